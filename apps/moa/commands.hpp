@@ -1,0 +1,17 @@
+// The moa command's subcommands: each file registers one on the CLI11 app
+// and returns the action to run after parsing.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <functional>
+
+namespace moa::cli {
+
+/// Runs the parsed subcommand; returns the process exit code.
+using Action = std::function<int()>;
+
+void add_version(CLI::App& app, Action& action);
+void add_odometry(CLI::App& app, Action& action);
+void add_evaluate(CLI::App& app, Action& action);
+
+}  // namespace moa::cli

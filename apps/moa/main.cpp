@@ -1,0 +1,31 @@
+// moa: robot velocity and pose from several optical mouse sensors.
+#include <fmt/core.h>
+
+#include <exception>
+
+#include "commands.hpp"
+#include "moa/io/error.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "moa: robot velocity and pose from an array of optical mouse sensors.\n"
+      "Formats: robot config v1 (YAML), log format v1 (a directory of CSV files)."};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", MOA_VERSION);
+  moa::cli::Action action;
+  moa::cli::add_version(app, action);
+  moa::cli::add_odometry(app, action);
+  moa::cli::add_evaluate(app, action);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  try {
+    return action();
+  } catch (const std::exception& e) {
+    const auto* sub = app.get_subcommands().empty() ? nullptr : app.get_subcommands().front();
+    fmt::print(stderr, "moa {}: error: {}\n", sub ? sub->get_name() : "", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,30 @@
+// An output file that appears whole or not at all: written to a temporary
+// file beside the target and renamed over it by commit(). Destroyed
+// without commit() (an error, an exception), the temporary is removed.
+#pragma once
+
+#include <filesystem>
+#include <fstream>
+
+namespace moa::io {
+
+class AtomicFile {
+ public:
+  /// Opens the temporary file; throws io::Error naming the path if it cannot.
+  explicit AtomicFile(std::filesystem::path target);
+  ~AtomicFile();
+  AtomicFile(const AtomicFile&) = delete;
+  AtomicFile& operator=(const AtomicFile&) = delete;
+
+  std::ostream& stream() { return out_; }
+  /// Flushes, closes and renames onto the target; throws io::Error on failure.
+  void commit();
+
+ private:
+  std::filesystem::path target_;
+  std::filesystem::path temp_;
+  std::ofstream out_;
+  bool committed_ = false;
+};
+
+}  // namespace moa::io

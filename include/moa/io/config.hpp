@@ -1,0 +1,48 @@
+// Robot configuration v1 (spec/config.md): YAML in, YAML out, same schema.
+//
+//   version: 1
+//   sensors:
+//     - name: m1                 # unique, used by mice.csv
+//       position: [0.07, 0.07]   # m, robot frame
+//       yaw: 0.785398            # rad
+//       cpi: 800
+//       scale: [1.0, 1.0]        # optional
+//       mirrored: false          # optional
+//       max_speed: 0.3556        # optional, m/s
+//       noise: 0.002             # optional (moa extension), m/s per axis
+//
+// Unknown keys and missing required keys are errors that name the key and
+// the sensor; so are wrong types, non-finite numbers, cpi or scale <= 0,
+// duplicate names and an unsupported version.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "moa/array.hpp"
+
+namespace moa::io {
+
+struct RobotConfig {
+  std::vector<std::string> names;  ///< one per sensor, in array order
+  SensorArray array;
+
+  /// Index of the sensor called `name`, nullopt if there is none.
+  std::optional<int> index_of(std::string_view name) const;
+};
+
+/// Parses YAML text; `source` names it in errors (usually the file path).
+RobotConfig parse_config(std::string_view yaml, std::string_view source);
+/// Reads and parses a file; throws io::Error ("FILE: ...") on any problem.
+RobotConfig read_config(const std::filesystem::path& path);
+
+/// YAML text of a config; parse_config(format_config(c)) reproduces c exactly
+/// (doubles written with enough digits to round-trip).
+std::string format_config(const RobotConfig& config);
+/// Writes a config file atomically.
+void write_config(const RobotConfig& config, const std::filesystem::path& path);
+
+}  // namespace moa::io

@@ -1,0 +1,76 @@
+// Internal to moa's I/O: the line reader under every log-format CSV reader
+// (spec/log-format.md), so that all of them apply the same rules and word
+// their errors the same way ("FILE:LINE: what is wrong").
+//
+// Rules it enforces: a header row first (comment lines before it are fine),
+// '#' lines are comments anywhere, a trailing '\r' (CRLF files) is dropped,
+// spaces and tabs around a field are dropped, every record has as many
+// fields as the header, and blank lines are allowed only at the end of the
+// file (a blank line followed by more content is reported at its own line).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace moa::io {
+
+/// `text` with control characters written as \xNN, so that an error message
+/// quoting input stays on one line.
+std::string printable(std::string_view text);
+
+class CsvReader {
+ public:
+  /// Opens `file` and reads its header row; throws io::Error ("FILE: cannot
+  /// open", "FILE:LINE: duplicate column 'x'", an empty file...).
+  explicit CsvReader(const std::filesystem::path& file);
+
+  /// The file as named in errors.
+  const std::string& file() const { return file_; }
+  /// 1-based line of the current record (the header's before the first next()).
+  std::size_t line() const { return line_; }
+
+  /// Index of the column called `name`, nullopt if the header has none.
+  std::optional<std::size_t> column(std::string_view name) const;
+  /// Index of a column the file must have; throws "FILE:LINE: missing column 'name'".
+  std::size_t required_column(std::string_view name) const;
+
+  /// Advances to the next record; false at the end of the file.
+  bool next();
+
+  /// Fields of the current record, by column index.
+  std::string_view field(std::size_t column) const { return fields_[column]; }
+  bool is_empty(std::size_t column) const { return fields_[column].empty(); }
+  /// A finite floating point number.
+  double number(std::size_t column) const;
+  /// An integer within [min, max] (decimal digits, optional sign, nothing else).
+  std::int64_t integer(std::size_t column, std::int64_t min, std::int64_t max) const;
+  /// A finite number no earlier than the previous record's time.
+  double time(std::size_t column);
+
+  /// Throws io::Error "FILE:LINE: what" for the current line.
+  [[noreturn]] void fail(std::string_view what) const;
+  /// Throws io::Error "FILE:LINE: column 'name': what" for the current line.
+  [[noreturn]] void fail_field(std::size_t column, std::string_view what) const;
+
+ private:
+  bool read_record();
+  [[noreturn]] void fail_at(std::size_t line, std::string_view what) const;
+
+  std::string file_;
+  std::ifstream in_;
+  std::vector<std::string> header_;
+  std::size_t header_line_ = 0;
+  std::string buffer_;  // the current line; fields_ point into it
+  std::vector<std::string_view> fields_;
+  std::size_t line_ = 0;
+  std::size_t blank_line_ = 0;  // first blank line not yet followed by content, 0 if none
+  std::optional<double> last_time_;
+};
+
+}  // namespace moa::io

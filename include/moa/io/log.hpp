@@ -1,0 +1,108 @@
+// Log format v1 (spec/log-format.md): a directory of CSV files.
+//
+// Every reader finds columns by header name, skips '#' comment lines
+// anywhere, ignores unknown extra columns, and throws io::Error as
+// "FILE:LINE: what is wrong" for: a missing required column, a wrong
+// number of fields, a field that is not a number (or not an integer where
+// one is required), NaN or infinity, time going backwards, an unknown
+// sensor name, squal outside 0..255, an empty file (no header).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "moa/io/config.hpp"
+#include "moa/se2.hpp"
+#include "moa/synchronise.hpp"
+
+namespace moa::io {
+
+/// Yields timestamped per-sensor counts, in non-decreasing time. The log
+/// reader, and later the live readers, implement it, so that everything
+/// downstream of it is the same for files and devices.
+class FrameSource {
+ public:
+  virtual ~FrameSource() = default;
+  /// Time from which the first row of each sensor accumulates (s).
+  virtual double start_time() = 0;
+  /// The next row, nullopt at the end. Throws io::Error on bad input.
+  virtual std::optional<SensorRow> next() = 0;
+};
+
+/// Streams mice.csv (columns t, sensor, dx, dy, optional squal, flags);
+/// memory does not grow with the file's length.
+class MiceReader : public FrameSource {
+ public:
+  /// `path` is the log directory or the mice.csv file itself; sensor names
+  /// are resolved against `config`.
+  MiceReader(const std::filesystem::path& path, const RobotConfig& config);
+  ~MiceReader() override;
+  double start_time() override;
+  std::optional<SensorRow> next() override;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+struct WheelRow {
+  double t = 0.0;  ///< s, end of the averaging interval
+  Twist2 twist;    ///< robot frame, m/s and rad/s
+};
+struct CameraRow {
+  double t = 0.0;                  ///< s
+  Eigen::Vector2d position{0, 0};  ///< m, world frame
+  std::optional<double> theta;     ///< rad
+  std::optional<Eigen::Vector2d> sigma;  ///< m, (sx, sy)
+};
+struct TruthRow {
+  double t = 0.0;
+  Pose2 pose;  ///< world_T_robot
+};
+
+/// Streams a CSV of one of the record types above.
+template <class Row>
+class RowReader {
+ public:
+  explicit RowReader(const std::filesystem::path& file);
+  ~RowReader();
+  std::optional<Row> next();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+using WheelsReader = RowReader<WheelRow>;  ///< wheels.csv: t,vx,vy,omega
+using CameraReader = RowReader<CameraRow>;  ///< camera.csv: t,x,y[,theta][,sx,sy]
+using TruthReader = RowReader<TruthRow>;    ///< truth.csv: t,x,y,theta
+
+/// Reads a whole file of rows (evaluation and calibration, not streaming).
+template <class Row>
+std::vector<Row> read_all(const std::filesystem::path& file) {
+  RowReader<Row> reader(file);
+  std::vector<Row> rows;
+  while (auto row = reader.next()) rows.push_back(*row);
+  return rows;
+}
+
+/// Writes odometry.csv: t,x,y,theta,vx,vy,omega, then `extra_columns`.
+/// The file appears only on commit(); an exception leaves no file behind.
+class OdometryWriter {
+ public:
+  OdometryWriter(const std::filesystem::path& file, std::vector<std::string> extra_columns = {});
+  ~OdometryWriter();
+  /// One row; `extra` must hold one value per extra column (already text).
+  void write(double t, const Pose2& pose, const Twist2& twist,
+             const std::vector<std::string>& extra = {});
+  void commit();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace moa::io

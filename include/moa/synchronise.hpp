@@ -1,0 +1,122 @@
+// From per-sensor rows at arbitrary times to array samples at common epochs.
+//
+// Epoch k covers (t0 + k P, t0 + (k+1) P], P the period (default 10 ms).
+// A row of sensor i at time t carries the counts accumulated over its own
+// interval (a, t], a = max(previous row of i (or t0), t - max_row_interval):
+// the counts are spread over the epochs in proportion to overlap, so rows
+// already on the epoch grid map onto exactly one epoch each and are used as
+// they are. A row with an empty interval (the first row at t0, or a repeat
+// of the same time) goes whole into the epoch that contains t. No rows means
+// no motion: epochs nobody reported in are emitted with zero counts.
+//
+// Why max_row_interval: a sensor that reports only while moving (a USB
+// mouse) has rows far apart after a pause; its first row then covers the
+// last report period, not the whole pause.
+//
+// Streaming: an epoch is final once no later row can overlap it, i.e. its
+// end is <= max(t_row - max_row_interval, min_i last_t_i). Pending epochs
+// live in a ring allocated at construction; push() does not allocate.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "moa/array.hpp"
+
+namespace moa {
+
+/// One sensor's report: counts in its own frame over the interval ending at t.
+struct SensorRow {
+  double t = 0.0;  ///< s
+  int sensor = 0;  ///< index in the SensorArray
+  Eigen::Vector2d counts{0.0, 0.0};
+  std::optional<std::uint8_t> squal;
+  std::uint8_t flags = 0;
+};
+
+enum class RowError {
+  kTimeNotFinite,
+  kTimeBeforeStart,  ///< t < t0
+  kTimeBackwards,    ///< t earlier than the previous row's
+  kUnknownSensor,    ///< index outside the array
+  kCountsNotFinite,
+};
+const char* describe(RowError error);
+
+struct SynchroniserOptions {
+  double period = 0.01;            ///< s, epoch length (100 Hz)
+  double max_row_interval = 0.05;  ///< s, longest interval one row can cover
+};
+
+class Synchroniser {
+ public:
+  /// n sensors, first epoch starting at t0 (the log's first time).
+  Synchroniser(int n_sensors, double t0, SynchroniserOptions options = {});
+
+  /// Adds a row and calls sink(const ArraySample&) for every epoch that
+  /// became final, in time order. Returns the error instead when the row is
+  /// invalid (nothing is changed then).
+  template <class Sink>
+  std::optional<RowError> push(const SensorRow& row, Sink&& sink) {
+    if (auto error = check(row)) return error;
+    // Epochs that end before this row's interval can start are final now;
+    // emitting them first keeps the pending span within the ring.
+    emit_until(final_time(row.t), sink);
+    add(row);
+    emit_until(final_time(row.t), sink);
+    return std::nullopt;
+  }
+
+  /// Emits every remaining epoch up to t_end (the last epoch is cut at
+  /// t_end). Call once at the end of the stream.
+  template <class Sink>
+  void finish(double t_end, Sink&& sink) {
+    while (start_of(next_) < t_end) {
+      ArraySample& s = slot(next_);
+      if (end_of(next_) > t_end) {
+        s.dt = t_end - start_of(next_);
+        s.t = t_end;
+      }
+      sink(static_cast<const ArraySample&>(s));
+      recycle(next_++);
+    }
+  }
+
+  double t0() const { return t0_; }
+  const SynchroniserOptions& options() const { return options_; }
+
+ private:
+  std::optional<RowError> check(const SensorRow& row) const;
+  void add(const SensorRow& row);
+  double final_time(double t_row) const;
+  double start_of(std::int64_t k) const { return t0_ + static_cast<double>(k) * options_.period; }
+  double end_of(std::int64_t k) const { return start_of(k + 1); }
+  ArraySample& slot(std::int64_t k) {
+    return ring_[static_cast<std::size_t>(k % static_cast<std::int64_t>(ring_.size()))];
+  }
+  /// Makes the slot of epoch k an empty epoch k.
+  void reset(std::int64_t k);
+  /// Epoch k was emitted: its slot becomes epoch k + ring size.
+  void recycle(std::int64_t k) { reset(k + static_cast<std::int64_t>(ring_.size())); }
+  /// Index of the epoch whose interval (start, end] contains t (0 for t0).
+  std::int64_t epoch_of(double t) const;
+
+  template <class Sink>
+  void emit_until(double t_final, Sink& sink) {
+    while (end_of(next_) <= t_final) {
+      sink(static_cast<const ArraySample&>(slot(next_)));
+      recycle(next_++);
+    }
+  }
+
+  int n_;
+  double t0_;
+  SynchroniserOptions options_;
+  std::vector<ArraySample> ring_;  // epochs next_ .. next_ + size - 1
+  std::vector<double> last_t_;     // per sensor, end of its previous row
+  std::int64_t next_ = 0;          // first epoch not yet emitted
+  double last_row_t_;
+};
+
+}  // namespace moa

@@ -1,0 +1,311 @@
+#include "moa/io/log.hpp"
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <iterator>
+#include <string_view>
+
+#include "moa/io/atomic_file.hpp"
+#include "moa/io/csv.hpp"
+#include "moa/io/error.hpp"
+
+namespace moa::io {
+namespace {
+
+// Counts are held as doubles downstream; beyond 2^53 they would silently
+// lose their last digits.
+constexpr std::int64_t kMaxExactCount = std::int64_t{1} << 53;
+
+std::filesystem::path mice_file(const std::filesystem::path& path) {
+  std::error_code ec;
+  return std::filesystem::is_directory(path, ec) ? path / "mice.csv" : path;
+}
+
+// Per record type: which columns it needs and how one record becomes a row.
+template <class Row>
+class RowParser;
+
+template <>
+class RowParser<WheelRow> {
+ public:
+  explicit RowParser(const CsvReader& csv)
+      : t_(csv.required_column("t")),
+        vx_(csv.required_column("vx")),
+        vy_(csv.required_column("vy")),
+        omega_(csv.required_column("omega")) {}
+
+  WheelRow parse(CsvReader& csv) const {
+    WheelRow row;
+    row.t = csv.time(t_);
+    row.twist.v = {csv.number(vx_), csv.number(vy_)};
+    row.twist.omega = csv.number(omega_);
+    return row;
+  }
+
+ private:
+  std::size_t t_, vx_, vy_, omega_;
+};
+
+template <>
+class RowParser<CameraRow> {
+ public:
+  explicit RowParser(const CsvReader& csv)
+      : t_(csv.required_column("t")),
+        x_(csv.required_column("x")),
+        y_(csv.required_column("y")),
+        theta_(csv.column("theta")),
+        sx_(csv.column("sx")),
+        sy_(csv.column("sy")) {
+    // One standard deviation without the other cannot be used: say so
+    // rather than drop it.
+    if (sx_ && !sy_) csv.required_column("sy");
+    if (sy_ && !sx_) csv.required_column("sx");
+  }
+
+  CameraRow parse(CsvReader& csv) const {
+    CameraRow row;
+    row.t = csv.time(t_);
+    row.position = {csv.number(x_), csv.number(y_)};
+    // In optional columns an empty field means "not given for this fix".
+    if (theta_ && !csv.is_empty(*theta_)) row.theta = csv.number(*theta_);
+    if (sx_) {
+      if (csv.is_empty(*sx_) != csv.is_empty(*sy_)) {
+        csv.fail("columns 'sx' and 'sy' must be both given or both empty");
+      }
+      if (!csv.is_empty(*sx_)) {
+        const Eigen::Vector2d sigma(positive(csv, *sx_), positive(csv, *sy_));
+        row.sigma = sigma;
+      }
+    }
+    return row;
+  }
+
+ private:
+  // A zero standard deviation would give the fix infinite weight.
+  static double positive(const CsvReader& csv, std::size_t column) {
+    const double value = csv.number(column);
+    if (value <= 0.0) {
+      csv.fail_field(column, fmt::format("must be > 0 (found {})", value));
+    }
+    return value;
+  }
+
+  std::size_t t_, x_, y_;
+  std::optional<std::size_t> theta_, sx_, sy_;
+};
+
+template <>
+class RowParser<TruthRow> {
+ public:
+  explicit RowParser(const CsvReader& csv)
+      : t_(csv.required_column("t")),
+        x_(csv.required_column("x")),
+        y_(csv.required_column("y")),
+        theta_(csv.required_column("theta")) {}
+
+  TruthRow parse(CsvReader& csv) const {
+    TruthRow row;
+    row.t = csv.time(t_);
+    row.pose.t = {csv.number(x_), csv.number(y_)};
+    row.pose.theta = csv.number(theta_);
+    return row;
+  }
+
+ private:
+  std::size_t t_, x_, y_, theta_;
+};
+
+}  // namespace
+
+// ---------------------------------------------------------------- MiceReader
+
+struct MiceReader::Impl {
+  Impl(const std::filesystem::path& path, const RobotConfig& config)
+      : csv(mice_file(path)),
+        names(config.names),
+        t(csv.required_column("t")),
+        sensor(csv.required_column("sensor")),
+        dx(csv.required_column("dx")),
+        dy(csv.required_column("dy")),
+        squal(csv.column("squal")),
+        flags(csv.column("flags")) {}
+
+  std::optional<SensorRow> read() {
+    if (!csv.next()) return std::nullopt;
+    SensorRow row;
+    row.t = csv.time(t);
+    const std::string_view name = csv.field(sensor);
+    const auto it = std::find(names.begin(), names.end(), name);
+    if (it == names.end()) csv.fail(fmt::format("unknown sensor '{}'", name));
+    row.sensor = static_cast<int>(it - names.begin());
+    row.counts = {static_cast<double>(csv.integer(dx, -kMaxExactCount, kMaxExactCount)),
+                  static_cast<double>(csv.integer(dy, -kMaxExactCount, kMaxExactCount))};
+    // In optional columns an empty field means "not reported in this row".
+    if (squal && !csv.is_empty(*squal)) {
+      row.squal = static_cast<std::uint8_t>(csv.integer(*squal, 0, 255));
+    }
+    if (flags && !csv.is_empty(*flags)) {
+      row.flags = static_cast<std::uint8_t>(csv.integer(*flags, 0, 255));
+    }
+    return row;
+  }
+
+  CsvReader csv;
+  std::vector<std::string> names;  // a copy: the reader may outlive the config
+  std::size_t t, sensor, dx, dy;
+  std::optional<std::size_t> squal, flags;
+  std::optional<SensorRow> peeked;
+  std::optional<double> start;
+};
+
+MiceReader::MiceReader(const std::filesystem::path& path, const RobotConfig& config)
+    : impl_(std::make_unique<Impl>(path, config)) {}
+
+MiceReader::~MiceReader() = default;
+
+double MiceReader::start_time() {
+  if (!impl_->start) {
+    impl_->peeked = impl_->read();
+    if (!impl_->peeked) throw Error(fmt::format("{}: no data rows", impl_->csv.file()));
+    impl_->start = impl_->peeked->t;
+  }
+  return *impl_->start;
+}
+
+std::optional<SensorRow> MiceReader::next() {
+  if (impl_->peeked) {
+    auto row = std::move(impl_->peeked);
+    impl_->peeked.reset();
+    return row;
+  }
+  auto row = impl_->read();
+  if (row && !impl_->start) impl_->start = row->t;
+  return row;
+}
+
+// ----------------------------------------------------------------- RowReader
+
+template <class Row>
+struct RowReader<Row>::Impl {
+  explicit Impl(const std::filesystem::path& file) : csv(file), parser(csv) {}
+  CsvReader csv;
+  RowParser<Row> parser;
+};
+
+template <class Row>
+RowReader<Row>::RowReader(const std::filesystem::path& file)
+    : impl_(std::make_unique<Impl>(file)) {}
+
+template <class Row>
+RowReader<Row>::~RowReader() = default;
+
+template <class Row>
+std::optional<Row> RowReader<Row>::next() {
+  if (!impl_->csv.next()) return std::nullopt;
+  return impl_->parser.parse(impl_->csv);
+}
+
+template class RowReader<WheelRow>;
+template class RowReader<CameraRow>;
+template class RowReader<TruthRow>;
+
+// ------------------------------------------------------------ OdometryWriter
+
+namespace {
+
+constexpr std::array<std::string_view, 7> kOdometryColumns{"t",  "x",  "y",    "theta",
+                                                           "vx", "vy", "omega"};
+
+// Text that would split or end a field, or turn a line into a comment.
+bool breaks_csv(std::string_view text) {
+  return text.find_first_of(",\r\n") != std::string_view::npos;
+}
+
+}  // namespace
+
+struct OdometryWriter::Impl {
+  Impl(const std::filesystem::path& path, std::vector<std::string> extra)
+      : file_name(path.string()), extra_columns(std::move(extra)), file(path) {}
+
+  [[noreturn]] void fail(std::string_view what) const {
+    throw Error(printable(fmt::format("{}: {}", file_name, what)));
+  }
+
+  std::string file_name;
+  std::vector<std::string> extra_columns;
+  AtomicFile file;
+  fmt::memory_buffer line;
+  std::optional<double> last_t;
+  bool committed = false;
+};
+
+OdometryWriter::OdometryWriter(const std::filesystem::path& file,
+                               std::vector<std::string> extra_columns)
+    : impl_(std::make_unique<Impl>(file, std::move(extra_columns))) {
+  std::vector<std::string_view> columns(kOdometryColumns.begin(), kOdometryColumns.end());
+  for (const auto& name : impl_->extra_columns) {
+    // Readers trim spaces around fields, so such a name would not read back.
+    const bool padded = name.empty() || name.front() == ' ' || name.front() == '\t' ||
+                        name.back() == ' ' || name.back() == '\t';
+    if (padded || breaks_csv(name) || name.front() == '#') {
+      impl_->fail(fmt::format("invalid column name '{}'", name));
+    }
+    if (std::find(columns.begin(), columns.end(), name) != columns.end()) {
+      impl_->fail(fmt::format("duplicate column '{}'", name));
+    }
+    columns.push_back(name);
+  }
+  impl_->file.stream() << fmt::format("{}\n", fmt::join(columns, ","));
+}
+
+OdometryWriter::~OdometryWriter() = default;
+
+void OdometryWriter::write(double t, const Pose2& pose, const Twist2& twist,
+                           const std::vector<std::string>& extra) {
+  Impl& impl = *impl_;
+  if (impl.committed) impl.fail("write after commit");
+  if (extra.size() != impl.extra_columns.size()) {
+    impl.fail(fmt::format("row at t={}: expected {} extra values, found {}", t,
+                          impl.extra_columns.size(), extra.size()));
+  }
+  const std::array<double, 7> values{t,           pose.t.x(),  pose.t.y(), pose.theta,
+                                     twist.v.x(), twist.v.y(), twist.omega};
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    // The log format admits no NaN or infinity; writing one would make a
+    // file that no reader of the format accepts.
+    if (!std::isfinite(values[i])) {
+      impl.fail(
+          fmt::format("row at t={}: {} is not finite ({})", t, kOdometryColumns[i], values[i]));
+    }
+  }
+  if (impl.last_t && t < *impl.last_t) {
+    impl.fail(fmt::format("time goes backwards ({} after {})", t, *impl.last_t));
+  }
+  for (std::size_t i = 0; i < extra.size(); ++i) {
+    if (breaks_csv(extra[i])) {
+      impl.fail(fmt::format("row at t={}: value of column '{}' contains a comma or a line break", t,
+                            impl.extra_columns[i]));
+    }
+  }
+  impl.last_t = t;
+
+  // "{}" is the shortest text that reads back as the same double: exact,
+  // and no longer than needed.
+  impl.line.clear();
+  fmt::format_to(std::back_inserter(impl.line), "{}", fmt::join(values, ","));
+  for (const auto& value : extra) fmt::format_to(std::back_inserter(impl.line), ",{}", value);
+  impl.line.push_back('\n');
+  impl.file.stream().write(impl.line.data(), static_cast<std::streamsize>(impl.line.size()));
+}
+
+void OdometryWriter::commit() {
+  if (impl_->committed) impl_->fail("already committed");
+  impl_->file.commit();
+  impl_->committed = true;
+}
+
+}  // namespace moa::io

@@ -1,0 +1,91 @@
+#include "moa/synchronise.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace moa {
+
+const char* describe(RowError error) {
+  switch (error) {
+    case RowError::kTimeNotFinite:
+      return "time is not a finite number";
+    case RowError::kTimeBeforeStart:
+      return "time is before the start of the log";
+    case RowError::kTimeBackwards:
+      return "time goes backwards";
+    case RowError::kUnknownSensor:
+      return "unknown sensor";
+    case RowError::kCountsNotFinite:
+      return "counts are not finite numbers";
+  }
+  return "invalid row";
+}
+
+Synchroniser::Synchroniser(int n_sensors, double t0, SynchroniserOptions options)
+    : n_(n_sensors),
+      t0_(t0),
+      options_(options),
+      last_t_(static_cast<std::size_t>(n_sensors), t0),
+      last_row_t_(t0) {
+  const auto slots =
+      static_cast<std::size_t>(std::ceil(options_.max_row_interval / options_.period) + 3.0);
+  ring_.resize(slots);
+  for (std::size_t k = 0; k < slots; ++k) reset(static_cast<std::int64_t>(k));
+}
+
+std::optional<RowError> Synchroniser::check(const SensorRow& row) const {
+  if (!std::isfinite(row.t)) return RowError::kTimeNotFinite;
+  if (row.t < t0_) return RowError::kTimeBeforeStart;
+  if (row.t < last_row_t_) return RowError::kTimeBackwards;
+  if (row.sensor < 0 || row.sensor >= n_) return RowError::kUnknownSensor;
+  if (!row.counts.allFinite()) return RowError::kCountsNotFinite;
+  return std::nullopt;
+}
+
+void Synchroniser::reset(std::int64_t k) {
+  ArraySample& s = slot(k);
+  s.t = end_of(k);
+  s.dt = options_.period;
+  s.size = n_;
+  for (int i = 0; i < n_; ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    s.counts[u].setZero();
+    s.squal[u] = 255;
+    s.flags[u] = 0;
+  }
+}
+
+std::int64_t Synchroniser::epoch_of(double t) const {
+  const auto k = static_cast<std::int64_t>(std::ceil((t - t0_) / options_.period)) - 1;
+  return std::max<std::int64_t>(k, 0);
+}
+
+void Synchroniser::add(const SensorRow& row) {
+  const auto i = static_cast<std::size_t>(row.sensor);
+  const double a = std::max(last_t_[i], row.t - options_.max_row_interval);
+  const double b = row.t;
+  last_t_[i] = b;
+  last_row_t_ = b;
+  const auto deposit = [&](std::int64_t k, double fraction) {
+    // Rows are never older than the first pending epoch (see final_time()).
+    ArraySample& s = slot(std::max(k, next_));
+    s.counts[i] += fraction * row.counts;
+    if (row.squal) s.squal[i] = std::min(s.squal[i], *row.squal);
+    s.flags[i] |= row.flags;
+  };
+  if (!(b > a)) {
+    deposit(epoch_of(b), 1.0);
+    return;
+  }
+  for (std::int64_t k = epoch_of(a); start_of(k) < b; ++k) {
+    const double overlap = std::min(b, end_of(k)) - std::max(a, start_of(k));
+    if (overlap > 0.0) deposit(k, overlap / (b - a));
+  }
+}
+
+double Synchroniser::final_time(double t_row) const {
+  double oldest = *std::min_element(last_t_.begin(), last_t_.end());
+  return std::max(t_row - options_.max_row_interval, oldest);
+}
+
+}  // namespace moa

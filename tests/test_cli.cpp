@@ -1,0 +1,121 @@
+// The moa command end to end: what users and scripts rely on (spec/cli.md).
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+
+#include "moa/evaluate.hpp"
+#include "moa/io/log.hpp"
+#include "support/run.hpp"
+#include "support/synth.hpp"
+
+namespace moa {
+namespace {
+
+using ::testing::HasSubstr;
+namespace fs = std::filesystem;
+
+TEST(Cli, HelpListsSubcommands) {
+  const auto r = test::run_moa("--help");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_THAT(r.out, HasSubstr("odometry"));
+  EXPECT_THAT(r.out, HasSubstr("evaluate"));
+  EXPECT_THAT(r.out, HasSubstr("version"));
+  EXPECT_EQ(test::run_moa("odometry --help").exit_code, 0);
+}
+
+TEST(Cli, VersionPrintsProjectVersion) {
+  const auto r = test::run_moa("version");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_THAT(r.out, HasSubstr("moa 0."));
+}
+
+TEST(Cli, OdometryTracksNoiseFreeLogWithinMillimetre) {
+  // 20 s of mixed motion, sensors with yaw, per-axis scale, one mirrored,
+  // 100 Hz rows of integer counts. Bound: counts are exact to half a count
+  // (<= 32 um at 400 cpi), so the pose error stays well under 1 mm / 2 mrad.
+  const auto dir = test::scratch_dir("odometry");
+  const SensorArray array = test::skewed_array();
+  const auto log = test::synthesise(array, test::mixed_motion, 20.0, 0.01);
+  test::write_log(log, array, {"a", "b", "c", "d"}, dir);
+  const auto r =
+      test::run_moa("odometry --config " + (dir / "robot.yaml").string() + " --log " +
+                    dir.string() + " --estimator ls --out " + (dir / "odom.csv").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("odom.csv"));
+
+  TrajectoryErrorAccumulator acc(log.truth);
+  io::TruthReader odometry(dir / "odom.csv");
+  while (const auto row = odometry.next()) acc.add(row->t, row->pose);
+  const TrajectoryError e = acc.result();
+  EXPECT_EQ(e.samples, 2000u);
+  EXPECT_EQ(e.outside, 0u);
+  EXPECT_LT(e.max_translation, 1e-3);
+  EXPECT_LT(e.max_heading, 2e-3);
+
+  const auto ev = test::run_moa("evaluate --json --truth " + (dir / "truth.csv").string() +
+                                " --odometry " + (dir / "odom.csv").string());
+  ASSERT_EQ(ev.exit_code, 0) << ev.err;
+  EXPECT_THAT(ev.out, HasSubstr("\"max_translation_m\""));
+  fs::remove_all(dir);
+}
+
+TEST(Cli, BadInputFailsWithOneLineAndNoOutputFile) {
+  const auto dir = test::scratch_dir("badinput");
+  const SensorArray array = test::skewed_array();
+  const auto log = test::synthesise(array, test::mixed_motion, 1.0, 0.01);
+  test::write_log(log, array, {"a", "b", "c", "d"}, dir);
+  {
+    std::ofstream mice(dir / "mice.csv", std::ios::app);
+    mice << "1.5,zz,1,1\n";
+  }
+  const auto out = dir / "odom.csv";
+  const auto r = test::run_moa("odometry --config " + (dir / "robot.yaml").string() + " --log " +
+                               dir.string() + " --out " + out.string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.err, HasSubstr("mice.csv:"));
+  EXPECT_THAT(r.err, HasSubstr("zz"));
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+  // Nothing else was left beside it either (no temporary files).
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    EXPECT_THAT(entry.path().filename().string(), ::testing::Not(HasSubstr("odom")));
+  }
+  fs::remove_all(dir);
+}
+
+TEST(Cli, UnavailableEstimatorIsRefusedClearly) {
+  const auto dir = test::scratch_dir("estimator");
+  const SensorArray array = test::skewed_array();
+  test::write_log(test::synthesise(array, test::mixed_motion, 0.1, 0.01), array,
+                  {"a", "b", "c", "d"}, dir);
+  const auto r =
+      test::run_moa("odometry --config " + (dir / "robot.yaml").string() + " --log " +
+                    dir.string() + " --estimator consensus --out " + (dir / "o.csv").string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.err, HasSubstr("--estimator consensus"));
+  EXPECT_FALSE(fs::exists(dir / "o.csv"));
+  const auto bad = test::run_moa("odometry --config " + (dir / "robot.yaml").string() + " --log " +
+                                 dir.string() + " --estimator magic --out x.csv");
+  EXPECT_NE(bad.exit_code, 0);
+  fs::remove_all(dir);
+}
+
+TEST(Cli, RankDeficientConfigIsRefused) {
+  const auto dir = test::scratch_dir("rank");
+  SensorMount m;
+  m.position = {0.1, 0.0};
+  const SensorArray array({m, m});
+  test::write_log(test::synthesise(array, test::mixed_motion, 0.1, 0.01), array, {"a", "b"}, dir);
+  const auto r = test::run_moa("odometry --config " + (dir / "robot.yaml").string() + " --log " +
+                               dir.string() + " --out " + (dir / "o.csv").string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.err, HasSubstr("robot.yaml"));
+  EXPECT_THAT(r.err, HasSubstr("rank-deficient"));
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace moa

@@ -1,0 +1,146 @@
+#include <gtest/gtest.h>
+
+#include <random>
+#include <vector>
+
+#include "moa/synchronise.hpp"
+
+namespace moa {
+namespace {
+
+struct Collected {
+  std::vector<ArraySample> samples;
+  void operator()(const ArraySample& s) { samples.push_back(s); }
+};
+
+SensorRow row(double t, int sensor, double dx, double dy) {
+  return SensorRow{t, sensor, {dx, dy}, std::nullopt, 0};
+}
+
+TEST(Synchroniser, RowsOnTheEpochGridAreUsedAsTheyAre) {
+  Synchroniser sync(3, 0.0, {0.01, 0.05});
+  Collected out;
+  for (int k = 1; k <= 50; ++k) {
+    for (int i = 0; i < 3; ++i) {
+      ASSERT_FALSE(sync.push(row(k * 0.01, i, 10 * k + i, -k), std::ref(out)));
+    }
+  }
+  sync.finish(0.5, std::ref(out));
+  ASSERT_EQ(out.samples.size(), 50u);
+  for (int k = 1; k <= 50; ++k) {
+    const ArraySample& s = out.samples[static_cast<std::size_t>(k - 1)];
+    EXPECT_NEAR(s.t, k * 0.01, 1e-12);
+    EXPECT_NEAR(s.dt, 0.01, 1e-12);
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_NEAR(s.counts[static_cast<std::size_t>(i)].x(), 10 * k + i, 1e-9) << k;
+      EXPECT_NEAR(s.counts[static_cast<std::size_t>(i)].y(), -k, 1e-9);
+    }
+  }
+}
+
+TEST(Synchroniser, RowIsSpreadOverItsOwnIntervalByOverlap) {
+  Synchroniser sync(2, 0.0, {0.01, 0.05});
+  Collected out;
+  ASSERT_FALSE(sync.push(row(0.025, 0, 100, 50), std::ref(out)));  // covers (0, 0.025]
+  ASSERT_FALSE(sync.push(row(0.03, 1, 30, 0), std::ref(out)));     // covers (0, 0.03]
+  sync.finish(0.03, std::ref(out));
+  ASSERT_EQ(out.samples.size(), 3u);
+  const double share[3] = {0.4, 0.4, 0.2};
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR(out.samples[static_cast<std::size_t>(k)].counts[0].x(), 100 * share[k], 1e-9);
+    EXPECT_NEAR(out.samples[static_cast<std::size_t>(k)].counts[0].y(), 50 * share[k], 1e-9);
+    EXPECT_NEAR(out.samples[static_cast<std::size_t>(k)].counts[1].x(), 10, 1e-9);
+  }
+}
+
+TEST(Synchroniser, CountsAreConservedAndEpochsAreContiguous) {
+  std::mt19937_64 rng(20);
+  std::uniform_real_distribution<double> gap(0.0, 0.03);
+  std::uniform_int_distribution<int> counts(-50, 50), sensor(0, 3);
+  Synchroniser sync(4, 1.0, {0.01, 0.05});
+  Collected out;
+  std::vector<Eigen::Vector2d> total(4, Eigen::Vector2d::Zero());
+  double t = 1.0;
+  for (int k = 0; k < 5000; ++k) {
+    t += gap(rng);
+    const int i = sensor(rng);
+    const Eigen::Vector2d c(counts(rng), counts(rng));
+    total[static_cast<std::size_t>(i)] += c;
+    ASSERT_FALSE(sync.push(row(t, i, c.x(), c.y()), std::ref(out)));
+  }
+  sync.finish(t, std::ref(out));
+  std::vector<Eigen::Vector2d> sum(4, Eigen::Vector2d::Zero());
+  double expected_start = 1.0;
+  for (const ArraySample& s : out.samples) {
+    EXPECT_NEAR(s.t - s.dt, expected_start, 1e-9);
+    expected_start = s.t;
+    for (int i = 0; i < 4; ++i)
+      sum[static_cast<std::size_t>(i)] += s.counts[static_cast<std::size_t>(i)];
+  }
+  EXPECT_NEAR(expected_start, t, 1e-12);
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_TRUE(
+        sum[static_cast<std::size_t>(i)].isApprox(total[static_cast<std::size_t>(i)], 1e-9));
+  }
+}
+
+TEST(Synchroniser, GapMeansNoMotion) {
+  // A mouse silent for a second, then one row: its counts fall into the last
+  // max_row_interval before the row, every earlier epoch is still.
+  Synchroniser sync(2, 0.0, {0.01, 0.05});
+  Collected out;
+  ASSERT_FALSE(sync.push(row(1.0, 0, 500, 0), std::ref(out)));
+  ASSERT_FALSE(sync.push(row(1.0, 1, 500, 0), std::ref(out)));
+  sync.finish(1.0, std::ref(out));
+  ASSERT_EQ(out.samples.size(), 100u);
+  for (std::size_t k = 0; k < 95; ++k) EXPECT_NEAR(out.samples[k].counts[0].x(), 0.0, 1e-9) << k;
+  for (std::size_t k = 95; k < 100; ++k)
+    EXPECT_NEAR(out.samples[k].counts[0].x(), 100.0, 1e-9) << k;
+}
+
+TEST(Synchroniser, FirstRowAtStartGoesIntoFirstEpoch) {
+  Synchroniser sync(1, 2.0, {0.01, 0.05});
+  Collected out;
+  ASSERT_FALSE(sync.push(row(2.0, 0, 7, 3), std::ref(out)));
+  ASSERT_FALSE(sync.push(row(2.02, 0, 2, 0), std::ref(out)));
+  sync.finish(2.02, std::ref(out));
+  ASSERT_EQ(out.samples.size(), 2u);
+  EXPECT_NEAR(out.samples[0].counts[0].x(), 7 + 1, 1e-9);
+  EXPECT_NEAR(out.samples[1].counts[0].x(), 1, 1e-9);
+}
+
+TEST(Synchroniser, SqualAndFlagsAreCarriedPerEpoch) {
+  Synchroniser sync(2, 0.0, {0.01, 0.05});
+  Collected out;
+  SensorRow r = row(0.01, 0, 1, 1);
+  r.squal = 40;
+  r.flags = kFlagLift;
+  ASSERT_FALSE(sync.push(r, std::ref(out)));
+  r = row(0.02, 0, 1, 1);
+  r.squal = 90;
+  ASSERT_FALSE(sync.push(r, std::ref(out)));
+  sync.finish(0.02, std::ref(out));
+  ASSERT_EQ(out.samples.size(), 2u);
+  EXPECT_EQ(out.samples[0].squal[0], 40);
+  EXPECT_EQ(out.samples[0].flags[0], kFlagLift);
+  EXPECT_EQ(out.samples[1].squal[0], 90);
+  EXPECT_EQ(out.samples[1].flags[0], 0);
+  EXPECT_EQ(out.samples[0].squal[1], 255);  // nothing reported
+}
+
+TEST(Synchroniser, InvalidRowsAreRejectedAndChangeNothing) {
+  Synchroniser sync(2, 1.0, {0.01, 0.05});
+  Collected out;
+  ASSERT_FALSE(sync.push(row(1.5, 0, 1, 1), std::ref(out)));
+  EXPECT_EQ(sync.push(row(1.4, 1, 1, 1), std::ref(out)), RowError::kTimeBackwards);
+  EXPECT_EQ(sync.push(row(std::nan(""), 1, 1, 1), std::ref(out)), RowError::kTimeNotFinite);
+  EXPECT_EQ(sync.push(row(1.6, 2, 1, 1), std::ref(out)), RowError::kUnknownSensor);
+  EXPECT_EQ(sync.push(row(1.6, -1, 1, 1), std::ref(out)), RowError::kUnknownSensor);
+  EXPECT_EQ(sync.push(row(1.6, 1, std::nan(""), 1), std::ref(out)), RowError::kCountsNotFinite);
+  Synchroniser late(1, 1.0, {0.01, 0.05});
+  EXPECT_EQ(late.push(row(0.5, 0, 1, 1), std::ref(out)), RowError::kTimeBeforeStart);
+  EXPECT_STREQ(describe(RowError::kTimeBackwards), "time goes backwards");
+}
+
+}  // namespace
+}  // namespace moa

@@ -1,0 +1,19 @@
+// Writes the noise-free example log shipped in examples/logs/mixed-motion:
+//   synth_log DIR [DURATION_S]
+#include <cstdlib>
+#include <iostream>
+
+#include "support/synth.hpp"
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::cerr << "usage: synth_log DIR [DURATION_S]\n";
+    return 2;
+  }
+  const double duration = argc > 2 ? std::atof(argv[2]) : 20.0;
+  const auto array = moa::test::skewed_array();
+  const auto log = moa::test::synthesise(array, moa::test::mixed_motion, duration, 0.01);
+  moa::test::write_log(log, array, {"front", "left", "rear", "right"}, argv[1]);
+  std::cout << "wrote " << argv[1] << "\n";
+  return 0;
+}
