@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -72,11 +73,14 @@ double to_number(const Context& context, std::string_view key, const YAML::Node&
   const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), value,
                                          std::chars_format::general);
   const bool whole = end == digits.data() + digits.size();
+  // YAML spells them .nan, .inf, -.Inf; plain C spellings are caught too.
   std::string lower(text);
   std::transform(lower.begin(), lower.end(), lower.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  const bool spelled_non_finite =
-      lower.find("nan") != std::string::npos || lower.find("inf") != std::string::npos;
+  std::string_view word = lower;
+  if (!word.empty() && (word[0] == '-' || word[0] == '+')) word.remove_prefix(1);
+  if (!word.empty() && word[0] == '.') word.remove_prefix(1);
+  const bool spelled_non_finite = word == "nan" || word == "inf" || word == "infinity";
   if ((ec == std::errc{} && whole && !std::isfinite(value)) ||
       (ec != std::errc{} && spelled_non_finite)) {
     context.fail_key(key, fmt::format("'{}' is not a finite number", text));

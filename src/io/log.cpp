@@ -220,7 +220,7 @@ namespace {
 constexpr std::array<std::string_view, 7> kOdometryColumns{"t",  "x",  "y",    "theta",
                                                            "vx", "vy", "omega"};
 
-// Text that would split or end a field, or turn a line into a comment.
+// Text that would split a field or end the record early.
 bool breaks_csv(std::string_view text) {
   return text.find_first_of(",\r\n") != std::string_view::npos;
 }
