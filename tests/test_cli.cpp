@@ -86,20 +86,27 @@ TEST(Cli, BadInputFailsWithOneLineAndNoOutputFile) {
   fs::remove_all(dir);
 }
 
-TEST(Cli, UnavailableEstimatorIsRefusedClearly) {
-  const auto dir = test::scratch_dir("estimator");
+TEST(Cli, EveryEstimatorTracksNoiseFreeLog) {
+  // On fault-free data all three estimators use every sensor and agree with truth.
+  const auto dir = test::scratch_dir("estimators");
   const SensorArray array = test::skewed_array();
-  test::write_log(test::synthesise(array, test::mixed_motion, 0.1, 0.01), array,
-                  {"a", "b", "c", "d"}, dir);
-  const auto r =
-      test::run_moa("odometry --config " + (dir / "robot.yaml").string() + " --log " +
-                    dir.string() + " --estimator consensus --out " + (dir / "o.csv").string());
-  EXPECT_NE(r.exit_code, 0);
-  EXPECT_THAT(r.err, HasSubstr("--estimator consensus"));
-  EXPECT_FALSE(fs::exists(dir / "o.csv"));
+  const auto log = test::synthesise(array, test::mixed_motion, 5.0, 0.01);
+  test::write_log(log, array, {"a", "b", "c", "d"}, dir);
+  for (const std::string name : {"ls", "sekimori", "consensus"}) {
+    const auto out = dir / (name + ".csv");
+    const auto r = test::run_moa("odometry --config " + (dir / "robot.yaml").string() + " --log " +
+                                 dir.string() + " --estimator " + name + " --out " + out.string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    TrajectoryErrorAccumulator acc(log.truth);
+    io::TruthReader odometry(out);
+    while (const auto row = odometry.next()) acc.add(row->t, row->pose);
+    EXPECT_LT(acc.result().max_translation, 1e-3) << name;
+    EXPECT_LT(acc.result().max_heading, 2e-3) << name;
+  }
   const auto bad = test::run_moa("odometry --config " + (dir / "robot.yaml").string() + " --log " +
                                  dir.string() + " --estimator magic --out x.csv");
   EXPECT_NE(bad.exit_code, 0);
+  EXPECT_THAT(bad.err, HasSubstr("magic"));
   fs::remove_all(dir);
 }
 

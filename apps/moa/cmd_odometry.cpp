@@ -1,23 +1,18 @@
 // moa odometry: dead reckoning from a log (spec/cli.md).
-//
-// Data path: MiceReader (rows) -> Synchroniser (epochs) -> estimator
-// (twist + covariance) -> DeadReckoner (exact SE(2) step) -> odometry.csv.
-// Everything is streamed: memory does not grow with the log's length.
 #include <fmt/core.h>
 #include <unistd.h>
 
 #include <chrono>
-#include <cmath>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "commands.hpp"
-#include "moa/estimate.hpp"
 #include "moa/io/config.hpp"
 #include "moa/io/error.hpp"
 #include "moa/io/log.hpp"
-#include "moa/synchronise.hpp"
+#include "pipeline.hpp"
 
 namespace moa::cli {
 namespace {
@@ -25,78 +20,55 @@ namespace {
 struct OdometryArgs {
   std::string config;
   std::string log;
-  std::string estimator = "ls";
   std::string out;
-  double rate = 100.0;
-  double max_row_interval = 0.05;
+  PipelineOptions pipeline;
   std::vector<double> initial_pose{0.0, 0.0, 0.0};
+  bool no_wheels = false;
   bool quiet = false;
 };
 
-std::string fmt_sd(double variance) {
-  return fmt::format("{:.6g}", std::sqrt(std::max(variance, 0.0)));
-}
-
-int run_odometry(const OdometryArgs& args) {
-  if (args.estimator != "ls") {
-    throw io::Error(fmt::format(
-        "--estimator {}: not available in this version of moa (available: ls)", args.estimator));
-  }
+int run_odometry(OdometryArgs args) {
+  namespace fs = std::filesystem;
   const io::RobotConfig config = io::read_config(args.config);
   io::MiceReader reader(args.log, config);
-
-  const double period = 1.0 / args.rate;
-  const auto built = LsEstimator::create(config.array, all_sensors(config.array.size()), period);
-  if (const auto* error = std::get_if<GeometryError>(&built)) {
-    throw io::Error(fmt::format("{}: {}", args.config, describe(*error)));
+  const fs::path log_dir = fs::is_directory(args.log) ? fs::path(args.log) : fs::path(args.log).parent_path();
+  std::unique_ptr<io::WheelsReader> wheels;
+  if (!args.no_wheels && fs::exists(log_dir / "wheels.csv")) {
+    wheels = std::make_unique<io::WheelsReader>(log_dir / "wheels.csv");
   }
-  const auto& estimator = std::get<LsEstimator>(built);
+  args.pipeline.initial = Pose2{{args.initial_pose[0], args.initial_pose[1]}, args.initial_pose[2]};
 
+  io::OdometryWriter writer(args.out, odometry_extra_columns());
+  std::vector<std::string> extra;
   const double t0 = reader.start_time();
-  Synchroniser sync(config.array.size(), t0, {period, args.max_row_interval});
-  DeadReckoner reckoner(Pose2{{args.initial_pose[0], args.initial_pose[1]}, args.initial_pose[2]});
-  io::OdometryWriter writer(args.out, {"sd_vx", "sd_vy", "sd_omega"});
-
-  std::vector<std::string> extra(3);
-  std::size_t samples = 0;
-  const auto sink = [&](const ArraySample& sample) {
-    const auto estimate = estimator.estimate(sample);
-    if (!estimate) {
-      throw io::Error(
-          fmt::format("{}: sample at t = {} s has no valid interval", args.log, sample.t));
-    }
-    const Pose2& pose = reckoner.step(estimate->twist, sample.dt);
-    for (int k = 0; k < 3; ++k)
-      extra[static_cast<std::size_t>(k)] = fmt_sd(estimate->covariance(k, k));
-    writer.write(sample.t, pose, estimate->twist, extra);
-    ++samples;
-  };
+  Pipeline pipeline(config, args.config, t0, args.pipeline, std::move(wheels),
+                    [&](const PipelineStep& step) {
+                      odometry_extra_values(step, config, extra);
+                      writer.write(step.sample.t, step.pose, step.estimate.estimate.twist, extra);
+                    });
 
   const bool progress = !args.quiet && isatty(STDERR_FILENO);
   auto last_report = std::chrono::steady_clock::now();
+  const std::string where = (log_dir / "mice.csv").string();
   std::size_t rows = 0;
-  double t_last = t0;
   while (const auto row = reader.next()) {
-    if (const auto error = sync.push(*row, sink)) {
-      throw io::Error(
-          fmt::format("{}: row {} (t = {} s): {}", args.log, rows + 1, row->t, describe(*error)));
-    }
-    t_last = row->t;
+    pipeline.push(*row, where);
     ++rows;
     if (progress && (rows & 0xfff) == 0) {
       const auto now = std::chrono::steady_clock::now();
       if (now - last_report > std::chrono::seconds(1)) {
-        fmt::print(stderr, "\rmoa odometry: {} rows, t = {:.1f} s", rows, t_last - t0);
+        fmt::print(stderr, "\rmoa odometry: {} rows, t = {:.1f} s", rows, pipeline.last_time() - t0);
         last_report = now;
       }
     }
   }
-  sync.finish(t_last, sink);
+  pipeline.finish();
   writer.commit();
-  if (progress) fmt::print(stderr, "\r");
+  if (progress) fmt::print(stderr, "\r\033[K");
   if (!args.quiet) {
-    fmt::print("moa odometry: {} rows, {} samples over {:.3f} s at {} Hz; odometry written to {}\n",
-               rows, samples, t_last - t0, args.rate, args.out);
+    fmt::print("moa odometry: {} rows, {} samples over {:.3f} s at {} Hz ({} estimator); odometry written to {}\n",
+               rows, pipeline.samples(), pipeline.last_time() - t0, args.pipeline.rate,
+               args.pipeline.estimator, args.out);
   }
   return 0;
 }
@@ -112,15 +84,17 @@ void add_odometry(CLI::App& app, Action& action) {
   cmd->add_option("--log", args->log, "Log directory (log format v1) or its mice.csv")
       ->required()
       ->check(CLI::ExistingPath);
-  cmd->add_option("--estimator", args->estimator, "Twist estimator")
+  cmd->add_option("--estimator", args->pipeline.estimator,
+                  "Twist estimator: ls (all sensors, least squares), sekimori (pairwise voting, "
+                  "Sekimori & Miyazaki), consensus (largest consistent set)")
       ->check(CLI::IsMember({"ls", "sekimori", "consensus"}))
       ->capture_default_str();
   cmd->add_option("--out", args->out, "Output odometry.csv (written whole or not at all)")
       ->required();
-  cmd->add_option("--rate", args->rate, "Epoch rate of the synchroniser, Hz")
+  cmd->add_option("--rate", args->pipeline.rate, "Epoch rate of the synchroniser, Hz")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  cmd->add_option("--max-row-interval", args->max_row_interval,
+  cmd->add_option("--max-row-interval", args->pipeline.max_row_interval,
                   "Longest interval one mice.csv row may cover, s (a sensor silent for longer "
                   "was still before its row)")
       ->check(CLI::PositiveNumber)
@@ -129,6 +103,8 @@ void add_odometry(CLI::App& app, Action& action) {
                   "Initial pose X,Y,THETA in the world frame (m, m, rad)")
       ->expected(3)
       ->delimiter(',');
+  cmd->add_flag("--no-wheels", args->no_wheels,
+                "Ignore wheels.csv (by default it is the fallback and plausibility check)");
   cmd->add_flag("--quiet", args->quiet, "Print nothing on success");
   cmd->callback([&action, args] { action = [args] { return run_odometry(*args); }; });
 }

@@ -338,8 +338,8 @@ double DataTracker::accept(const Data& data, std::uint32_t tick_hz) {
   }
   last_sequence_ = data.sequence;
   last_timestamp_ = data.timestamp;
-  const double ticks = static_cast<double>(wraps_) * 4294967296.0 +
-                       static_cast<double>(data.timestamp);
+  const double ticks =
+      static_cast<double>(wraps_) * 4294967296.0 + static_cast<double>(data.timestamp);
   return ticks / static_cast<double>(tick_hz);
 }
 

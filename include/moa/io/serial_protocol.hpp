@@ -36,11 +36,11 @@ std::optional<std::vector<std::uint8_t>> cobs_decode(std::span<const std::uint8_
 
 struct Hello {
   std::uint8_t version = kProtocolVersion;
-  std::uint16_t k = 1;             ///< sensor frames per DATA frame
-  std::uint16_t frame_rate = 0;    ///< sensor frames per second
-  std::uint16_t cpi = 0;           ///< counts per inch
-  std::uint32_t tick_hz = 1000000; ///< timestamp ticks per second
-  std::vector<std::string> names;  ///< one per sensor
+  std::uint16_t k = 1;              ///< sensor frames per DATA frame
+  std::uint16_t frame_rate = 0;     ///< sensor frames per second
+  std::uint16_t cpi = 0;            ///< counts per inch
+  std::uint32_t tick_hz = 1000000;  ///< timestamp ticks per second
+  std::vector<std::string> names;   ///< one per sensor
 };
 
 struct SensorCounts {
@@ -57,8 +57,12 @@ struct Data {
   std::array<SensorCounts, kMaxSensors> sensors{};
 };
 
-struct SetK { std::uint16_t k = 1; };
-struct SetCpi { std::uint16_t cpi = 1600; };
+struct SetK {
+  std::uint16_t k = 1;
+};
+struct SetCpi {
+  std::uint16_t cpi = 1600;
+};
 struct HelloRequest {};
 
 using Message = std::variant<Hello, Data, SetK, SetCpi, HelloRequest>;
@@ -82,9 +86,9 @@ const char* describe(FrameError error);
 class Decoder {
  public:
   struct Stats {
-    std::uint64_t frames = 0;          ///< good frames decoded
-    std::uint64_t corrupt = 0;         ///< frames dropped (any FrameError)
-    std::uint64_t overlong = 0;        ///< blocks longer than any valid frame
+    std::uint64_t frames = 0;    ///< good frames decoded
+    std::uint64_t corrupt = 0;   ///< frames dropped (any FrameError)
+    std::uint64_t overlong = 0;  ///< blocks longer than any valid frame
   };
 
   /// Feeds one byte; returns a message when it completes a good frame, or

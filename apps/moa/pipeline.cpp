@@ -1,0 +1,172 @@
+#include "pipeline.hpp"
+
+#include <fmt/core.h>
+
+#include <cmath>
+#include <variant>
+
+#include "moa/consensus.hpp"
+#include "moa/estimate.hpp"
+#include "moa/io/error.hpp"
+#include "moa/sekimori.hpp"
+#include "moa/wheels.hpp"
+
+namespace moa::cli {
+namespace {
+
+template <class Estimator>
+Estimator built_or_throw(std::variant<Estimator, GeometryError> built, const std::string& path) {
+  if (const auto* error = std::get_if<GeometryError>(&built)) {
+    throw io::Error(fmt::format("{}: {}", path, describe(*error)));
+  }
+  return std::get<Estimator>(std::move(built));
+}
+
+class LsSource : public TwistSource {
+ public:
+  explicit LsSource(LsEstimator est) : est_(std::move(est)) {}
+  std::optional<RobustEstimate> estimate(const ArraySample& sample,
+                                         const std::optional<Twist2>&) override {
+    const auto e = est_.estimate(sample);
+    if (!e) return std::nullopt;
+    RobustEstimate out;
+    out.estimate = *e;
+    return out;
+  }
+
+ private:
+  LsEstimator est_;
+};
+
+template <class Estimator>
+class RobustSource : public TwistSource {
+ public:
+  explicit RobustSource(Estimator est) : est_(std::move(est)) {}
+  std::optional<RobustEstimate> estimate(const ArraySample& sample,
+                                         const std::optional<Twist2>& wheels) override {
+    return est_.estimate(sample, wheels);
+  }
+
+ private:
+  Estimator est_;
+};
+
+std::string sd(double variance) { return fmt::format("{:.6g}", std::sqrt(std::max(variance, 0.0))); }
+
+}  // namespace
+
+std::unique_ptr<TwistSource> TwistSource::create(const std::string& name, const SensorArray& array,
+                                                 double period, const std::string& config_path) {
+  if (name == "ls") {
+    return std::make_unique<LsSource>(built_or_throw(
+        LsEstimator::create(array, all_sensors(array.size()), period), config_path));
+  }
+  if (name == "sekimori") {
+    return std::make_unique<RobustSource<SekimoriEstimator>>(
+        built_or_throw(SekimoriEstimator::create(array), config_path));
+  }
+  if (name == "consensus") {
+    return std::make_unique<RobustSource<ConsensusEstimator>>(
+        built_or_throw(ConsensusEstimator::create(array), config_path));
+  }
+  throw io::Error(fmt::format("unknown estimator '{}' (ls, sekimori, consensus)", name));
+}
+
+struct Pipeline::Impl {
+  Synchroniser sync;
+  std::unique_ptr<TwistSource> estimator;
+  std::unique_ptr<io::WheelsReader> wheels_reader;
+  WheelAverager wheels;
+  bool wheels_done = false;
+  DeadReckoner reckoner;
+  Sink sink;
+  std::string log_name;
+
+  std::optional<Twist2> wheel_twist(double a, double b) {
+    if (!wheels_reader) return std::nullopt;
+    while (!wheels_done && !wheels.covers(b) && !wheels.full()) {
+      const auto row = wheels_reader->next();
+      if (!row) {
+        wheels_done = true;
+        break;
+      }
+      wheels.push(row->t, row->twist);
+    }
+    return wheels.average(a, b);
+  }
+};
+
+Pipeline::Pipeline(const io::RobotConfig& config, const std::string& config_path, double t0,
+                   const PipelineOptions& options, std::unique_ptr<io::WheelsReader> wheels,
+                   Sink sink)
+    : t_last_(t0) {
+  const double period = 1.0 / options.rate;
+  impl_ = std::unique_ptr<Impl>(new Impl{
+      Synchroniser(config.array.size(), t0, {period, options.max_row_interval}),
+      TwistSource::create(options.estimator, config.array, period, config_path), std::move(wheels),
+      WheelAverager{}, false, DeadReckoner(options.initial), std::move(sink), ""});
+}
+
+Pipeline::~Pipeline() = default;
+
+void Pipeline::push(const SensorRow& row, const std::string& where) {
+  Impl& s = *impl_;
+  const auto on_sample = [&](const ArraySample& sample) {
+    const auto wheels = s.wheel_twist(sample.t - sample.dt, sample.t);
+    const auto estimate = s.estimator->estimate(sample, wheels);
+    if (!estimate) {
+      throw io::Error(fmt::format("{}: sample at t = {} s has no valid interval", where, sample.t));
+    }
+    const Pose2& pose = s.reckoner.step(estimate->estimate.twist, sample.dt);
+    s.sink(PipelineStep{sample, *estimate, pose});
+    ++samples_;
+  };
+  if (const auto error = s.sync.push(row, on_sample)) {
+    throw io::Error(fmt::format("{}: row at t = {} s: {}", where, row.t, describe(*error)));
+  }
+  t_last_ = row.t;
+}
+
+void Pipeline::finish() {
+  Impl& s = *impl_;
+  s.sync.finish(t_last_, [&](const ArraySample& sample) {
+    const auto wheels = s.wheel_twist(sample.t - sample.dt, sample.t);
+    const auto estimate = s.estimator->estimate(sample, wheels);
+    if (!estimate) return;  // a zero-length tail carries no motion
+    const Pose2& pose = s.reckoner.step(estimate->estimate.twist, sample.dt);
+    s.sink(PipelineStep{sample, *estimate, pose});
+    ++samples_;
+  });
+}
+
+std::vector<std::string> odometry_extra_columns() {
+  return {"sd_vx", "sd_vy", "sd_omega", "source", "used", "excluded"};
+}
+
+void odometry_extra_values(const PipelineStep& step, const io::RobotConfig& config,
+                           std::vector<std::string>& out) {
+  const auto& e = step.estimate;
+  out.resize(6);
+  out[0] = sd(e.estimate.covariance(0, 0));
+  out[1] = sd(e.estimate.covariance(1, 1));
+  out[2] = sd(e.estimate.covariance(2, 2));
+  out[3] = describe(e.source);
+  out[4].clear();
+  out[5].clear();
+  for (int i = 0; i < config.array.size(); ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    if (contains(e.estimate.used, i)) {
+      if (!out[4].empty()) out[4] += '+';
+      out[4] += config.names[u];
+    } else {
+      if (!out[5].empty()) out[5] += ';';
+      out[5] += config.names[u] + ':' + describe(e.excluded[u]);
+      const auto f = e.noise_flags[u];
+      if (f & kNoiseOverSpeed) out[5] += "/over-speed";
+      if (f & kNoiseLowSqual) out[5] += "/low-squal";
+      if (f & kNoiseOverflow) out[5] += "/overflow";
+    }
+  }
+}
+
+}  // namespace moa::cli

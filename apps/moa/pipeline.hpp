@@ -1,0 +1,72 @@
+// The dead-reckoning pipeline shared by `moa odometry` (files) and live
+// input: frames -> Synchroniser -> estimator (+ wheels) -> DeadReckoner ->
+// odometry rows. One path for every source, streamed, memory flat.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "moa/array.hpp"
+#include "moa/io/config.hpp"
+#include "moa/io/log.hpp"
+#include "moa/select.hpp"
+#include "moa/synchronise.hpp"
+
+namespace moa::cli {
+
+struct PipelineOptions {
+  std::string estimator = "consensus";  ///< ls | sekimori | consensus
+  double rate = 100.0;                  ///< Hz, epochs
+  double max_row_interval = 0.05;       ///< s
+  Pose2 initial;
+};
+
+/// One output epoch of the pipeline.
+struct PipelineStep {
+  const ArraySample& sample;
+  const RobustEstimate& estimate;
+  const Pose2& pose;
+};
+
+/// The estimator chosen by name behind one interface.
+class TwistSource {
+ public:
+  virtual ~TwistSource() = default;
+  virtual std::optional<RobustEstimate> estimate(const ArraySample& sample,
+                                                 const std::optional<Twist2>& wheels) = 0;
+  /// Throws io::Error naming `config_path` when the geometry is refused.
+  static std::unique_ptr<TwistSource> create(const std::string& name, const SensorArray& array,
+                                             double period, const std::string& config_path);
+};
+
+class Pipeline {
+ public:
+  using Sink = std::function<void(const PipelineStep&)>;
+  /// `wheels` may be null (no wheels.csv).
+  Pipeline(const io::RobotConfig& config, const std::string& config_path, double t0,
+           const PipelineOptions& options, std::unique_ptr<io::WheelsReader> wheels, Sink sink);
+  ~Pipeline();
+
+  /// Feeds one row; throws io::Error on an invalid row (`where` names it).
+  void push(const SensorRow& row, const std::string& where);
+  /// Flushes the epochs up to the last row's time.
+  void finish();
+  std::size_t samples() const { return samples_; }
+  double last_time() const { return t_last_; }
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::size_t samples_ = 0;
+  double t_last_;
+};
+
+/// The extra odometry.csv columns the pipeline writes, and their values.
+std::vector<std::string> odometry_extra_columns();
+void odometry_extra_values(const PipelineStep& step, const io::RobotConfig& config,
+                           std::vector<std::string>& out);
+
+}  // namespace moa::cli

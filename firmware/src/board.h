@@ -1,0 +1,71 @@
+/* Pins and the register names that differ between the ATmega328P and the
+ * ATmega8 (same package pinout for SPI, UART and the ports used here).
+ *
+ * Pinout (Arduino Uno/Nano names in brackets), docs/firmware.md:
+ *   SPI  SCK PB5 [D13], MISO PB4 [D12], MOSI PB3 [D11]
+ *   UART TXD PD1 [D1], RXD PD0 [D0]
+ *   RESET of all sensors, active high: PD2 [D2]
+ *   chip select of sensor i, active low: CS_PINS[i] below. */
+#ifndef MOA_FW_BOARD_H
+#define MOA_FW_BOARD_H
+
+#include <avr/io.h>
+#include <stdint.h>
+
+#if defined(__AVR_ATmega8__)
+#define MOA_UCSRA UCSRA
+#define MOA_UCSRB UCSRB
+#define MOA_UBRRL UBRRL
+#define MOA_UBRRH UBRRH
+#define MOA_UDR UDR
+#define MOA_U2X U2X
+#define MOA_RXEN RXEN
+#define MOA_TXEN TXEN
+#define MOA_RXCIE RXCIE
+#define MOA_UDRIE UDRIE
+#define MOA_UART_RX_VECT USART_RXC_vect
+#define MOA_UART_UDRE_VECT USART_UDRE_vect
+#define MOA_TIMSK1 TIMSK
+#elif defined(__AVR_ATmega328P__) || defined(__AVR_ATmega328__) || \
+    defined(__AVR_ATmega168__) || defined(__AVR_ATmega88__)
+#define MOA_UCSRA UCSR0A
+#define MOA_UCSRB UCSR0B
+#define MOA_UBRRL UBRR0L
+#define MOA_UBRRH UBRR0H
+#define MOA_UDR UDR0
+#define MOA_U2X U2X0
+#define MOA_RXEN RXEN0
+#define MOA_TXEN TXEN0
+#define MOA_RXCIE RXCIE0
+#define MOA_UDRIE UDRIE0
+#define MOA_UART_RX_VECT USART_RX_vect
+#define MOA_UART_UDRE_VECT USART_UDRE_vect
+#define MOA_TIMSK1 TIMSK1
+#else
+#error "moa firmware: unsupported MCU (ATmega328P, ATmega8)"
+#endif
+
+/* RESET line shared by all sensors. */
+#define MOA_RESET_PORT PORTD
+#define MOA_RESET_DDR DDRD
+#define MOA_RESET_BIT PD2
+
+/* Chip selects, in the order of the sensors in HELLO and DATA. PB2 is the
+ * SPI SS pin: as an output it keeps the SPI in master mode. */
+typedef struct {
+  volatile uint8_t* port;
+  volatile uint8_t* ddr;
+  uint8_t mask;
+} moa_pin_t;
+
+#define MOA_CS_PIN_TABLE                                                             \
+  {                                                                                  \
+    {&PORTB, &DDRB, _BV(PB2)}, {&PORTB, &DDRB, _BV(PB1)}, {&PORTB, &DDRB, _BV(PB0)}, \
+        {&PORTD, &DDRD, _BV(PD7)}, {&PORTD, &DDRD, _BV(PD6)},                        \
+        {&PORTD, &DDRD, _BV(PD5)}, {&PORTD, &DDRD, _BV(PD4)},                        \
+        {&PORTD, &DDRD, _BV(PD3)}, {&PORTC, &DDRC, _BV(PC0)},                        \
+        {&PORTC, &DDRC, _BV(PC1)}, {&PORTC, &DDRC, _BV(PC2)},                        \
+        {&PORTC, &DDRC, _BV(PC3)}, {&PORTC, &DDRC, _BV(PC4)}, {&PORTC, &DDRC, _BV(PC5)}, \
+  }
+
+#endif

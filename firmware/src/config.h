@@ -1,0 +1,64 @@
+/* Build-time settings of the moa acquisition firmware.
+ *
+ * Every setting can be overridden with -D on the avr-gcc command line (the
+ * CMake function moa_add_firmware does that per build). K and the
+ * resolution can also be changed at run time by the host (SET_K, SET_CPI,
+ * docs/serial-protocol.md); N, the frame rate and the baud rate cannot. */
+#ifndef MOA_FW_CONFIG_H
+#define MOA_FW_CONFIG_H
+
+#ifndef F_CPU
+#error "F_CPU (the clock in Hz) must be defined"
+#endif
+
+/* N: number of ADNS-3080 sensors, one chip select each (board.h). */
+#ifndef MOA_FW_SENSORS
+#define MOA_FW_SENSORS 4
+#endif
+
+/* K: sensor frames summed into one DATA frame at start-up. Kim & Lee's
+ * downsampler uses K = 12 (their Section V). */
+#ifndef MOA_FW_K
+#define MOA_FW_K 12
+#endif
+
+/* Sensor frames per second: how often every sensor's motion burst is read.
+ * This is the FPS of Kim & Lee eq. (50) for the counts the host receives;
+ * the ADNS-3080 itself images faster and accumulates between reads. */
+#ifndef MOA_FW_FRAME_HZ
+#define MOA_FW_FRAME_HZ 1000
+#endif
+
+/* Resolution at start-up, counts per inch: 400 or 1600. */
+#ifndef MOA_FW_CPI
+#define MOA_FW_CPI 1600
+#endif
+
+/* UART rate. 500000 is exact at 8 and 16 MHz (U2X, UBRR = 1 or 3) and a
+ * standard Linux rate (B500000); see docs/firmware.md for others. */
+#ifndef MOA_FW_BAUD
+#define MOA_FW_BAUD 500000UL
+#endif
+
+/* SQUAL below this marks a window "lift or no surface" (flags bit 1). */
+#ifndef MOA_FW_SQUAL_FLOOR
+#define MOA_FW_SQUAL_FLOOR 16
+#endif
+
+#define MOA_FW_K_MAX 1000u
+
+/* Timestamp ticks: Timer1 with prescaler 8. */
+#define MOA_FW_TICK_HZ (F_CPU / 8UL)
+#define MOA_FW_FRAME_TICKS (MOA_FW_TICK_HZ / MOA_FW_FRAME_HZ)
+
+_Static_assert(MOA_FW_SENSORS >= 1 && MOA_FW_SENSORS <= 14,
+               "MOA_FW_SENSORS: 1..14 (chip-select pins available, board.h)");
+_Static_assert(MOA_FW_K >= 1 && MOA_FW_K <= MOA_FW_K_MAX, "MOA_FW_K: 1..1000");
+_Static_assert(MOA_FW_CPI == 400 || MOA_FW_CPI == 1600, "MOA_FW_CPI: 400 or 1600");
+_Static_assert(MOA_FW_TICK_HZ % MOA_FW_FRAME_HZ == 0,
+               "MOA_FW_FRAME_HZ must divide F_CPU/8 so that frames are a whole number of ticks");
+_Static_assert(MOA_FW_FRAME_TICKS >= 2 && MOA_FW_FRAME_TICKS <= 65536UL,
+               "MOA_FW_FRAME_HZ out of Timer1's range");
+_Static_assert(MOA_FW_FRAME_HZ <= 65535UL, "MOA_FW_FRAME_HZ must fit the HELLO's u16");
+
+#endif

@@ -1,0 +1,240 @@
+// Sekimori & Miyazaki's voting and the consensus estimator against
+// hand-built samples with one, two and three bad sensors.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "moa/chi2.hpp"
+#include "moa/consensus.hpp"
+#include "moa/sekimori.hpp"
+
+namespace moa {
+namespace {
+
+constexpr double kDt = 0.01;
+
+/// Sekimori & Miyazaki's layout: four sensors, x axis radial at 45 + k 90 deg, 0.1 m out.
+SensorArray sekimori_array() {
+  std::vector<SensorMount> m(4);
+  for (int k = 0; k < 4; ++k) {
+    const double phi = std::numbers::pi / 4.0 + k * std::numbers::pi / 2.0;
+    m[static_cast<std::size_t>(k)].position = 0.1 * Eigen::Vector2d(std::cos(phi), std::sin(phi));
+    m[static_cast<std::size_t>(k)].yaw = phi;
+  }
+  return SensorArray(m);
+}
+
+ArraySample clean_sample(const SensorArray& a, const Twist2& x) {
+  ArraySample s;
+  s.dt = kDt;
+  s.t = 1.0;
+  s.size = a.size();
+  for (int i = 0; i < a.size(); ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    s.counts[u] = a[i].counts(x, kDt);
+    s.squal[u] = 255;
+  }
+  return s;
+}
+
+/// Adds a robot-frame point-velocity error (m/s) to sensor i's counts.
+void corrupt(const SensorArray& a, ArraySample& s, int i, const Eigen::Vector2d& error) {
+  s.counts[static_cast<std::size_t>(i)] += a[i].counts_from_robot_velocity() * error * kDt;
+}
+
+const Twist2 kTruth{{0.25, -0.1}, 0.8};
+
+TEST(Sekimori, PairResidualIsLeastSquaresResidualOfEq4) {
+  // Independent computation with a dynamic pseudo-inverse, as eq. (5) is written.
+  const SensorArray a = sekimori_array();
+  auto est = std::get<SekimoriEstimator>(SekimoriEstimator::create(a));
+  std::mt19937_64 rng(30);
+  std::normal_distribution<double> g(0.0, 0.01);
+  ArraySample s = clean_sample(a, kTruth);
+  for (int i = 0; i < 4; ++i) corrupt(a, s, i, {g(rng), g(rng)});
+  ASSERT_TRUE(est.estimate(s).has_value());
+  for (int i = 0; i < 4; ++i) {
+    for (int j = i + 1; j < 4; ++j) {
+      Eigen::MatrixXd big_a(4, 3);
+      big_a.topRows(2) = a[i].point_jacobian();
+      big_a.bottomRows(2) = a[j].point_jacobian();
+      Eigen::VectorXd d(4);
+      d << a[i].robot_velocity_from_counts() * s.counts[static_cast<std::size_t>(i)],
+          a[j].robot_velocity_from_counts() * s.counts[static_cast<std::size_t>(j)];
+      const Eigen::VectorXd u = big_a.completeOrthogonalDecomposition().pseudoInverse() * d;
+      EXPECT_NEAR(est.pair_residual(i, j), (big_a * u - d).squaredNorm(), 1e-15);
+    }
+  }
+}
+
+TEST(Sekimori, OneBadSensorIsVotedOut) {
+  const SensorArray a = sekimori_array();
+  auto est = std::get<SekimoriEstimator>(SekimoriEstimator::create(a));
+  EXPECT_EQ(est.r_th(), 2);
+  ArraySample s = clean_sample(a, kTruth);
+  corrupt(a, s, 2, {0.2, -0.1});
+  const auto e = est.estimate(s);
+  ASSERT_TRUE(e.has_value());
+  EXPECT_EQ(e->source, Source::kMice);
+  EXPECT_EQ(e->estimate.used, 0b1011u);
+  EXPECT_EQ(e->excluded[2], Exclusion::kUnreliable);
+  EXPECT_TRUE(e->estimate.twist.vector().isApprox(kTruth.vector(), 1e-9));
+}
+
+TEST(Sekimori, TwoOrThreeBadSensorsFallBackToWheels) {
+  // With r_th = N - 2 = 2, two bad sensors leave each good one a single vote.
+  const SensorArray a = sekimori_array();
+  auto est = std::get<SekimoriEstimator>(SekimoriEstimator::create(a));
+  const Twist2 wheels{{0.24, -0.09}, 0.75};
+  for (int bad : {2, 3}) {
+    ArraySample s = clean_sample(a, kTruth);
+    for (int i = 0; i < bad; ++i) corrupt(a, s, i, {0.1 * (i + 1), -0.2 * i + 0.05});
+    const auto e = est.estimate(s, wheels);
+    ASSERT_TRUE(e.has_value());
+    EXPECT_EQ(e->source, Source::kWheels) << bad;
+    EXPECT_EQ(e->estimate.twist.vector(), wheels.vector());
+    EXPECT_EQ(e->estimate.used, 0u);
+    // Without wheels the last good twist is held, covariance grown.
+    const auto held = est.estimate(s);
+    EXPECT_EQ(held->source, Source::kHold);
+  }
+}
+
+/// V_i = S_i + A_i Cov_(-i) A_i^T: covariance of sensor i's deleted residual
+/// (its velocity predicted from the other sensors), dynamic matrices.
+Eigen::Matrix2d deleted_residual_covariance(const SensorArray& a, int i,
+                                            const std::vector<Eigen::Matrix2d>& s) {
+  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
+  for (int j = 0; j < a.size(); ++j) {
+    if (j == i) continue;
+    normal += a[j].point_jacobian().transpose() * s[static_cast<std::size_t>(j)].inverse() *
+              a[j].point_jacobian();
+  }
+  return s[static_cast<std::size_t>(i)] +
+         a[i].point_jacobian() * normal.inverse() * a[i].point_jacobian().transpose();
+}
+
+TEST(Consensus, NeverUsesSensorWithErrorBeyondFiveSigma) {
+  // Good sensors noise-free, one sensor off by an error whose whitened
+  // deleted residual is >= 5 sigma (e^T V^-1 e >= 25). That is the
+  // detectable part of an error: the other sensors' fit absorbs the rest.
+  const SensorArray a = sekimori_array();
+  ConsensusOptions options;
+  options.noise.relative = 0.0;  // quantisation only: S_i = C C^T / (6 dt^2)
+  std::vector<Eigen::Matrix2d> s_cov;
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Matrix2d c = a[i].robot_velocity_from_counts();
+    s_cov.push_back(c * c.transpose() / 6.0 / (kDt * kDt));
+  }
+  std::mt19937_64 rng(31);
+  std::uniform_real_distribution<double> angle(0.0, 2.0 * std::numbers::pi), sigmas(5.0, 50.0);
+  for (int trial = 0; trial < 200; ++trial) {
+    auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a, options));
+    const int bad = trial % 4;
+    const Eigen::Matrix2d v = deleted_residual_covariance(a, bad, s_cov);
+    const double phi = angle(rng);
+    const Eigen::Vector2d dir(std::cos(phi), std::sin(phi));
+    const Eigen::Vector2d error = dir * sigmas(rng) / std::sqrt(dir.dot(v.inverse() * dir));
+    ASSERT_GE(error.dot(v.inverse() * error), 25.0 - 1e-9);
+    ArraySample sample = clean_sample(a, {});  // robot still: no speed-dependent noise
+    corrupt(a, sample, bad, error);
+    const auto e = est.estimate(sample);
+    ASSERT_TRUE(e.has_value());
+    EXPECT_FALSE(contains(e->estimate.used, bad)) << "trial " << trial;
+    EXPECT_EQ(e->excluded[static_cast<std::size_t>(bad)], Exclusion::kInconsistent);
+    EXPECT_EQ(count_sensors(e->estimate.used), 3);
+    EXPECT_LT(e->estimate.twist.vector().norm(), 1e-9);
+  }
+}
+
+TEST(Consensus, TwoBadSensorsLeaveTheGoodPair) {
+  const SensorArray a = sekimori_array();
+  auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a));
+  ArraySample s = clean_sample(a, kTruth);
+  corrupt(a, s, 0, {0.3, 0.1});
+  corrupt(a, s, 3, {-0.2, 0.25});
+  const auto e = est.estimate(s);
+  ASSERT_TRUE(e.has_value());
+  EXPECT_EQ(e->source, Source::kMice);
+  EXPECT_EQ(e->estimate.used, 0b0110u);
+  EXPECT_TRUE(e->estimate.twist.vector().isApprox(kTruth.vector(), 1e-6));
+}
+
+TEST(Consensus, ThreeBadSensorsFallBackToWheelsAndRelease) {
+  const SensorArray a = sekimori_array();
+  auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a));
+  const Twist2 wheels{{0.26, -0.1}, 0.82};
+  ASSERT_EQ(est.estimate(clean_sample(a, kTruth), wheels)->source, Source::kMice);
+  ArraySample s = clean_sample(a, kTruth);
+  corrupt(a, s, 0, {0.3, 0.1});
+  corrupt(a, s, 1, {-0.2, 0.25});
+  corrupt(a, s, 3, {0.05, -0.3});
+  const auto e = est.estimate(s, wheels);
+  ASSERT_TRUE(e.has_value());
+  EXPECT_EQ(e->source, Source::kWheels);
+  EXPECT_EQ(e->estimate.used, 0u);
+  EXPECT_EQ(e->excluded[2], Exclusion::kFallback);
+  // Engages without wheels as a hold with grown covariance...
+  const auto held = est.estimate(s);
+  EXPECT_EQ(held->source, Source::kHold);
+  // ...and releases as soon as the sensors agree again.
+  const auto back = est.estimate(clean_sample(a, kTruth), wheels);
+  EXPECT_EQ(back->source, Source::kMice);
+  EXPECT_EQ(back->estimate.used, 0b1111u);
+}
+
+TEST(Consensus, LiftedSensorIsExcludedWithReason) {
+  const SensorArray a = sekimori_array();
+  auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a));
+  ArraySample s = clean_sample(a, kTruth);
+  s.flags[1] = kFlagLift;
+  const auto e = est.estimate(s);
+  EXPECT_EQ(e->excluded[1], Exclusion::kLift);
+  EXPECT_EQ(e->estimate.used, 0b1101u);
+}
+
+TEST(Consensus, MinorityPairMustAgreeWithWheels) {
+  // Two sensors lose track identically (counts zero: a consistent "still"
+  // pair), the other two see the motion. Without wheels both pairs pass and
+  // the smaller residual wins; with wheels the pair that agrees is chosen.
+  const SensorArray a = sekimori_array();
+  auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a));
+  ArraySample s = clean_sample(a, kTruth);
+  s.counts[0].setZero();
+  s.counts[1].setZero();
+  const auto e = est.estimate(s, kTruth);
+  ASSERT_TRUE(e.has_value());
+  EXPECT_EQ(e->estimate.used, 0b1100u);
+  EXPECT_TRUE(e->estimate.twist.vector().isApprox(kTruth.vector(), 1e-6));
+}
+
+TEST(Consensus, NoiseFlagsMarkOverSpeedLowSqualAndOverflow) {
+  SensorArray a = sekimori_array();
+  for (int i = 0; i < 4; ++i) a[i].max_speed = 0.3556;
+  auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a));
+  const Twist2 fast{{0.5, 0.0}, 0.0};
+  est.estimate(clean_sample(a, fast));  // predicts the speed of the next sample
+  ArraySample s = clean_sample(a, fast);
+  s.squal[1] = 3;
+  s.flags[2] = kFlagOverflow;
+  const auto e = est.estimate(s);
+  EXPECT_TRUE(e->noise_flags[0] & kNoiseOverSpeed);
+  EXPECT_TRUE(e->noise_flags[1] & kNoiseLowSqual);
+  EXPECT_TRUE(e->noise_flags[2] & kNoiseOverflow);
+}
+
+TEST(Chi2, QuantilesMatchKnownValues) {
+  // Table values of the chi-square distribution (independent of the code).
+  EXPECT_NEAR(chi2_quantile(0.95, 1), 3.841459, 1e-5);
+  EXPECT_NEAR(chi2_quantile(0.999, 1), 10.827566, 1e-5);
+  EXPECT_NEAR(chi2_quantile(0.999, 5), 20.515006, 1e-5);
+  EXPECT_NEAR(chi2_quantile(0.99, 29), 49.587884, 1e-5);
+  // dof 2 has a closed form: P(x) = 1 - exp(-x/2).
+  EXPECT_NEAR(chi2_cdf(3.0, 2), 1.0 - std::exp(-1.5), 1e-13);
+}
+
+}  // namespace
+}  // namespace moa
