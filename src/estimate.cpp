@@ -23,7 +23,7 @@ const char* describe(GeometryError error) {
 
 std::array<Eigen::Vector2d, kMaxSensors> point_velocities(const SensorArray& array,
                                                           const ArraySample& sample) {
-  std::array<Eigen::Vector2d, kMaxSensors> u{};
+  std::array<Eigen::Vector2d, kMaxSensors> u = zeros<Eigen::Vector2d>();
   for (int i = 0; i < sample.size && i < array.size(); ++i) {
     u[static_cast<std::size_t>(i)] = array[i].robot_velocity_from_counts() *
                                      sample.counts[static_cast<std::size_t>(i)] / sample.dt;
@@ -53,7 +53,7 @@ std::variant<LsEstimator, GeometryError> LsEstimator::create(const SensorArray& 
   Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d atwa = Eigen::Matrix3d::Zero();
   std::array<double, kMaxSensors> weight{};
-  std::array<Eigen::Matrix2d, kMaxSensors> quant{};  // C_i C_i^T / 6, m^2 per count^2
+  std::array<Eigen::Matrix2d, kMaxSensors> quant = zeros<Eigen::Matrix2d>();  // C_i C_i^T / 6, m^2 per count^2
   for (int i = 0; i < n; ++i) {
     if (!contains(used, i)) continue;
     const auto k = static_cast<std::size_t>(i);

@@ -13,5 +13,6 @@ using Action = std::function<int()>;
 void add_version(CLI::App& app, Action& action);
 void add_odometry(CLI::App& app, Action& action);
 void add_evaluate(CLI::App& app, Action& action);
+void add_analyze(CLI::App& app, Action& action);
 
 }  // namespace moa::cli

@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   moa::cli::add_version(app, action);
   moa::cli::add_odometry(app, action);
   moa::cli::add_evaluate(app, action);
+  moa::cli::add_analyze(app, action);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -14,6 +14,15 @@ namespace moa {
 /// per-sample matrix are bounded by it, so no per-sample call allocates.
 inline constexpr int kMaxSensors = 16;
 
+/// kMaxSensors copies of a zero Eigen vector or matrix (Eigen's default
+/// constructor leaves them uninitialised, so `{}` is not enough).
+template <class T>
+std::array<T, kMaxSensors> zeros() {
+  std::array<T, kMaxSensors> out;
+  for (auto& x : out) x.setZero();
+  return out;
+}
+
 /// Bit i set: sensor i takes part.
 using SensorMask = std::uint32_t;
 static_assert(kMaxSensors <= 32, "SensorMask must hold one bit per sensor");
@@ -59,7 +68,7 @@ struct ArraySample {
   int size = 0;     ///< number of sensors
   /// Counts in each sensor's own frame accumulated over the interval. Real
   /// valued: a row spread over several intervals contributes a fraction.
-  std::array<Eigen::Vector2d, kMaxSensors> counts{};
+  std::array<Eigen::Vector2d, kMaxSensors> counts = zeros<Eigen::Vector2d>();
   /// Lowest SQUAL reported in the interval (255 when none was reported).
   std::array<std::uint8_t, kMaxSensors> squal{};
   /// OR of the SensorFlag bits reported in the interval.

@@ -52,8 +52,8 @@ class SekimoriEstimator {
   SekimoriOptions options_;
   int r_th_;
   SubsetSolver solver_;
-  std::array<Eigen::Matrix2d, kMaxSensors> c_{};  ///< m per count, robot frame
-  std::array<Eigen::Matrix2d, kMaxSensors> quant_{};
+  std::array<Eigen::Matrix2d, kMaxSensors> c_ = zeros<Eigen::Matrix2d>();  ///< m per count, robot frame
+  std::array<Eigen::Matrix2d, kMaxSensors> quant_ = zeros<Eigen::Matrix2d>();
   /// Unit normals n_ij (4-vectors), pairs i < j in row-major order.
   std::vector<Eigen::Vector4d> normals_;
   std::array<double, kMaxSensors * (kMaxSensors - 1) / 2> residual_{};

@@ -76,9 +76,9 @@ class NoiseModel {
  private:
   int n_;
   NoiseModelOptions options_;
-  std::array<Eigen::Matrix2d, kMaxSensors> c_{};          ///< m per count, robot frame
-  std::array<Eigen::Matrix2d, kMaxSensors> quant_{};      ///< C C^T / 6
-  std::array<Eigen::Matrix<double, 2, 3>, kMaxSensors> a_{};
+  std::array<Eigen::Matrix2d, kMaxSensors> c_ = zeros<Eigen::Matrix2d>();          ///< m per count, robot frame
+  std::array<Eigen::Matrix2d, kMaxSensors> quant_ = zeros<Eigen::Matrix2d>();      ///< C C^T / 6
+  std::array<Eigen::Matrix<double, 2, 3>, kMaxSensors> a_ = zeros<Eigen::Matrix<double, 2, 3>>();
   std::array<double, kMaxSensors> noise2_{};
   std::array<double, kMaxSensors> max_speed_{};           ///< 0 when not rated
 };

@@ -20,8 +20,8 @@ namespace moa {
 /// Sensor point velocities and their covariances for one sample.
 struct PointMeasurements {
   int size = 0;
-  std::array<Eigen::Vector2d, kMaxSensors> u{};        ///< m/s, robot frame
-  std::array<Eigen::Matrix2d, kMaxSensors> info{};     ///< S_i^-1, (s/m)^2
+  std::array<Eigen::Vector2d, kMaxSensors> u = zeros<Eigen::Vector2d>();  ///< m/s, robot frame
+  std::array<Eigen::Matrix2d, kMaxSensors> info = zeros<Eigen::Matrix2d>();  ///< S_i^-1, (s/m)^2
 };
 
 struct SubsetFit {
@@ -47,7 +47,7 @@ class SubsetSolver {
 
  private:
   int n_ = 0;
-  std::array<Eigen::Matrix<double, 2, 3>, kMaxSensors> a_{};
+  std::array<Eigen::Matrix<double, 2, 3>, kMaxSensors> a_ = zeros<Eigen::Matrix<double, 2, 3>>();
 };
 
 }  // namespace moa
