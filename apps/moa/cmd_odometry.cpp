@@ -22,7 +22,7 @@ struct OdometryArgs {
   std::string log;
   std::string out;
   PipelineOptions pipeline;
-  std::vector<double> initial_pose{0.0, 0.0, 0.0};
+  std::vector<double> initial_pose;
   bool no_wheels = false;
   bool quiet = false;
 };
@@ -36,12 +36,21 @@ int run_odometry(OdometryArgs args) {
   if (!args.no_wheels && fs::exists(log_dir / "wheels.csv")) {
     wheels = std::make_unique<io::WheelsReader>(log_dir / "wheels.csv");
   }
-  args.pipeline.initial = Pose2{{args.initial_pose[0], args.initial_pose[1]}, args.initial_pose[2]};
+  if (args.initial_pose.size() == 3) {
+    args.pipeline.initial = Pose2{{args.initial_pose[0], args.initial_pose[1]}, args.initial_pose[2]};
+  }
+  std::unique_ptr<io::CameraReader> camera;
+  if (args.pipeline.fuse_camera) {
+    if (!fs::exists(log_dir / "camera.csv")) {
+      throw io::Error(fmt::format("{}: --fuse-camera needs camera.csv in the log", (log_dir / "camera.csv").string()));
+    }
+    camera = std::make_unique<io::CameraReader>(log_dir / "camera.csv");
+  }
 
-  io::OdometryWriter writer(args.out, odometry_extra_columns());
+  io::OdometryWriter writer(args.out, odometry_extra_columns(args.pipeline.fuse_camera));
   std::vector<std::string> extra;
   const double t0 = reader.start_time();
-  Pipeline pipeline(config, args.config, t0, args.pipeline, std::move(wheels),
+  Pipeline pipeline(config, args.config, t0, args.pipeline, std::move(wheels), std::move(camera),
                     [&](const PipelineStep& step) {
                       odometry_extra_values(step, config, extra);
                       writer.write(step.sample.t, step.pose, step.estimate.estimate.twist, extra);
@@ -69,6 +78,11 @@ int run_odometry(OdometryArgs args) {
     fmt::print("moa odometry: {} rows, {} samples over {:.3f} s at {} Hz ({} estimator); odometry written to {}\n",
                rows, pipeline.samples(), pipeline.last_time() - t0, args.pipeline.rate,
                args.pipeline.estimator, args.out);
+    if (args.pipeline.fuse_camera) {
+      const FixCounts& f = pipeline.fixes();
+      fmt::print("camera fixes: {} applied, {} rejected as outliers, {} older than the filter's history, {} invalid\n",
+                 f.applied, f.rejected, f.too_old, f.invalid);
+    }
   }
   return 0;
 }
@@ -103,6 +117,17 @@ void add_odometry(CLI::App& app, Action& action) {
                   "Initial pose X,Y,THETA in the world frame (m, m, rad)")
       ->expected(3)
       ->delimiter(',');
+  cmd->add_flag("--fuse-camera", args->pipeline.fuse_camera,
+                "Fuse camera.csv position fixes with an EKF (adds pose covariance columns)");
+  cmd->add_option("--camera-latency", args->pipeline.camera_latency,
+                  "Delay from a fix's capture (camera.csv t) to its arrival, s: late fixes are "
+                  "applied at their capture time")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--camera-sigma", args->pipeline.camera_sigma,
+                  "Std. dev. of a camera fix, m, when camera.csv has no sx, sy")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   cmd->add_flag("--no-wheels", args->no_wheels,
                 "Ignore wheels.csv (by default it is the fallback and plausibility check)");
   cmd->add_flag("--quiet", args->quiet, "Print nothing on success");

@@ -6,6 +6,7 @@
 #include <variant>
 
 #include "moa/consensus.hpp"
+#include "moa/ekf.hpp"
 #include "moa/estimate.hpp"
 #include "moa/io/error.hpp"
 #include "moa/sekimori.hpp"
@@ -80,7 +81,81 @@ struct Pipeline::Impl {
   bool wheels_done = false;
   DeadReckoner reckoner;
   Sink sink;
-  std::string log_name;
+  std::unique_ptr<io::CameraReader> camera;
+  PipelineOptions options;
+  std::optional<PoseEkf> ekf;
+  std::optional<io::CameraRow> pending_fix;
+  FixCounts fixes;
+  double t0 = 0.0;
+
+  Eigen::Matrix2d fix_covariance(const io::CameraRow& row) const {
+    const Eigen::Vector2d sd = row.sigma ? *row.sigma
+                                         : Eigen::Vector2d::Constant(options.camera_sigma);
+    return sd.cwiseAbs2().asDiagonal();
+  }
+
+  /// The EKF starts at the given pose, or at the first fix's position.
+  void start_filter() {
+    Eigen::Matrix3d p0 = Eigen::Vector3d(1e-8, 1e-8, 1e-8).asDiagonal();
+    Pose2 initial = options.initial.value_or(Pose2{});
+    if (!options.initial) {
+      pending_fix = camera->next();
+      if (pending_fix) {
+        initial.t = pending_fix->position;
+        p0.topLeftCorner<2, 2>() = fix_covariance(*pending_fix);
+        p0(2, 2) = 1e-4;
+        pending_fix.reset();  // it made the initial position
+      }
+    }
+    ekf.emplace(t0, initial, p0);
+  }
+
+  /// Applies every fix that has arrived by t (capture time + latency).
+  void apply_fixes(double t) {
+    while (true) {
+      if (!pending_fix) pending_fix = camera->next();
+      if (!pending_fix || pending_fix->t + options.camera_latency > t) return;
+      const io::CameraRow& f = *pending_fix;
+      FixResult result;
+      if (f.theta) {
+        Eigen::Matrix3d r = Eigen::Matrix3d::Zero();
+        r.topLeftCorner<2, 2>() = fix_covariance(f);
+        r(2, 2) = options.camera_heading_sigma * options.camera_heading_sigma;
+        result = ekf->update_pose(f.t, {f.position.x(), f.position.y(), *f.theta}, r);
+      } else {
+        result = ekf->update_position(f.t, f.position, fix_covariance(f));
+      }
+      switch (result) {
+        case FixResult::kApplied:
+          ++fixes.applied;
+          break;
+        case FixResult::kRejected:
+          ++fixes.rejected;
+          break;
+        case FixResult::kTooOld:
+          ++fixes.too_old;
+          break;
+        case FixResult::kFuture:
+          return;  // keep it until the filter has reached its time
+        case FixResult::kInvalid:
+          ++fixes.invalid;
+          break;
+      }
+      pending_fix.reset();
+    }
+  }
+
+  void step(const ArraySample& sample, const RobustEstimate& estimate, std::size_t& samples) {
+    if (ekf) {
+      ekf->predict(sample.t, estimate.estimate.twist, estimate.estimate.covariance, sample.dt);
+      apply_fixes(sample.t);
+      sink(PipelineStep{sample, estimate, ekf->pose(), &ekf->covariance()});
+    } else {
+      sink(PipelineStep{sample, estimate, reckoner.step(estimate.estimate.twist, sample.dt),
+                        nullptr});
+    }
+    ++samples;
+  }
 
   std::optional<Twist2> wheel_twist(double a, double b) {
     if (!wheels_reader) return std::nullopt;
@@ -98,14 +173,18 @@ struct Pipeline::Impl {
 
 Pipeline::Pipeline(const io::RobotConfig& config, const std::string& config_path, double t0,
                    const PipelineOptions& options, std::unique_ptr<io::WheelsReader> wheels,
-                   Sink sink)
+                   std::unique_ptr<io::CameraReader> camera, Sink sink)
     : t_last_(t0) {
   const double period = 1.0 / options.rate;
   impl_ = std::unique_ptr<Impl>(new Impl{
       Synchroniser(config.array.size(), t0, {period, options.max_row_interval}),
       TwistSource::create(options.estimator, config.array, period, config_path), std::move(wheels),
-      WheelAverager{}, false, DeadReckoner(options.initial), std::move(sink), ""});
+      WheelAverager{}, false, DeadReckoner(options.initial.value_or(Pose2{})), std::move(sink),
+      std::move(camera), options, std::nullopt, std::nullopt, FixCounts{}, t0});
+  if (impl_->camera) impl_->start_filter();
 }
+
+const FixCounts& Pipeline::fixes() const { return impl_->fixes; }
 
 Pipeline::~Pipeline() = default;
 
@@ -117,9 +196,7 @@ void Pipeline::push(const SensorRow& row, const std::string& where) {
     if (!estimate) {
       throw io::Error(fmt::format("{}: sample at t = {} s has no valid interval", where, sample.t));
     }
-    const Pose2& pose = s.reckoner.step(estimate->estimate.twist, sample.dt);
-    s.sink(PipelineStep{sample, *estimate, pose});
-    ++samples_;
+    s.step(sample, *estimate, samples_);
   };
   if (const auto error = s.sync.push(row, on_sample)) {
     throw io::Error(fmt::format("{}: row at t = {} s: {}", where, row.t, describe(*error)));
@@ -133,20 +210,26 @@ void Pipeline::finish() {
     const auto wheels = s.wheel_twist(sample.t - sample.dt, sample.t);
     const auto estimate = s.estimator->estimate(sample, wheels);
     if (!estimate) return;  // a zero-length tail carries no motion
-    const Pose2& pose = s.reckoner.step(estimate->estimate.twist, sample.dt);
-    s.sink(PipelineStep{sample, *estimate, pose});
-    ++samples_;
+    s.step(sample, *estimate, samples_);
   });
 }
 
-std::vector<std::string> odometry_extra_columns() {
-  return {"sd_vx", "sd_vy", "sd_omega", "source", "used", "excluded"};
+std::vector<std::string> odometry_extra_columns(bool fused) {
+  std::vector<std::string> columns{"sd_vx", "sd_vy", "sd_omega", "source", "used", "excluded"};
+  if (fused) columns.insert(columns.end(), {"pxx", "pxy", "pyy", "ptt"});
+  return columns;
 }
 
 void odometry_extra_values(const PipelineStep& step, const io::RobotConfig& config,
                            std::vector<std::string>& out) {
   const auto& e = step.estimate;
-  out.resize(6);
+  out.resize(step.pose_covariance ? 10 : 6);
+  if (const Eigen::Matrix3d* p = step.pose_covariance) {
+    out[6] = fmt::format("{:.6g}", (*p)(0, 0));
+    out[7] = fmt::format("{:.6g}", (*p)(0, 1));
+    out[8] = fmt::format("{:.6g}", (*p)(1, 1));
+    out[9] = fmt::format("{:.6g}", (*p)(2, 2));
+  }
   out[0] = sd(e.estimate.covariance(0, 0));
   out[1] = sd(e.estimate.covariance(1, 1));
   out[2] = sd(e.estimate.covariance(2, 2));

@@ -21,7 +21,16 @@ struct PipelineOptions {
   std::string estimator = "consensus";  ///< ls | sekimori | consensus
   double rate = 100.0;                  ///< Hz, epochs
   double max_row_interval = 0.05;       ///< s
-  Pose2 initial;
+  std::optional<Pose2> initial;  ///< world_T_robot at t0; default: identity, or the first fix
+  bool fuse_camera = false;       ///< EKF with camera.csv fixes
+  double camera_latency = 0.0;    ///< s from capture (camera.csv t) to arrival
+  double camera_sigma = 0.005;    ///< m, fix sd when camera.csv has no sx, sy
+  double camera_heading_sigma = 0.02;  ///< rad, when camera.csv has theta
+};
+
+/// Counts of what happened to the camera fixes.
+struct FixCounts {
+  std::size_t applied = 0, rejected = 0, too_old = 0, invalid = 0;
 };
 
 /// One output epoch of the pipeline.
@@ -29,6 +38,7 @@ struct PipelineStep {
   const ArraySample& sample;
   const RobustEstimate& estimate;
   const Pose2& pose;
+  const Eigen::Matrix3d* pose_covariance;  ///< with --fuse-camera, else null
 };
 
 /// The estimator chosen by name behind one interface.
@@ -45,9 +55,10 @@ class TwistSource {
 class Pipeline {
  public:
   using Sink = std::function<void(const PipelineStep&)>;
-  /// `wheels` may be null (no wheels.csv).
+  /// `wheels` and `camera` may be null (no wheels.csv, no fusion).
   Pipeline(const io::RobotConfig& config, const std::string& config_path, double t0,
-           const PipelineOptions& options, std::unique_ptr<io::WheelsReader> wheels, Sink sink);
+           const PipelineOptions& options, std::unique_ptr<io::WheelsReader> wheels,
+           std::unique_ptr<io::CameraReader> camera, Sink sink);
   ~Pipeline();
 
   /// Feeds one row; throws io::Error on an invalid row (`where` names it).
@@ -56,6 +67,7 @@ class Pipeline {
   void finish();
   std::size_t samples() const { return samples_; }
   double last_time() const { return t_last_; }
+  const FixCounts& fixes() const;
 
  private:
   struct Impl;
@@ -65,7 +77,7 @@ class Pipeline {
 };
 
 /// The extra odometry.csv columns the pipeline writes, and their values.
-std::vector<std::string> odometry_extra_columns();
+std::vector<std::string> odometry_extra_columns(bool fused);
 void odometry_extra_values(const PipelineStep& step, const io::RobotConfig& config,
                            std::vector<std::string>& out);
 

@@ -1,0 +1,170 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "moa/ekf.hpp"
+#include "support/checks.hpp"
+
+namespace moa {
+namespace {
+
+Eigen::Vector3d vec(const Pose2& p) { return {p.t.x(), p.t.y(), p.theta}; }
+Pose2 pose_of(const Eigen::Vector3d& x) { return {{x(0), x(1)}, x(2)}; }
+
+TEST(Ekf, StepJacobiansMatchFiniteDifferences) {
+  std::mt19937_64 rng(50);
+  std::vector<std::pair<Pose2, Twist2>> cases{
+      {Pose2{}, Twist2{}},                                  // identity, zero twist
+      {Pose2{}, Twist2{{0.3, 0.1}, 1e-7}},                  // near-zero rotation (Taylor branch)
+      {Pose2{{1.0, -2.0}, 0.4}, Twist2{{0.0, 0.0}, 2.0}}};  // pure rotation
+  for (int k = 0; k < 20; ++k) {
+    std::uniform_real_distribution<double> d(-3.0, 3.0);
+    cases.push_back({Pose2{{d(rng), d(rng)}, d(rng)}, test::random_twist(rng)});
+  }
+  for (const auto& [pose, twist] : cases) {
+    for (double dt : {0.01, 0.5}) {
+      const auto f_pose = [&](const Eigen::Vector3d& x) {
+        return vec(integrate_exact(pose_of(x), twist, dt));
+      };
+      const auto f_twist = [&](const Eigen::Vector3d& x) {
+        return vec(integrate_exact(pose, Twist2::from_vector(x), dt));
+      };
+      const Eigen::Matrix3d nf = test::numerical_jacobian<3, 3>(f_pose, vec(pose));
+      const Eigen::Matrix3d ng = test::numerical_jacobian<3, 3>(f_twist, twist.vector());
+      // Central differences with h = 1e-6: error ~h^2 * third derivative + 1e-16/h.
+      EXPECT_LT((nf - exact_step_pose_jacobian(pose, twist, dt)).cwiseAbs().maxCoeff(), 1e-8);
+      EXPECT_LT((ng - exact_step_twist_jacobian(pose, twist, dt)).cwiseAbs().maxCoeff(), 1e-8);
+    }
+  }
+}
+
+TEST(Ekf, StaticRobotConvergesWithTheoreticalCovariance) {
+  // Zero twist, no process noise: after n fixes of variance s^2 the
+  // posterior variance of x is 1 / (1/p0 + n/s^2), and the errors over many
+  // runs have that variance.
+  const double s = 0.005, p0 = 0.1 * 0.1;
+  const int fixes = 50, runs = 1000;
+  EkfOptions options;
+  options.twist_noise_floor.setZero();
+  options.gate_position = 1e9;
+  const double expected = 1.0 / (1.0 / p0 + fixes / (s * s));
+  std::mt19937_64 rng(51);
+  std::normal_distribution<double> noise(0.0, s), start(0.0, std::sqrt(p0));
+  double sum_sq = 0.0;
+  for (int run = 0; run < runs; ++run) {
+    const Eigen::Vector2d truth(start(rng), start(rng));  // the prior is right on average
+    PoseEkf ekf(0.0, Pose2{}, Eigen::Vector3d(p0, p0, 0.01).asDiagonal(), options);
+    for (int k = 1; k <= fixes; ++k) {
+      ekf.predict(0.1 * k, Twist2{}, Eigen::Matrix3d::Zero(), 0.1);
+      ASSERT_EQ(ekf.update_position(0.1 * k, truth + Eigen::Vector2d(noise(rng), noise(rng)),
+                                    Eigen::Matrix2d::Identity() * s * s),
+                FixResult::kApplied);
+    }
+    EXPECT_NEAR(ekf.covariance()(0, 0) / expected, 1.0, 1e-9);
+    sum_sq += (ekf.pose().t - truth).squaredNorm() / 2.0;
+  }
+  // Sample variance of 2 * runs normal errors: relative sd sqrt(2 / (2 runs)).
+  EXPECT_NEAR(sum_sq / runs / expected, 1.0, 5.0 * std::sqrt(1.0 / runs));
+}
+
+TEST(Ekf, OutlierFixIsRejectedByGate) {
+  PoseEkf ekf(0.0, Pose2{}, Eigen::Matrix3d::Identity() * 1e-4);
+  ekf.predict(0.1, Twist2{{0.1, 0.0}, 0.0}, Eigen::Matrix3d::Identity() * 1e-6, 0.1);
+  const Pose2 before = ekf.pose();
+  EXPECT_EQ(ekf.update_position(0.1, {1.0, 1.0}, Eigen::Matrix2d::Identity() * 2.5e-5),
+            FixResult::kRejected);
+  EXPECT_GT(ekf.last_distance(), 13.8);
+  EXPECT_EQ(ekf.pose().t, before.t);
+  EXPECT_EQ(ekf.update_position(0.1, {0.011, 0.001}, Eigen::Matrix2d::Identity() * 2.5e-5),
+            FixResult::kApplied);
+}
+
+TEST(Ekf, HeadingInnovationIsWrapped) {
+  PoseEkf ekf(0.0, Pose2{{0.0, 0.0}, 3.1}, Eigen::Matrix3d::Identity() * 0.01);
+  ASSERT_EQ(ekf.update_pose(0.0, {0.0, 0.0, -3.1}, Eigen::Matrix3d::Identity() * 0.01),
+            FixResult::kApplied);
+  // The fix is 0.083 rad away across +-pi, not 6.2 rad: the heading moves up by half of it.
+  EXPECT_NEAR(ekf.pose().theta, 3.1 + 0.5 * (2.0 * M_PI - 6.2), 1e-9);
+}
+
+TEST(Ekf, DelayedFixesGiveSameEstimateAsOnTimeOnes) {
+  std::mt19937_64 rng(52);
+  std::normal_distribution<double> g(0.0, 1.0);
+  const double dt = 0.01;
+  std::vector<Twist2> twists;
+  for (int k = 0; k < 300; ++k) twists.push_back({{0.3 + 0.05 * g(rng), 0.05 * g(rng)}, 0.5 + 0.1 * g(rng)});
+  struct Fix {
+    double t;
+    Eigen::Vector2d z;
+  };
+  std::vector<Fix> fixes;
+  for (int k = 10; k < 300; k += 10) {
+    // Capture times inside steps and on step boundaries.
+    const double t = dt * k + (k % 20 == 0 ? 0.0 : 0.0043);
+    fixes.push_back({t, {0.3 * t + 0.01 * g(rng), 0.1 * t + 0.01 * g(rng)}});
+  }
+  const Eigen::Matrix2d r = Eigen::Matrix2d::Identity() * 1e-4;
+  const Eigen::Matrix3d q = Eigen::Matrix3d::Identity() * 1e-4;
+  EkfOptions options;
+  options.gate_position = 1e9;
+
+  // On time: predict exactly to each capture time (splitting the step), then fix.
+  PoseEkf on_time(0.0, Pose2{}, Eigen::Matrix3d::Identity() * 1e-4, options);
+  {
+    std::size_t f = 0;
+    double t = 0.0;
+    for (int k = 0; k < 300; ++k) {
+      const double t_end = dt * (k + 1);
+      while (f < fixes.size() && fixes[f].t <= t_end + 1e-12) {
+        if (fixes[f].t > t + 1e-12) {
+          // A part of a step: the white-noise twist average is noisier by dt/part.
+          const double part = fixes[f].t - t;
+          on_time.predict(fixes[f].t, twists[static_cast<std::size_t>(k)], q * (dt / part), part);
+          t = fixes[f].t;
+        }
+        ASSERT_EQ(on_time.update_position(fixes[f].t, fixes[f].z, r), FixResult::kApplied);
+        ++f;
+      }
+      if (t_end > t + 1e-12) {
+        const double part = t_end - t;
+        on_time.predict(t_end, twists[static_cast<std::size_t>(k)], q * (dt / part), part);
+        t = t_end;
+      }
+    }
+  }
+  // Late: whole steps predicted; each fix arrives 0.13 s after its capture.
+  PoseEkf late(0.0, Pose2{}, Eigen::Matrix3d::Identity() * 1e-4, options);
+  {
+    std::size_t f = 0;
+    for (int k = 0; k < 300; ++k) {
+      late.predict(dt * (k + 1), twists[static_cast<std::size_t>(k)], q, dt);
+      while (f < fixes.size() && fixes[f].t + 0.13 <= dt * (k + 1) + 1e-12) {
+        ASSERT_EQ(late.update_position(fixes[f].t, fixes[f].z, r), FixResult::kApplied);
+        ++f;
+      }
+    }
+    while (f < fixes.size()) {
+      ASSERT_EQ(late.update_position(fixes[f].t, fixes[f].z, r), FixResult::kApplied);
+      ++f;
+    }
+  }
+  EXPECT_LT((vec(late.pose()) - vec(on_time.pose())).norm(), 1e-9);
+  EXPECT_LT((late.covariance() - on_time.covariance()).norm(), 1e-12);
+}
+
+TEST(Ekf, FixBeyondHistoryOrInFutureIsRefused) {
+  PoseEkf ekf(0.0, Pose2{}, Eigen::Matrix3d::Identity() * 1e-4);
+  for (std::size_t k = 1; k <= PoseEkf::kHistory + 10; ++k) {
+    ekf.predict(0.01 * static_cast<double>(k), Twist2{}, Eigen::Matrix3d::Zero(), 0.01);
+  }
+  EXPECT_EQ(ekf.update_position(0.05, {0, 0}, Eigen::Matrix2d::Identity()), FixResult::kTooOld);
+  EXPECT_EQ(ekf.update_position(100.0, {0, 0}, Eigen::Matrix2d::Identity()), FixResult::kFuture);
+  EXPECT_EQ(ekf.update_position(ekf.time(), {std::nan(""), 0}, Eigen::Matrix2d::Identity()),
+            FixResult::kInvalid);
+  EXPECT_EQ(ekf.update_position(ekf.time(), {0, 0}, Eigen::Matrix2d::Zero()), FixResult::kInvalid);
+}
+
+}  // namespace
+}  // namespace moa
