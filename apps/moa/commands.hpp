@@ -14,5 +14,6 @@ void add_version(CLI::App& app, Action& action);
 void add_odometry(CLI::App& app, Action& action);
 void add_evaluate(CLI::App& app, Action& action);
 void add_analyze(CLI::App& app, Action& action);
+void add_bench(CLI::App& app, Action& action);
 
 }  // namespace moa::cli

@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   moa::cli::add_odometry(app, action);
   moa::cli::add_evaluate(app, action);
   moa::cli::add_analyze(app, action);
+  moa::cli::add_bench(app, action);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
