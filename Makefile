@@ -10,7 +10,8 @@ JOBS ?= $(shell nproc)
 MOA := $(BUILD_DIR)/bin/moa
 
 DEBIAN_PACKAGES := g++ make cmake libeigen3-dev libyaml-cpp-dev libcli11-dev libfmt-dev \
-                   libgtest-dev libgmock-dev libbenchmark-dev
+                   libgtest-dev libgmock-dev libbenchmark-dev \
+                   gcc-avr avr-libc binutils-avr simavr libsimavr-dev
 
 # Under CI (CI=true) warnings are errors.
 ifeq ($(CI),true)

@@ -1,4 +1,4 @@
-/* ADNS-3080 register access over SPI (Avago data sheet AV02-0366EN):
+/* ADNS-3080 register access over SPI (Avago data sheet):
  * timing t_SRAD = 50 us (address to data of a read), t_SRAD-MOT = 75 us
  * (for Motion and Motion_Burst), t_SWW = t_SWR = 50 us (after a write),
  * t_BEXIT = 4 us (NCS high to leave burst mode), f_SCLK <= 2 MHz. */

@@ -26,8 +26,8 @@
 #define MOA_UART_RX_VECT USART_RXC_vect
 #define MOA_UART_UDRE_VECT USART_UDRE_vect
 #define MOA_TIMSK1 TIMSK
-#elif defined(__AVR_ATmega328P__) || defined(__AVR_ATmega328__) || \
-    defined(__AVR_ATmega168__) || defined(__AVR_ATmega88__)
+#elif defined(__AVR_ATmega328P__) || defined(__AVR_ATmega328__) || defined(__AVR_ATmega168__) || \
+    defined(__AVR_ATmega88__)
 #define MOA_UCSRA UCSR0A
 #define MOA_UCSRB UCSR0B
 #define MOA_UBRRL UBRR0L
@@ -58,14 +58,23 @@ typedef struct {
   uint8_t mask;
 } moa_pin_t;
 
-#define MOA_CS_PIN_TABLE                                                             \
-  {                                                                                  \
-    {&PORTB, &DDRB, _BV(PB2)}, {&PORTB, &DDRB, _BV(PB1)}, {&PORTB, &DDRB, _BV(PB0)}, \
-        {&PORTD, &DDRD, _BV(PD7)}, {&PORTD, &DDRD, _BV(PD6)},                        \
-        {&PORTD, &DDRD, _BV(PD5)}, {&PORTD, &DDRD, _BV(PD4)},                        \
-        {&PORTD, &DDRD, _BV(PD3)}, {&PORTC, &DDRC, _BV(PC0)},                        \
-        {&PORTC, &DDRC, _BV(PC1)}, {&PORTC, &DDRC, _BV(PC2)},                        \
-        {&PORTC, &DDRC, _BV(PC3)}, {&PORTC, &DDRC, _BV(PC4)}, {&PORTC, &DDRC, _BV(PC5)}, \
+/* clang-format off */
+#define MOA_CS_PIN_TABLE {                                 \
+    {&PORTB, &DDRB, _BV(PB2)}, /* sensor 1:  D10 */         \
+    {&PORTB, &DDRB, _BV(PB1)}, /* sensor 2:  D9  */         \
+    {&PORTB, &DDRB, _BV(PB0)}, /* sensor 3:  D8  */         \
+    {&PORTD, &DDRD, _BV(PD7)}, /* sensor 4:  D7  */         \
+    {&PORTD, &DDRD, _BV(PD6)}, /* sensor 5:  D6  */         \
+    {&PORTD, &DDRD, _BV(PD5)}, /* sensor 6:  D5  */         \
+    {&PORTD, &DDRD, _BV(PD4)}, /* sensor 7:  D4  */         \
+    {&PORTD, &DDRD, _BV(PD3)}, /* sensor 8:  D3  */         \
+    {&PORTC, &DDRC, _BV(PC0)}, /* sensor 9:  A0  */         \
+    {&PORTC, &DDRC, _BV(PC1)}, /* sensor 10: A1  */         \
+    {&PORTC, &DDRC, _BV(PC2)}, /* sensor 11: A2  */         \
+    {&PORTC, &DDRC, _BV(PC3)}, /* sensor 12: A3  */         \
+    {&PORTC, &DDRC, _BV(PC4)}, /* sensor 13: A4  */         \
+    {&PORTC, &DDRC, _BV(PC5)}, /* sensor 14: A5  */         \
   }
+/* clang-format on */
 
 #endif

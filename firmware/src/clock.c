@@ -1,13 +1,13 @@
 #include "clock.h"
 
 #include <avr/interrupt.h>
-#include <util/atomic.h>
+#include <stdbool.h>
 
 #include "board.h"
 #include "config.h"
 
-static volatile uint32_t tick_time;
-static volatile uint8_t ticks_due;
+static uint32_t tick_time;
+static volatile bool in_frame;
 
 void clock_start(void) {
   TCCR1A = 0;
@@ -18,19 +18,14 @@ void clock_start(void) {
   MOA_TIMSK1 |= _BV(OCIE1A);
 }
 
-ISR(TIMER1_COMPA_vect) {
+/* Interrupts are enabled again at once: the UART interrupts (a byte every
+ * 20 us at 500 kbaud) must not wait for a whole frame of sensor reads. */
+ISR(TIMER1_COMPA_vect, ISR_NOBLOCK) {
   tick_time += MOA_FW_FRAME_TICKS;
-  if (ticks_due != 0xFF) ++ticks_due;
+  /* A frame that overruns its period must not be re-entered; the time still
+   * advances, so timestamps stay right and the host sees a longer window. */
+  if (in_frame) return;
+  in_frame = true;
+  frame_tick(tick_time);
+  in_frame = false;
 }
-
-uint8_t clock_take_ticks(uint32_t* latest) {
-  uint8_t due;
-  ATOMIC_BLOCK(ATOMIC_RESTORESTATE) {
-    due = ticks_due;
-    ticks_due = 0;
-    *latest = tick_time;
-  }
-  return due;
-}
-
-bool clock_tick_pending(void) { return ticks_due != 0; }

@@ -61,4 +61,16 @@ _Static_assert(MOA_FW_FRAME_TICKS >= 2 && MOA_FW_FRAME_TICKS <= 65536UL,
                "MOA_FW_FRAME_HZ out of Timer1's range");
 _Static_assert(MOA_FW_FRAME_HZ <= 65535UL, "MOA_FW_FRAME_HZ must fit the HELLO's u16");
 
+/* Time budget of one frame (docs/firmware.md, rates): a motion burst costs
+ * the sensor's 75 us wait plus 5 bytes at 2 MHz (25 us), and about 480 CPU
+ * cycles of code and of UART interrupts that run meanwhile; the frame
+ * interrupt takes about 300 cycles to reach the first read. All N reads
+ * must fit 90 % of the frame period (measured in simavr by the firmware
+ * tests, which also check that no tick is missed). */
+#define MOA_FW_READ_NS_PER_SENSOR (100000ULL + 480ULL * 1000000000ULL / F_CPU)
+#define MOA_FW_FRAME_READ_NS \
+  (MOA_FW_SENSORS * MOA_FW_READ_NS_PER_SENSOR + 300ULL * 1000000000ULL / F_CPU)
+_Static_assert(MOA_FW_FRAME_READ_NS * 10ULL <= 9ULL * 1000000000ULL / MOA_FW_FRAME_HZ,
+               "MOA_FW_SENSORS reads do not fit one frame at MOA_FW_FRAME_HZ: lower the rate");
+
 #endif

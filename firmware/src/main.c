@@ -1,10 +1,20 @@
 /* moa acquisition firmware: reads N ADNS-3080 sensors once per frame tick,
- * sums K frames per sensor (Kim & Lee's downsampler) and streams one DATA
- * frame per window over the UART in moa serial protocol v1. */
+ * sums K frames per sensor (Kim & Lee's downsampler, their Section V) and
+ * streams one DATA frame per window over the UART in moa serial protocol
+ * v1 (docs/serial-protocol.md).
+ *
+ * Two contexts share the work. The frame interrupt (clock.h) reads the
+ * sensors and closes windows: hard real time, it keeps to the clock. The
+ * main loop encodes and sends closed windows and answers commands: it may
+ * take as long as K frames, and is preempted by the reads. Closed windows
+ * pass from one to the other through two slots (see close_window). */
 #include <avr/interrupt.h>
 #include <avr/sleep.h>
 #include <stdbool.h>
 #include <stdint.h>
+#include <string.h>
+#include <util/atomic.h>
+#include <util/delay.h>
 
 #include "adns3080.h"
 #include "board.h"
@@ -22,15 +32,38 @@
 #define DATA_LENGTH (8u + 6u * N)
 /* Both payloads plus the CRC appended in place. */
 #define PAYLOAD_MAX ((HELLO_MAX > DATA_LENGTH ? HELLO_MAX : DATA_LENGTH) + 2u)
+_Static_assert(HELLO_MAX <= MOA_PAYLOAD_MAX && DATA_LENGTH <= MOA_PAYLOAD_MAX,
+               "payload longer than protocol.h allows for");
+_Static_assert(MOA_FRAME_MAX < MOA_UART_TX_SIZE, "a whole frame must fit the transmit ring");
 
-static uint8_t payload[PAYLOAD_MAX];
-static moa_window_t windows[N];
-static bool present[N];
+/* A closed window on its way from the frame interrupt to the main loop. */
+typedef struct {
+  uint16_t sequence;
+  uint32_t time;
+  moa_window_t windows[N];
+} closed_window_t;
+
+/* Settings; written by the main loop only while reads are paused. */
 static uint16_t k = MOA_FW_K;
 static uint16_t cpi = MOA_FW_CPI;
+static bool present[N];
+
+/* Frame interrupt state (the main loop touches it only while paused). */
+static moa_window_t windows[N];
 static uint16_t frames_in_window;
-static uint16_t sequence;
-static uint32_t window_end_time;
+static uint32_t last_frame_time;
+static uint16_t next_sequence;
+static volatile bool paused = true;
+
+/* Slot states: the interrupt fills an EMPTY slot or adds to a READY one;
+ * the main loop turns READY into SENDING while it reads the slot, then
+ * EMPTY. At most one slot is READY, so frames keep their order. */
+enum { SLOT_EMPTY, SLOT_READY, SLOT_SENDING };
+static closed_window_t slots[2];
+static volatile uint8_t slot_state[2];
+
+/* Main loop state. */
+static uint8_t payload[PAYLOAD_MAX];
 static moa_command_reader_t command_reader;
 
 static void put_u16(uint8_t* p, uint16_t v) {
@@ -41,6 +74,42 @@ static void put_u16(uint8_t* p, uint16_t v) {
 static void put_u32(uint8_t* p, uint32_t v) {
   put_u16(p, (uint16_t)v);
   put_u16(p + 2, (uint16_t)(v >> 16));
+}
+
+static void start_window(void) {
+  for (uint8_t i = 0; i < N; ++i) window_reset(&windows[i]);
+  frames_in_window = 0;
+}
+
+/* Hands the window to the main loop. If the previous one has not been
+ * picked up yet (the link or the main loop is slower than the data), this
+ * one is added to it rather than lost: that frame then covers more than K
+ * sensor frames, and its timestamp says how long. Called from the frame
+ * interrupt, or from the main loop while reads are paused. */
+static void close_window(void) {
+  uint8_t slot = slot_state[0] == SLOT_READY ? 0 : 1;
+  if (slot_state[slot] == SLOT_READY) {
+    for (uint8_t i = 0; i < N; ++i) window_merge(&slots[slot].windows[i], &windows[i]);
+  } else {
+    slot = slot_state[0] == SLOT_EMPTY ? 0 : 1;
+    slots[slot].sequence = next_sequence++;
+    memcpy(slots[slot].windows, windows, sizeof windows);
+  }
+  slots[slot].time = last_frame_time;
+  slot_state[slot] = SLOT_READY;
+  start_window();
+}
+
+void frame_tick(uint32_t tick_time) {
+  if (paused) return;
+  for (uint8_t i = 0; i < N; ++i) {
+    if (!present[i]) continue;
+    adns3080_motion_t m;
+    adns3080_motion_burst(i, &m);
+    window_add(&windows[i], m.motion, m.dx, m.dy, m.squal, MOA_FW_SQUAL_FLOOR);
+  }
+  last_frame_time = tick_time;
+  if (++frames_in_window >= k) close_window();
 }
 
 static void send_hello(void) {
@@ -60,52 +129,56 @@ static void send_hello(void) {
     if (number >= 10) payload[at++] = (uint8_t)('0' + number / 10u);
     payload[at++] = (uint8_t)('0' + number % 10u);
   }
-  /* A configuration answer must not be lost: wait for room. */
-  protocol_send(payload, at, true);
+  protocol_send(payload, at);
 }
 
-static void start_window(void) {
-  for (uint8_t i = 0; i < N; ++i) window_reset(&windows[i]);
-  frames_in_window = 0;
-}
-
-static void send_data(void) {
+/* Sends the closed window, if there is one. */
+static void send_ready(void) {
+  uint8_t slot = 2;
+  ATOMIC_BLOCK(ATOMIC_RESTORESTATE) {
+    for (uint8_t s = 0; s < 2; ++s) {
+      if (slot_state[s] == SLOT_READY) slot = s;
+    }
+    if (slot < 2) slot_state[slot] = SLOT_SENDING;
+  }
+  if (slot == 2) return;
+  const closed_window_t* w = &slots[slot];
   payload[0] = MOA_TYPE_DATA;
-  put_u16(payload + 1, sequence);
-  put_u32(payload + 3, window_end_time);
+  put_u16(payload + 1, w->sequence);
+  put_u32(payload + 3, w->time);
   payload[7] = N;
   uint8_t* record = payload + 8;
   for (uint8_t i = 0; i < N; ++i, record += 6) {
     moa_record_t r = {0, 0, 0, MOA_FLAG_NO_SURFACE};
-    if (present[i]) r = window_record(&windows[i]);
+    if (present[i]) r = window_record(&w->windows[i]);
     put_u16(record, (uint16_t)r.dx);
     put_u16(record + 2, (uint16_t)r.dy);
     record[4] = r.squal;
     record[5] = r.flags;
   }
-  /* If the link cannot keep up the frame is dropped rather than the reads
-   * delayed; its sequence number is used all the same, so the host counts
-   * it as lost. */
-  protocol_send(payload, DATA_LENGTH, false);
-  ++sequence;
-  start_window();
+  slot_state[slot] = SLOT_EMPTY;
+  protocol_send(payload, DATA_LENGTH);
 }
 
-/* Counts of different settings must not be summed: a partial window is
- * sent as it is before a change (its timestamp says how long it was). */
+/* Stops the reads between two frames, so that the main loop may use the
+ * SPI bus and the windows. The main loop only runs while the frame
+ * interrupt does not, so no read is ever cut in half. Ticks keep counting. */
+static void pause_reads(void) {
+  paused = true;
+  /* t_BEXIT: a burst of the last sensor may have ended just now. */
+  _delay_us(4);
+}
+
+static void resume_reads(void) { paused = false; }
+
+/* Counts of different settings must not be summed: a partial window goes
+ * out as it is before a change (its timestamp says how long it was). */
 static void flush_window(void) {
-  if (frames_in_window > 0) send_data();
-}
-
-static void read_frame(uint32_t tick_time) {
-  for (uint8_t i = 0; i < N; ++i) {
-    if (!present[i]) continue;
-    adns3080_motion_t m;
-    adns3080_motion_burst(i, &m);
-    window_add(&windows[i], m.motion, m.dx, m.dy, m.squal, MOA_FW_SQUAL_FLOOR);
+  send_ready();
+  if (frames_in_window > 0) {
+    close_window();
+    send_ready();
   }
-  window_end_time = tick_time;
-  if (++frames_in_window >= k) send_data();
 }
 
 static void apply_cpi(uint16_t value) {
@@ -116,17 +189,22 @@ static void apply_cpi(uint16_t value) {
 }
 
 static void handle(const moa_command_t* command) {
+  const uint16_t value = command->value;
   switch (command->type) {
     case MOA_TYPE_SET_K:
-      if (command->value >= 1 && command->value <= MOA_FW_K_MAX && command->value != k) {
+      if (value >= 1 && value <= MOA_FW_K_MAX && value != k) {
+        pause_reads();
         flush_window();
-        k = command->value;
+        k = value;
+        resume_reads();
       }
       break;
     case MOA_TYPE_SET_CPI:
-      if ((command->value == 400 || command->value == 1600) && command->value != cpi) {
+      if ((value == 400 || value == 1600) && value != cpi) {
+        pause_reads();
         flush_window();
-        apply_cpi(command->value);
+        apply_cpi(value);
+        resume_reads();
       }
       break;
     default:
@@ -137,12 +215,12 @@ static void handle(const moa_command_t* command) {
   send_hello();
 }
 
-/* Sleeps (idle mode: timers and UART keep running) until a frame tick or a
- * received byte needs the main loop. */
+/* Sleeps (idle mode: timers and UART keep running) until a closed window
+ * or a received byte needs the main loop. */
 static void wait_for_work(void) {
-  set_sleep_mode(SLEEP_MODE_IDLE);
+  /* The sleep mode bits are left at their reset value, which is idle. */
   cli();
-  while (!clock_tick_pending() && !uart_rx_available()) {
+  while (slot_state[0] != SLOT_READY && slot_state[1] != SLOT_READY && !uart_rx_available()) {
     sleep_enable();
     sei();
     sleep_cpu();
@@ -159,15 +237,15 @@ int main(void) {
   for (uint8_t i = 0; i < N; ++i) present[i] = adns3080_present(i);
   command_reader_reset(&command_reader);
   start_window();
-  sei();
   apply_cpi(cpi);
+  sei();
   /* A lone delimiter ends whatever partial frame the host may hold from
    * before a reset, so that the HELLO is not lost with it. */
-  while (uart_tx_free() < 1) {
-  }
-  uart_tx_put(0);
+  static const uint8_t delimiter = 0;
+  uart_tx_write(&delimiter, 1);
   send_hello();
   clock_start();
+  resume_reads();
 
   for (;;) {
     wait_for_work();
@@ -175,7 +253,6 @@ int main(void) {
       moa_command_t command;
       if (command_reader_push(&command_reader, uart_rx_get(), &command)) handle(&command);
     }
-    uint32_t tick_time;
-    if (clock_take_ticks(&tick_time) > 0) read_frame(tick_time);
+    send_ready();
   }
 }

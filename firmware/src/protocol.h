@@ -19,11 +19,16 @@
 /* CRC-16/CCITT-FALSE: poly 0x1021, init 0xFFFF, no reflection, no xor-out. */
 uint16_t crc16_update(uint16_t crc, uint8_t byte);
 
-/* Sends payload[0..length) as one frame through the UART. The buffer must
- * have room for two more bytes (the CRC is appended in place). Returns
- * false, sending nothing, if the transmit ring has no room and `wait` is
- * false; with `wait` it spins until the ring has drained enough. */
-bool protocol_send(uint8_t* payload, uint8_t length, bool wait);
+/* Longest payload the device sends (HELLO or DATA of 14 sensors), and its
+ * frame on the wire: CRC, one COBS code byte (payloads stay under 254
+ * bytes) and the delimiter. */
+#define MOA_PAYLOAD_MAX (8u + 6u * 14u)
+#define MOA_FRAME_MAX (MOA_PAYLOAD_MAX + 4u)
+
+/* Sends payload[0..length) as one frame through the UART, waiting for room
+ * in the transmit ring. The buffer must have room for two more bytes (the
+ * CRC is appended in place). */
+void protocol_send(uint8_t* payload, uint8_t length);
 
 /* Incremental command decoder. */
 typedef struct {

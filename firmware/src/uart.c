@@ -9,10 +9,10 @@
 /* Double speed (U2X): the divider is F_CPU / (8 baud) - 1, rounded. */
 #define MOA_UBRR ((F_CPU + 4UL * MOA_FW_BAUD) / (8UL * MOA_FW_BAUD) - 1UL)
 #define MOA_BAUD_ACTUAL (F_CPU / (8UL * (MOA_UBRR + 1UL)))
-#define MOA_BAUD_ERROR_PERMILLE                                                 \
-  ((MOA_BAUD_ACTUAL > MOA_FW_BAUD ? MOA_BAUD_ACTUAL - MOA_FW_BAUD              \
-                                  : MOA_FW_BAUD - MOA_BAUD_ACTUAL) * 1000UL / \
-   MOA_FW_BAUD)
+#define MOA_BAUD_ERROR_PERMILLE                                      \
+  ((MOA_BAUD_ACTUAL > MOA_FW_BAUD ? MOA_BAUD_ACTUAL - MOA_FW_BAUD    \
+                                  : MOA_FW_BAUD - MOA_BAUD_ACTUAL) * \
+   1000UL / MOA_FW_BAUD)
 /* 8N1 tolerates about 4.5 % between the two ends together; keep our share
  * at 2.1 % or less (115200 at 16 MHz is the common worst accepted case). */
 _Static_assert(MOA_BAUD_ERROR_PERMILLE <= 21, "MOA_FW_BAUD cannot be made within 2.1 % from F_CPU");
@@ -29,21 +29,29 @@ static volatile uint8_t rx_head; /* written by the RX interrupt */
 static volatile uint8_t rx_tail; /* written by the main loop */
 
 void uart_init(void) {
+  /* U2X before the divider: simavr derives the byte time when UBRRL is
+   * written (the hardware does not care about the order). */
+  MOA_UCSRA = _BV(MOA_U2X);
   MOA_UBRRH = (uint8_t)(MOA_UBRR >> 8);
   MOA_UBRRL = (uint8_t)MOA_UBRR;
-  MOA_UCSRA = _BV(MOA_U2X);
   /* Frame format stays at the reset default, 8N1, on both MCUs. */
   MOA_UCSRB = _BV(MOA_RXEN) | _BV(MOA_TXEN) | _BV(MOA_RXCIE);
 }
 
-uint8_t uart_tx_free(void) {
-  return (uint8_t)((tx_tail - tx_head - 1u) & (MOA_UART_TX_SIZE - 1u));
+static uint8_t tx_free(void) {
+  const uint8_t free_slots = (uint8_t)(tx_tail - tx_head - 1);
+  return (uint8_t)(free_slots & (MOA_UART_TX_SIZE - 1u));
 }
 
-void uart_tx_put(uint8_t byte) {
-  const uint8_t head = tx_head;
-  tx_buf[head] = byte;
-  tx_head = (uint8_t)((head + 1u) & (MOA_UART_TX_SIZE - 1u));
+void uart_tx_write(const uint8_t* bytes, uint8_t n) {
+  while (tx_free() < n) {
+  }
+  uint8_t head = tx_head;
+  for (uint8_t i = 0; i < n; ++i) {
+    tx_buf[head] = bytes[i];
+    head = (uint8_t)((head + 1u) & (MOA_UART_TX_SIZE - 1u));
+  }
+  tx_head = head;
   MOA_UCSRB |= _BV(MOA_UDRIE);
 }
 

@@ -12,10 +12,9 @@
 #define MOA_UART_RX_SIZE 32u
 
 void uart_init(void);
-/* Bytes that can be queued without overwriting unsent ones. */
-uint8_t uart_tx_free(void);
-/* Queues one byte; the caller has checked uart_tx_free(). */
-void uart_tx_put(uint8_t byte);
+/* Queues n bytes (n < MOA_UART_TX_SIZE), first waiting until the ring has
+ * room for all of them: a frame is never interleaved or cut. */
+void uart_tx_write(const uint8_t* bytes, uint8_t n);
 bool uart_rx_available(void);
 uint8_t uart_rx_get(void);
 

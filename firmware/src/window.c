@@ -18,6 +18,13 @@ void window_add(moa_window_t* w, uint8_t motion, int8_t dx, int8_t dy, uint8_t s
   if (squal < squal_floor) w->flags |= MOA_FLAG_NO_SURFACE;
 }
 
+void window_merge(moa_window_t* into, const moa_window_t* from) {
+  into->sum_x += from->sum_x;
+  into->sum_y += from->sum_y;
+  if (from->min_squal < into->min_squal) into->min_squal = from->min_squal;
+  into->flags |= from->flags;
+}
+
 static int16_t saturate(int32_t sum, uint8_t* flags) {
   if (sum > INT16_MAX) {
     *flags |= MOA_FLAG_OVERFLOW;
