@@ -25,6 +25,7 @@ namespace {
 struct BenchArgs {
   int batches = 31;
   int updates = 2000;
+  std::vector<int> sizes{2, 4, 8};
   bool json = false;
 };
 
@@ -137,11 +138,14 @@ std::string json_escape(const std::string& s) {
 
 int run_bench(const BenchArgs& args) {
   std::vector<Row> rows;
-  for (int n : {2, 4, 8}) {
+  for (int n : args.sizes) {
     if (!args.json) fmt::print(stderr, "moa bench: N = {} ...\n", n);
     rows.push_back(bench_n(args, n));
   }
-  const Row& four = rows[1];
+  // The headline figures are for N = 4 (or the last size measured).
+  const Row& four = *std::find_if(rows.begin(), rows.end(), [&](const Row& r) {
+    return r.n == 4 || &r == &rows.back();
+  });
 #ifdef NDEBUG
   const char* build = "optimised (NDEBUG)";
 #else
@@ -158,13 +162,13 @@ int run_bench(const BenchArgs& args) {
           r.n, r.ls, r.naive_ls, r.sekimori, r.naive_sekimori, r.consensus);
     }
     fmt::print(
-        "{{\"n\": 4, \"ls_ns_per_update\": {:.1f}, \"naive_ls_ns_per_update\": {:.1f}, "
+        "{{\"n\": {}, \"ls_ns_per_update\": {:.1f}, \"naive_ls_ns_per_update\": {:.1f}, "
         "\"sekimori_ns_per_update\": {:.1f}, \"naive_sekimori_ns_per_update\": {:.1f}, "
         "\"consensus_ns_per_update\": {:.1f}, \"ls_speedup\": {:.1f}, \"sekimori_speedup\": {:.1f}, "
         "\"consensus_vs_naive_ls\": {:.2f}, \"per_n\": [{}], \"machine\": {{\"cpu\": \"{}\", "
         "\"hardware_threads\": {}}}, \"compiler\": \"{}\", \"build\": \"{}\", \"batches\": {}, "
         "\"updates_per_batch\": {}}}\n",
-        four.ls, four.naive_ls, four.sekimori, four.naive_sekimori, four.consensus,
+        four.n, four.ls, four.naive_ls, four.sekimori, four.naive_sekimori, four.consensus,
         four.naive_ls / four.ls, four.naive_sekimori / four.sekimori, four.naive_ls / four.consensus,
         per_n, json_escape(cpu_model()), std::thread::hardware_concurrency(),
         json_escape(__VERSION__), build, args.batches, args.updates);
@@ -193,6 +197,10 @@ void add_bench(CLI::App& app, Action& action) {
       ->capture_default_str();
   cmd->add_option("--updates", args->updates, "Updates per batch")
       ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--sizes", args->sizes, "Numbers of sensors to measure (2..16)")
+      ->delimiter(',')
+      ->check(CLI::Range(2, kMaxSensors))
       ->capture_default_str();
   cmd->add_flag("--json", args->json, "One JSON object on stdout");
   cmd->callback([&action, args] { action = [args] { return run_bench(*args); }; });
