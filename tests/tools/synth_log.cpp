@@ -1,5 +1,6 @@
 // Writes the noise-free example log shipped in examples/logs/mixed-motion:
-//   synth_log DIR [DURATION_S]
+//   synth_log DIR [DURATION_S [ROW_PERIOD_S]]
+#include <algorithm>
 #include <cstdlib>
 #include <iostream>
 
@@ -7,12 +8,14 @@
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::cerr << "usage: synth_log DIR [DURATION_S]\n";
+    std::cerr << "usage: synth_log DIR [DURATION_S [ROW_PERIOD_S]]\n";
     return 2;
   }
   const double duration = argc > 2 ? std::atof(argv[2]) : 20.0;
   const auto array = moa::test::skewed_array();
-  const auto log = moa::test::synthesise(array, moa::test::mixed_motion, duration, 0.01);
+  const double row_period = argc > 3 ? std::atof(argv[3]) : 0.01;
+  const auto log = moa::test::synthesise(array, moa::test::mixed_motion, duration, row_period, true,
+                                         std::min(1e-4, row_period));
   moa::test::write_log(log, array, {"front", "left", "rear", "right"}, argv[1]);
   std::cout << "wrote " << argv[1] << "\n";
   return 0;
