@@ -67,7 +67,8 @@ void BM_NaiveSekimori(benchmark::State& state) {
   const auto s = sample_for(a);
   const int r_th = std::max(1, a.size() - 2);
   for (auto _ : state) {
-    benchmark::DoNotOptimize(moa::baseline::naive_sekimori(a, s, moa::SekimoriOptions{}.e_th, r_th));
+    benchmark::DoNotOptimize(
+        moa::baseline::naive_sekimori(a, s, moa::SekimoriOptions{}.e_th, r_th));
   }
 }
 BENCHMARK(BM_NaiveSekimori)->Arg(2)->Arg(4)->Arg(8);

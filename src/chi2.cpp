@@ -19,7 +19,8 @@ double regularized_gamma_p(double a, double x) {
     return std::exp(log_prefix) * sum;
   }
   // Q = x^a e^-x / Gamma(a) * 1 / (x + 1 - a - 1(1-a)/(x + 3 - a - ...)), modified Lentz.
-  constexpr double kTiny = std::numeric_limits<double>::min() / std::numeric_limits<double>::epsilon();
+  constexpr double kTiny =
+      std::numeric_limits<double>::min() / std::numeric_limits<double>::epsilon();
   double b = x + 1.0 - a, c = 1.0 / kTiny, d = 1.0 / b, h = d;
   for (int n = 1; n < 1000; ++n) {
     const double an = -n * (n - a);

@@ -87,7 +87,7 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
                                                            const std::optional<Twist2>& wheels) {
   if (!(std::isfinite(sample.dt) && sample.dt > 0.0) || sample.size != n_) return std::nullopt;
   RobustEstimate out;
-  noise_.measure(sample, last_twist_, measurements_, out.noise_flags);
+  noise_.measure(sample, fallback_.last_twist(), measurements_, out.noise_flags);
 
   SensorMask candidates = 0;
   for (int i = 0; i < n_; ++i) {
@@ -110,25 +110,13 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
         out.excluded[static_cast<std::size_t>(i)] = Exclusion::kInconsistent;
       }
     }
-    last_twist_ = out.estimate.twist;
-    last_covariance_ = out.estimate.covariance;
-    last_good_t_ = sample.t;
+    fallback_.good(out.estimate.twist, out.estimate.covariance, sample.t);
     return out;
   }
   for (int i = 0; i < n_; ++i) {
     if (contains(candidates, i)) out.excluded[static_cast<std::size_t>(i)] = Exclusion::kFallback;
   }
-  out.estimate.used = 0;
-  if (wheels) {
-    out.source = Source::kWheels;
-    out.estimate.twist = *wheels;
-    out.estimate.covariance = wheel_cov;
-    last_twist_ = *wheels;  // the best prediction of the sensors' speeds
-  } else {
-    out.source = Source::kHold;
-    out.estimate.twist = last_twist_;
-    out.estimate.covariance = options_.hold.grown(last_covariance_, sample.t - last_good_t_);
-  }
+  fallback_.apply(out, wheels, options_.wheels, options_.hold, sample.t);
   return out;
 }
 

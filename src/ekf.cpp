@@ -80,7 +80,8 @@ void PoseEkf::predict(double t, const Twist2& twist, const Eigen::Matrix3d& twis
                       double dt) {
   constexpr double kFloorInterval = 0.01;  // s, see EkfOptions::twist_noise_floor
   const Eigen::Vector3d relative =
-      options_.twist_noise_relative * Eigen::Vector3d(twist.v.norm(), twist.v.norm(), std::abs(twist.omega));
+      options_.twist_noise_relative *
+      Eigen::Vector3d(twist.v.norm(), twist.v.norm(), std::abs(twist.omega));
   const Eigen::Vector3d floor =
       (options_.twist_noise_floor.cwiseAbs2() + relative.cwiseAbs2()) * (kFloorInterval / dt);
   Step step{t - dt, t, twist, twist_covariance + Eigen::Matrix3d(floor.asDiagonal()), pose_, cov_};

@@ -53,7 +53,8 @@ std::variant<LsEstimator, GeometryError> LsEstimator::create(const SensorArray& 
   Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d atwa = Eigen::Matrix3d::Zero();
   std::array<double, kMaxSensors> weight{};
-  std::array<Eigen::Matrix2d, kMaxSensors> quant = zeros<Eigen::Matrix2d>();  // C_i C_i^T / 6, m^2 per count^2
+  std::array<Eigen::Matrix2d, kMaxSensors> quant =
+      zeros<Eigen::Matrix2d>();  // C_i C_i^T / 6, m^2 per count^2
   for (int i = 0; i < n; ++i) {
     if (!contains(used, i)) continue;
     const auto k = static_cast<std::size_t>(i);

@@ -66,7 +66,8 @@ std::optional<RobustEstimate> SekimoriEstimator::estimate(const ArraySample& sam
     for (int j = i + 1; j < n_; ++j) {
       const auto p = static_cast<std::size_t>(pair_index(i, j));
       Eigen::Vector4d a;
-      a << measurements_.u[static_cast<std::size_t>(i)], measurements_.u[static_cast<std::size_t>(j)];
+      a << measurements_.u[static_cast<std::size_t>(i)],
+          measurements_.u[static_cast<std::size_t>(j)];
       const double e = normals_[p].dot(a * sample.dt);
       residual_[p] = e * e;
       if (residual_[p] <= options_.e_th) {
@@ -88,32 +89,21 @@ std::optional<RobustEstimate> SekimoriEstimator::estimate(const ArraySample& sam
     for (int i = 0; i < n_; ++i) {
       if (!contains(reliable, i)) continue;
       const auto& a = solver_.jacobian(i);
-      middle += a.transpose() * quant_[static_cast<std::size_t>(i)] * a /
-                (sample.dt * sample.dt);
+      middle += a.transpose() * quant_[static_cast<std::size_t>(i)] * a / (sample.dt * sample.dt);
     }
     out.estimate.twist = fit->twist;
     out.estimate.covariance = fit->covariance * middle * fit->covariance;
     out.estimate.used = reliable;
     out.source = Source::kMice;
     for (int i = 0; i < n_; ++i) {
-      if (!contains(reliable, i)) out.excluded[static_cast<std::size_t>(i)] = Exclusion::kUnreliable;
+      if (!contains(reliable, i))
+        out.excluded[static_cast<std::size_t>(i)] = Exclusion::kUnreliable;
     }
-    last_twist_ = fit->twist;
-    last_covariance_ = out.estimate.covariance;
-    last_good_t_ = sample.t;
+    fallback_.good(fit->twist, out.estimate.covariance, sample.t);
     return out;
   }
   for (int i = 0; i < n_; ++i) out.excluded[static_cast<std::size_t>(i)] = Exclusion::kFallback;
-  if (wheels) {
-    out.source = Source::kWheels;
-    out.estimate.twist = *wheels;
-    out.estimate.covariance = options_.wheels.covariance(*wheels);
-    last_twist_ = *wheels;
-  } else {
-    out.source = Source::kHold;
-    out.estimate.twist = last_twist_;
-    out.estimate.covariance = options_.hold.grown(last_covariance_, sample.t - last_good_t_);
-  }
+  fallback_.apply(out, wheels, options_.wheels, options_.hold, sample.t);
   return out;
 }
 

@@ -46,8 +46,7 @@ NoiseModel::NoiseModel(const SensorArray& array, NoiseModelOptions options)
   }
 }
 
-void NoiseModel::measure(const ArraySample& sample, const Twist2& predicted,
-                         PointMeasurements& out,
+void NoiseModel::measure(const ArraySample& sample, const Twist2& predicted, PointMeasurements& out,
                          std::array<std::uint8_t, kMaxSensors>& flags) const {
   out.size = n_;
   const Eigen::Vector3d x = predicted.vector();
@@ -90,6 +89,21 @@ Eigen::Matrix3d WheelNoise::covariance(const Twist2& wheels) const {
 Eigen::Matrix3d HoldModel::grown(const Eigen::Matrix3d& covariance, double elapsed) const {
   const double v = accel * elapsed, w = angular_accel * elapsed;
   return covariance + Eigen::Vector3d(v * v, v * v, w * w).asDiagonal().toDenseMatrix();
+}
+
+void Fallback::apply(RobustEstimate& out, const std::optional<Twist2>& wheels,
+                     const WheelNoise& wheel_noise, const HoldModel& hold, double t) {
+  out.estimate.used = 0;
+  if (wheels) {
+    out.source = Source::kWheels;
+    out.estimate.twist = *wheels;
+    out.estimate.covariance = wheel_noise.covariance(*wheels);
+    last_twist_ = *wheels;  // the best prediction of the sensors' speeds
+  } else {
+    out.source = Source::kHold;
+    out.estimate.twist = last_twist_;
+    out.estimate.covariance = hold.grown(last_covariance_, t - last_good_t_);
+  }
 }
 
 }  // namespace moa

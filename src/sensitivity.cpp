@@ -33,8 +33,8 @@ SensitivityTerms first_order_sensitivity(const SensorArray& nominal, const Point
     Eigen::Matrix<double, 2, 3> da = Eigen::Matrix<double, 2, 3>::Zero();  // eq. (34)
     da(0, 2) = -dp[s].y();
     da(1, 2) = dp[s].x();
-    p += a.transpose() * a;                                // (24)
-    dp_mat += da.transpose() * a + a.transpose() * da;     // (25)
+    p += a.transpose() * a;                             // (24)
+    dp_mat += da.transpose() * a + a.transpose() * da;  // (25)
     at_vs += a.transpose() * v_s[s];
     dat_vs += da.transpose() * v_s[s];
     at_dvs += a.transpose() * dv_s[s];

@@ -5,7 +5,8 @@
 namespace moa {
 
 SubsetSolver::SubsetSolver(const SensorArray& array) : n_(array.size()) {
-  for (int i = 0; i < n_ && i < kMaxSensors; ++i) a_[static_cast<std::size_t>(i)] = array[i].point_jacobian();
+  for (int i = 0; i < n_ && i < kMaxSensors; ++i)
+    a_[static_cast<std::size_t>(i)] = array[i].point_jacobian();
 }
 
 std::optional<SubsetFit> SubsetSolver::fit(SensorMask mask, const PointMeasurements& m) const {

@@ -94,7 +94,8 @@ TEST(Ekf, DelayedFixesGiveSameEstimateAsOnTimeOnes) {
   std::normal_distribution<double> g(0.0, 1.0);
   const double dt = 0.01;
   std::vector<Twist2> twists;
-  for (int k = 0; k < 300; ++k) twists.push_back({{0.3 + 0.05 * g(rng), 0.05 * g(rng)}, 0.5 + 0.1 * g(rng)});
+  for (int k = 0; k < 300; ++k)
+    twists.push_back({{0.3 + 0.05 * g(rng), 0.05 * g(rng)}, 0.5 + 0.1 * g(rng)});
   struct Fix {
     double t;
     Eigen::Vector2d z;

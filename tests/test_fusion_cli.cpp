@@ -51,8 +51,8 @@ TEST(FusionCli, CameraFixesBoundTheDriftOfWrongMounts) {
   const std::string common = "odometry --config " + (dir / "robot.yaml").string() + " --log " +
                              dir.string() + " --estimator ls --out ";
   ASSERT_EQ(test::run_moa(common + (dir / "dr.csv").string()).exit_code, 0);
-  const auto fused = test::run_moa(common + (dir / "fused.csv").string() +
-                                   " --fuse-camera --camera-latency 0.05");
+  const auto fused =
+      test::run_moa(common + (dir / "fused.csv").string() + " --fuse-camera --camera-latency 0.05");
   ASSERT_EQ(fused.exit_code, 0) << fused.err;
   const TrajectoryError dr = errors_of(dir / "dr.csv", log.truth);
   const TrajectoryError f = errors_of(dir / "fused.csv", log.truth);

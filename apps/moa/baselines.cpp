@@ -34,7 +34,8 @@ Twist2 naive_sekimori(const SensorArray& array, const ArraySample& sample, doubl
       Eigen::VectorXd d(4);
       a.topRows(2) = array[i].point_jacobian();
       a.bottomRows(2) = array[j].point_jacobian();
-      d << point_velocity(array, sample, i) * sample.dt, point_velocity(array, sample, j) * sample.dt;
+      d << point_velocity(array, sample, i) * sample.dt,
+          point_velocity(array, sample, j) * sample.dt;
       const Eigen::MatrixXd pinv = a.completeOrthogonalDecomposition().pseudoInverse();
       const double e = (a * (pinv * d) - d).squaredNorm();
       if (e <= e_th) {

@@ -68,10 +68,11 @@ int run_sensitivity(const AnalyzeArgs& args) {
                v(2), items);
     return 0;
   }
-  fmt::print("Velocity error of the estimate made with nominal positions when one mouse is\n"
-             "{} mm off along one axis; twist vx {} m/s, vy {} m/s, omega {} rad/s.\n"
-             "first order: Kim & Lee eqs. (29)-(30); exact: least squares with the true positions.\n\n",
-             args.dp * 1e3, v(0), v(1), v(2));
+  fmt::print(
+      "Velocity error of the estimate made with nominal positions when one mouse is\n"
+      "{} mm off along one axis; twist vx {} m/s, vy {} m/s, omega {} rad/s.\n"
+      "first order: Kim & Lee eqs. (29)-(30); exact: least squares with the true positions.\n\n",
+      args.dp * 1e3, v(0), v(1), v(2));
   fmt::print("{:<12} {:>4} | {:>12} {:>12} {:>14} | {:>12} {:>12} {:>14}\n", "sensor", "axis",
              "dvx mm/s", "dvy mm/s", "domega mrad/s", "exact dvx", "exact dvy", "exact domega");
   for (const Row& r : rows) {

@@ -100,7 +100,8 @@ Row bench_n(const BenchArgs& args, int n) {
   const int r_th = sekimori.r_th();
   const double e_th = SekimoriOptions{}.e_th;
   Row r{n, 0, 0, 0, 0, 0};
-  r.ls = median_ns(args, samples, [&](const ArraySample& s) { return ls.estimate(s)->twist.omega; });
+  r.ls =
+      median_ns(args, samples, [&](const ArraySample& s) { return ls.estimate(s)->twist.omega; });
   r.naive_ls = median_ns(args, samples,
                          [&](const ArraySample& s) { return baseline::naive_ls(array, s).omega; });
   r.sekimori = median_ns(args, samples, [&](const ArraySample& s) {
@@ -143,9 +144,8 @@ int run_bench(const BenchArgs& args) {
     rows.push_back(bench_n(args, n));
   }
   // The headline figures are for N = 4 (or the last size measured).
-  const Row& four = *std::find_if(rows.begin(), rows.end(), [&](const Row& r) {
-    return r.n == 4 || &r == &rows.back();
-  });
+  const Row& four = *std::find_if(rows.begin(), rows.end(),
+                                  [&](const Row& r) { return r.n == 4 || &r == &rows.back(); });
 #ifdef NDEBUG
   const char* build = "optimised (NDEBUG)";
 #else
@@ -164,14 +164,16 @@ int run_bench(const BenchArgs& args) {
     fmt::print(
         "{{\"n\": {}, \"ls_ns_per_update\": {:.1f}, \"naive_ls_ns_per_update\": {:.1f}, "
         "\"sekimori_ns_per_update\": {:.1f}, \"naive_sekimori_ns_per_update\": {:.1f}, "
-        "\"consensus_ns_per_update\": {:.1f}, \"ls_speedup\": {:.1f}, \"sekimori_speedup\": {:.1f}, "
+        "\"consensus_ns_per_update\": {:.1f}, \"ls_speedup\": {:.1f}, \"sekimori_speedup\": "
+        "{:.1f}, "
         "\"consensus_vs_naive_ls\": {:.2f}, \"per_n\": [{}], \"machine\": {{\"cpu\": \"{}\", "
         "\"hardware_threads\": {}}}, \"compiler\": \"{}\", \"build\": \"{}\", \"batches\": {}, "
         "\"updates_per_batch\": {}}}\n",
         four.n, four.ls, four.naive_ls, four.sekimori, four.naive_sekimori, four.consensus,
-        four.naive_ls / four.ls, four.naive_sekimori / four.sekimori, four.naive_ls / four.consensus,
-        per_n, json_escape(cpu_model()), std::thread::hardware_concurrency(),
-        json_escape(__VERSION__), build, args.batches, args.updates);
+        four.naive_ls / four.ls, four.naive_sekimori / four.sekimori,
+        four.naive_ls / four.consensus, per_n, json_escape(cpu_model()),
+        std::thread::hardware_concurrency(), json_escape(__VERSION__), build, args.batches,
+        args.updates);
     return 0;
   }
   fmt::print("median ns per update ({} batches of {} updates; {}; {})\n", args.batches,

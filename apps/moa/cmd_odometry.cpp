@@ -31,18 +31,21 @@ int run_odometry(OdometryArgs args) {
   namespace fs = std::filesystem;
   const io::RobotConfig config = io::read_config(args.config);
   io::MiceReader reader(args.log, config);
-  const fs::path log_dir = fs::is_directory(args.log) ? fs::path(args.log) : fs::path(args.log).parent_path();
+  const fs::path log_dir =
+      fs::is_directory(args.log) ? fs::path(args.log) : fs::path(args.log).parent_path();
   std::unique_ptr<io::WheelsReader> wheels;
   if (!args.no_wheels && fs::exists(log_dir / "wheels.csv")) {
     wheels = std::make_unique<io::WheelsReader>(log_dir / "wheels.csv");
   }
   if (args.initial_pose.size() == 3) {
-    args.pipeline.initial = Pose2{{args.initial_pose[0], args.initial_pose[1]}, args.initial_pose[2]};
+    args.pipeline.initial =
+        Pose2{{args.initial_pose[0], args.initial_pose[1]}, args.initial_pose[2]};
   }
   std::unique_ptr<io::CameraReader> camera;
   if (args.pipeline.fuse_camera) {
     if (!fs::exists(log_dir / "camera.csv")) {
-      throw io::Error(fmt::format("{}: --fuse-camera needs camera.csv in the log", (log_dir / "camera.csv").string()));
+      throw io::Error(fmt::format("{}: --fuse-camera needs camera.csv in the log",
+                                  (log_dir / "camera.csv").string()));
     }
     camera = std::make_unique<io::CameraReader>(log_dir / "camera.csv");
   }
@@ -66,7 +69,8 @@ int run_odometry(OdometryArgs args) {
     if (progress && (rows & 0xfff) == 0) {
       const auto now = std::chrono::steady_clock::now();
       if (now - last_report > std::chrono::seconds(1)) {
-        fmt::print(stderr, "\rmoa odometry: {} rows, t = {:.1f} s", rows, pipeline.last_time() - t0);
+        fmt::print(stderr, "\rmoa odometry: {} rows, t = {:.1f} s", rows,
+                   pipeline.last_time() - t0);
         last_report = now;
       }
     }
@@ -75,13 +79,17 @@ int run_odometry(OdometryArgs args) {
   writer.commit();
   if (progress) fmt::print(stderr, "\r\033[K");
   if (!args.quiet) {
-    fmt::print("moa odometry: {} rows, {} samples over {:.3f} s at {} Hz ({} estimator); odometry written to {}\n",
-               rows, pipeline.samples(), pipeline.last_time() - t0, args.pipeline.rate,
-               args.pipeline.estimator, args.out);
+    fmt::print(
+        "moa odometry: {} rows, {} samples over {:.3f} s at {} Hz ({} estimator); odometry written "
+        "to {}\n",
+        rows, pipeline.samples(), pipeline.last_time() - t0, args.pipeline.rate,
+        args.pipeline.estimator, args.out);
     if (args.pipeline.fuse_camera) {
       const FixCounts& f = pipeline.fixes();
-      fmt::print("camera fixes: {} applied, {} rejected as outliers, {} older than the filter's history, {} invalid\n",
-                 f.applied, f.rejected, f.too_old, f.invalid);
+      fmt::print(
+          "camera fixes: {} applied, {} rejected as outliers, {} older than the filter's history, "
+          "{} invalid\n",
+          f.applied, f.rejected, f.too_old, f.invalid);
     }
   }
   return 0;

@@ -52,15 +52,17 @@ class RobustSource : public TwistSource {
   Estimator est_;
 };
 
-std::string sd(double variance) { return fmt::format("{:.6g}", std::sqrt(std::max(variance, 0.0))); }
+std::string sd(double variance) {
+  return fmt::format("{:.6g}", std::sqrt(std::max(variance, 0.0)));
+}
 
 }  // namespace
 
 std::unique_ptr<TwistSource> TwistSource::create(const std::string& name, const SensorArray& array,
                                                  double period, const std::string& config_path) {
   if (name == "ls") {
-    return std::make_unique<LsSource>(built_or_throw(
-        LsEstimator::create(array, all_sensors(array.size()), period), config_path));
+    return std::make_unique<LsSource>(
+        built_or_throw(LsEstimator::create(array, all_sensors(array.size()), period), config_path));
   }
   if (name == "sekimori") {
     return std::make_unique<RobustSource<SekimoriEstimator>>(
@@ -89,8 +91,8 @@ struct Pipeline::Impl {
   double t0 = 0.0;
 
   Eigen::Matrix2d fix_covariance(const io::CameraRow& row) const {
-    const Eigen::Vector2d sd = row.sigma ? *row.sigma
-                                         : Eigen::Vector2d::Constant(options.camera_sigma);
+    const Eigen::Vector2d sd =
+        row.sigma ? *row.sigma : Eigen::Vector2d::Constant(options.camera_sigma);
     return sd.cwiseAbs2().asDiagonal();
   }
 

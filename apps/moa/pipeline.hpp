@@ -21,10 +21,10 @@ struct PipelineOptions {
   std::string estimator = "consensus";  ///< ls | sekimori | consensus
   double rate = 100.0;                  ///< Hz, epochs
   double max_row_interval = 0.05;       ///< s
-  std::optional<Pose2> initial;  ///< world_T_robot at t0; default: identity, or the first fix
-  bool fuse_camera = false;       ///< EKF with camera.csv fixes
-  double camera_latency = 0.0;    ///< s from capture (camera.csv t) to arrival
-  double camera_sigma = 0.005;    ///< m, fix sd when camera.csv has no sx, sy
+  std::optional<Pose2> initial;        ///< world_T_robot at t0; default: identity, or the first fix
+  bool fuse_camera = false;            ///< EKF with camera.csv fixes
+  double camera_latency = 0.0;         ///< s from capture (camera.csv t) to arrival
+  double camera_sigma = 0.005;         ///< m, fix sd when camera.csv has no sx, sy
   double camera_heading_sigma = 0.02;  ///< rad, when camera.csv has theta
 };
 

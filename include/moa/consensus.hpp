@@ -67,9 +67,7 @@ class ConsensusEstimator {
   std::vector<SensorMask> subsets_;  ///< by decreasing size, built once
   // State carried between samples.
   PointMeasurements measurements_;
-  Twist2 last_twist_;
-  Eigen::Matrix3d last_covariance_ = Eigen::Matrix3d::Zero();
-  double last_good_t_ = 0.0;
+  Fallback fallback_;
 };
 
 }  // namespace moa

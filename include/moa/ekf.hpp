@@ -100,8 +100,8 @@ class PoseEkf {
   struct Step {
     double t_begin, t_end;
     Twist2 twist;
-    Eigen::Matrix3d q;         ///< twist covariance incl. the floor
-    Pose2 pose_before;         ///< state at t_begin
+    Eigen::Matrix3d q;  ///< twist covariance incl. the floor
+    Pose2 pose_before;  ///< state at t_begin
     Eigen::Matrix3d cov_before;
   };
   void propagate(const Twist2& twist, const Eigen::Matrix3d& q, double dt);

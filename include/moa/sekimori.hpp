@@ -52,15 +52,14 @@ class SekimoriEstimator {
   SekimoriOptions options_;
   int r_th_;
   SubsetSolver solver_;
-  std::array<Eigen::Matrix2d, kMaxSensors> c_ = zeros<Eigen::Matrix2d>();  ///< m per count, robot frame
+  std::array<Eigen::Matrix2d, kMaxSensors> c_ =
+      zeros<Eigen::Matrix2d>();  ///< m per count, robot frame
   std::array<Eigen::Matrix2d, kMaxSensors> quant_ = zeros<Eigen::Matrix2d>();
   /// Unit normals n_ij (4-vectors), pairs i < j in row-major order.
   std::vector<Eigen::Vector4d> normals_;
-  std::array<double, kMaxSensors * (kMaxSensors - 1) / 2> residual_{};
+  std::array<double, kMaxSensors*(kMaxSensors - 1) / 2> residual_{};
   PointMeasurements measurements_;
-  Twist2 last_twist_;
-  Eigen::Matrix3d last_covariance_ = Eigen::Matrix3d::Zero();
-  double last_good_t_ = 0.0;
+  Fallback fallback_;
   int pair_index(int i, int j) const { return i * n_ - i * (i + 1) / 2 + (j - i - 1); }
 };
 

@@ -76,11 +76,12 @@ class NoiseModel {
  private:
   int n_;
   NoiseModelOptions options_;
-  std::array<Eigen::Matrix2d, kMaxSensors> c_ = zeros<Eigen::Matrix2d>();          ///< m per count, robot frame
-  std::array<Eigen::Matrix2d, kMaxSensors> quant_ = zeros<Eigen::Matrix2d>();      ///< C C^T / 6
+  std::array<Eigen::Matrix2d, kMaxSensors> c_ =
+      zeros<Eigen::Matrix2d>();  ///< m per count, robot frame
+  std::array<Eigen::Matrix2d, kMaxSensors> quant_ = zeros<Eigen::Matrix2d>();  ///< C C^T / 6
   std::array<Eigen::Matrix<double, 2, 3>, kMaxSensors> a_ = zeros<Eigen::Matrix<double, 2, 3>>();
   std::array<double, kMaxSensors> noise2_{};
-  std::array<double, kMaxSensors> max_speed_{};           ///< 0 when not rated
+  std::array<double, kMaxSensors> max_speed_{};  ///< 0 when not rated
 };
 
 /// Covariance of a wheel-odometry twist: wheels slip, more when fast.
@@ -99,6 +100,29 @@ struct HoldModel {
   double accel = 1.0;
   double angular_accel = 5.0;
   Eigen::Matrix3d grown(const Eigen::Matrix3d& covariance, double elapsed) const;
+};
+
+/// What both robust estimators do when no set of sensors can be trusted:
+/// the wheel twist (its covariance from WheelNoise), or without wheels the
+/// last good twist held with its covariance grown (HoldModel).
+class Fallback {
+ public:
+  /// Records a twist that came from the mice at time t.
+  void good(const Twist2& twist, const Eigen::Matrix3d& covariance, double t) {
+    last_twist_ = twist;
+    last_covariance_ = covariance;
+    last_good_t_ = t;
+  }
+  /// Fills out's twist, covariance and source for a sample at time t.
+  void apply(RobustEstimate& out, const std::optional<Twist2>& wheels,
+             const WheelNoise& wheel_noise, const HoldModel& hold, double t);
+  /// The best guess of the current twist (for predicting sensor speeds).
+  const Twist2& last_twist() const { return last_twist_; }
+
+ private:
+  Twist2 last_twist_;
+  Eigen::Matrix3d last_covariance_ = Eigen::Matrix3d::Zero();
+  double last_good_t_ = 0.0;
 };
 
 }  // namespace moa

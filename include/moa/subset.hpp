@@ -20,7 +20,7 @@ namespace moa {
 /// Sensor point velocities and their covariances for one sample.
 struct PointMeasurements {
   int size = 0;
-  std::array<Eigen::Vector2d, kMaxSensors> u = zeros<Eigen::Vector2d>();  ///< m/s, robot frame
+  std::array<Eigen::Vector2d, kMaxSensors> u = zeros<Eigen::Vector2d>();     ///< m/s, robot frame
   std::array<Eigen::Matrix2d, kMaxSensors> info = zeros<Eigen::Matrix2d>();  ///< S_i^-1, (s/m)^2
 };
 
