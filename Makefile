@@ -12,6 +12,8 @@ MOA := $(BUILD_DIR)/bin/moa
 DEBIAN_PACKAGES := g++ make cmake libeigen3-dev libyaml-cpp-dev libcli11-dev libfmt-dev \
                    libgtest-dev libgmock-dev libbenchmark-dev \
                    gcc-avr avr-libc binutils-avr simavr libsimavr-dev
+# moa report: Chart.js, inlined into the page at build time; Chromium for its browser test.
+DEBIAN_PACKAGES += libjs-chart.js chromium
 
 # Under CI (CI=true) warnings are errors.
 ifeq ($(CI),true)
@@ -55,6 +57,15 @@ demo: build
 	  --log examples/logs/mixed-motion --estimator ls --out $(DEMO_OUT)/odometry.csv
 	$(MOA) evaluate --truth examples/logs/mixed-motion/truth.csv --odometry $(DEMO_OUT)/odometry.csv
 	@echo "moa demo: odometry written to $(DEMO_OUT)/odometry.csv"
+	$(MOA) simulate --scenario sekimori-b --seed 1 --out $(DEMO_OUT)/sekimori-b
+	$(MOA) odometry --config $(DEMO_OUT)/sekimori-b/robot.yaml --log $(DEMO_OUT)/sekimori-b \
+	  --estimator ls --out $(DEMO_OUT)/sekimori-b/odometry.csv
+	$(MOA) evaluate --truth $(DEMO_OUT)/sekimori-b/truth.csv \
+	  --odometry $(DEMO_OUT)/sekimori-b/odometry.csv
+	@echo "moa demo: simulated log, its odometry and truth in $(DEMO_OUT)/sekimori-b"
+	$(MOA) report --config $(DEMO_OUT)/sekimori-b/robot.yaml --log $(DEMO_OUT)/sekimori-b \
+	  --odometry $(DEMO_OUT)/sekimori-b/odometry.csv --truth $(DEMO_OUT)/sekimori-b/truth.csv \
+	  --out $(DEMO_OUT)/sekimori-b/report.html
 
 clean:
 	rm -rf $(BUILD_DIR)

@@ -13,7 +13,13 @@ using Action = std::function<int()>;
 void add_version(CLI::App& app, Action& action);
 void add_odometry(CLI::App& app, Action& action);
 void add_evaluate(CLI::App& app, Action& action);
+void add_simulate(CLI::App& app, Action& action);
+void add_import_evemu(CLI::App& app, Action& action);
+void add_live(CLI::App& app, Action& action);
 void add_analyze(CLI::App& app, Action& action);
 void add_bench(CLI::App& app, Action& action);
+void add_report(CLI::App& app, Action& action);
+void add_calibrate(CLI::App& app, Action& action);
+void add_experiment(CLI::App& app, Action& action);
 
 }  // namespace moa::cli

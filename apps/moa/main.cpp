@@ -16,8 +16,14 @@ int main(int argc, char** argv) {
   moa::cli::add_version(app, action);
   moa::cli::add_odometry(app, action);
   moa::cli::add_evaluate(app, action);
+  moa::cli::add_simulate(app, action);
+  moa::cli::add_import_evemu(app, action);
+  moa::cli::add_live(app, action);
   moa::cli::add_analyze(app, action);
   moa::cli::add_bench(app, action);
+  moa::cli::add_report(app, action);
+  moa::cli::add_calibrate(app, action);
+  moa::cli::add_experiment(app, action);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,63 @@
+// moa report: one self-contained HTML page with plots of a run.
+#include <fmt/core.h>
+
+#include <memory>
+#include <string>
+
+#include "commands.hpp"
+#include "moa/io/report.hpp"
+
+namespace moa::cli {
+namespace {
+
+struct ReportArgs {
+  std::string config;
+  std::string log;
+  std::string odometry;
+  std::string truth;
+  std::string calibration;
+  std::string title;
+  std::string out;
+  std::size_t max_points = io::ReportOptions{}.max_points;
+};
+
+int run_report(const ReportArgs& args) {
+  io::ReportInputs inputs;
+  inputs.config = args.config;
+  inputs.log = args.log;
+  inputs.odometry = args.odometry;
+  if (!args.truth.empty()) inputs.truth = args.truth;
+  if (!args.calibration.empty()) inputs.calibration = args.calibration;
+  inputs.title = args.title;
+  io::ReportOptions options;
+  options.max_points = args.max_points;
+  io::write_report(inputs, args.out, options);
+  fmt::print("moa report: written to {}\n", args.out);
+  return 0;
+}
+
+}  // namespace
+
+void add_report(CLI::App& app, Action& action) {
+  auto args = std::make_shared<ReportArgs>();
+  auto* cmd = app.add_subcommand(
+      "report",
+      "One self-contained HTML page with plots of a run: trajectory, error against truth, "
+      "sensors used and excluded, sensor speeds, calibrated mounts");
+  cmd->add_option("--config", args->config, "Robot config (YAML) the odometry was made with")
+      ->required();
+  cmd->add_option("--log", args->log, "Log directory (mice.csv, optional camera.csv)")->required();
+  cmd->add_option("--odometry", args->odometry, "odometry.csv written by moa odometry")->required();
+  cmd->add_option("--truth", args->truth, "truth.csv (t,x,y,theta): adds the error plots");
+  cmd->add_option("--calibration", args->calibration,
+                  "Calibrated config (YAML, moa calibrate): nominal and calibrated mounts");
+  cmd->add_option("--title", args->title, "Page title (default: after the log directory)");
+  cmd->add_option("--max-points", args->max_points,
+                  "Most points per plotted series; longer runs are binned in time")
+      ->check(CLI::Range(std::size_t{2}, std::size_t{1000000}))
+      ->capture_default_str();
+  cmd->add_option("--out", args->out, "The HTML file to write")->required();
+  cmd->callback([&action, args] { action = [args] { return run_report(*args); }; });
+}
+
+}  // namespace moa::cli

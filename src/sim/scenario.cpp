@@ -1,0 +1,823 @@
+#include "moa/sim/scenario.hpp"
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <map>
+#include <numbers>
+#include <optional>
+#include <sstream>
+#include <system_error>
+
+#include "builtin_scenarios.hpp"
+#include "moa/io/csv.hpp"
+#include "moa/io/error.hpp"
+
+namespace moa::sim {
+namespace {
+
+std::string describe_kind(const YAML::Node& node) {
+  switch (node.Type()) {
+    case YAML::NodeType::Null:
+      return "nothing";
+    case YAML::NodeType::Sequence:
+      return "a list";
+    case YAML::NodeType::Map:
+      return "a map";
+    default:
+      return fmt::format("'{}'", node.Scalar());
+  }
+}
+
+// Where a node is, for messages: "SOURCE:LINE: ".
+class Source {
+ public:
+  explicit Source(std::string_view name) : name_(name) {}
+  [[noreturn]] void fail(const YAML::Node& at, std::string_view what) const {
+    const YAML::Mark mark = at.Mark();
+    if (mark.is_null()) throw io::Error(io::printable(fmt::format("{}: {}", name_, what)));
+    throw io::Error(io::printable(fmt::format("{}:{}: {}", name_, mark.line + 1, what)));
+  }
+  [[noreturn]] void fail(std::string_view what) const {
+    throw io::Error(io::printable(fmt::format("{}: {}", name_, what)));
+  }
+
+ private:
+  std::string name_;
+};
+
+// A YAML map whose keys are all known and each present once. Values are
+// read by key; messages name the key by its dotted path ("motion.max_speed").
+class Fields {
+ public:
+  Fields(const Source& source, const YAML::Node& map, std::string path,
+         std::initializer_list<std::string_view> allowed)
+      : source_(source), map_(map), path_(std::move(path)) {
+    if (!map.IsMap()) {
+      source.fail(map, fmt::format("{}expected a map, found {}", where(), describe_kind(map)));
+    }
+    for (const auto& entry : map) {
+      if (!entry.first.IsScalar()) source.fail(entry.first, where() + "a key is not a plain name");
+      const std::string& key = entry.first.Scalar();
+      if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
+        std::string known;
+        for (const auto k : allowed) known += (known.empty() ? "" : ", ") + std::string(k);
+        source.fail(entry.first,
+                    fmt::format("unknown key '{}' (known here: {})", full(key), known));
+      }
+      if (!values_.emplace(key, entry).second) {
+        source.fail(entry.first, fmt::format("duplicate key '{}'", full(key)));
+      }
+    }
+  }
+
+  bool has(std::string_view key) const { return values_.contains(key); }
+  std::optional<YAML::Node> get(std::string_view key) const {
+    const auto it = values_.find(key);
+    if (it == values_.end()) return std::nullopt;
+    return it->second.second;
+  }
+  YAML::Node required(std::string_view key) const {
+    const auto node = get(key);
+    if (!node) source_.fail(map_, fmt::format("missing key '{}'", full(key)));
+    return *node;
+  }
+  /// The key node itself (for messages about the key, not its value).
+  YAML::Node key_node(std::string_view key) const { return values_.find(key)->second.first; }
+
+  [[noreturn]] void fail(std::string_view key, std::string_view what) const {
+    const auto it = values_.find(key);
+    const YAML::Node at = it == values_.end() ? map_ : it->second.second;
+    source_.fail(at, fmt::format("key '{}': {}", full(key), what));
+  }
+  [[noreturn]] void fail_at(const YAML::Node& at, std::string_view key,
+                            std::string_view what) const {
+    source_.fail(at, fmt::format("key '{}': {}", full(key), what));
+  }
+
+  std::string full(std::string_view key) const {
+    return path_.empty() ? std::string(key) : path_ + "." + std::string(key);
+  }
+  const Source& source() const { return source_; }
+  const YAML::Node& node() const { return map_; }
+
+  // Typed values.
+  double number(std::string_view key) const { return to_number(key, required(key)); }
+  double number(std::string_view key, double fallback) const {
+    return has(key) ? number(key) : fallback;
+  }
+  double positive(std::string_view key) const { return check_positive(key, number(key)); }
+  double positive(std::string_view key, double fallback) const {
+    return has(key) ? positive(key) : fallback;
+  }
+  double non_negative(std::string_view key, double fallback) const {
+    if (!has(key)) return fallback;
+    const double v = number(key);
+    if (v < 0.0) fail(key, fmt::format("must be >= 0 (found {})", v));
+    return v;
+  }
+  double fraction(std::string_view key, double fallback) const {
+    if (!has(key)) return fallback;
+    const double v = number(key);
+    if (v < 0.0 || v > 1.0) fail(key, fmt::format("must be within [0, 1] (found {})", v));
+    return v;
+  }
+  long integer(std::string_view key, long min, long max) const {
+    const YAML::Node node = required(key);
+    if (!node.IsScalar())
+      fail(key, fmt::format("expected an integer, found {}", describe_kind(node)));
+    const std::string& text = node.Scalar();
+    long value = 0;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+    if (ec != std::errc{} || end != text.data() + text.size()) {
+      fail(key, fmt::format("'{}' is not an integer", text));
+    }
+    if (value < min || value > max) {
+      fail(key, fmt::format("must be within [{}, {}] (found {})", min, max, value));
+    }
+    return value;
+  }
+  std::string text(std::string_view key) const {
+    const YAML::Node node = required(key);
+    if (!node.IsScalar()) fail(key, fmt::format("expected text, found {}", describe_kind(node)));
+    return node.Scalar();
+  }
+  bool boolean(std::string_view key, bool fallback) const {
+    if (!has(key)) return fallback;
+    const YAML::Node node = required(key);
+    if (node.IsScalar()) {
+      const std::string& t = node.Scalar();
+      if (t == "true" || t == "True" || t == "TRUE") return true;
+      if (t == "false" || t == "False" || t == "FALSE") return false;
+    }
+    fail(key, fmt::format("expected true or false, found {}", describe_kind(node)));
+  }
+  /// A list of numbers, of `size` elements when size > 0.
+  std::vector<double> numbers(std::string_view key, std::size_t size = 0) const {
+    return to_numbers(key, required(key), size);
+  }
+  std::vector<double> to_numbers(std::string_view key, const YAML::Node& node,
+                                 std::size_t size) const {
+    if (!node.IsSequence()) {
+      fail_at(node, key, fmt::format("expected a list of numbers, found {}", describe_kind(node)));
+    }
+    if (size > 0 && node.size() != size) {
+      fail_at(node, key, fmt::format("expected {} numbers, found {}", size, node.size()));
+    }
+    std::vector<double> out;
+    for (const auto& item : node) out.push_back(to_number(key, item));
+    return out;
+  }
+  /// One of `choices`.
+  std::string choice(std::string_view key, std::initializer_list<std::string_view> choices) const {
+    const std::string value = text(key);
+    if (std::find(choices.begin(), choices.end(), value) == choices.end()) {
+      std::string list;
+      for (const auto c : choices) list += (list.empty() ? "" : ", ") + std::string(c);
+      fail(key, fmt::format("'{}' is not one of: {}", value, list));
+    }
+    return value;
+  }
+
+  double to_number(std::string_view key, const YAML::Node& node) const {
+    if (!node.IsScalar()) {
+      fail_at(node, key, fmt::format("expected a number, found {}", describe_kind(node)));
+    }
+    const std::string& text = node.Scalar();
+    std::string_view digits = text;
+    if (digits.size() > 1 && digits[0] == '+' && digits[1] != '-') digits.remove_prefix(1);
+    double value = 0.0;
+    const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), value,
+                                           std::chars_format::general);
+    if (ec != std::errc{} || end != digits.data() + digits.size()) {
+      fail_at(node, key, fmt::format("'{}' is not a number", text));
+    }
+    if (!std::isfinite(value)) fail_at(node, key, fmt::format("'{}' is not finite", text));
+    return value;
+  }
+
+ private:
+  std::string where() const { return path_.empty() ? "" : fmt::format("key '{}': ", path_); }
+  double check_positive(std::string_view key, double v) const {
+    if (!(v > 0.0)) fail(key, fmt::format("must be > 0 (found {})", v));
+    return v;
+  }
+
+  const Source& source_;
+  YAML::Node map_;
+  std::string path_;
+  std::map<std::string, std::pair<YAML::Node, YAML::Node>, std::less<>> values_;
+};
+
+constexpr double kDegree = std::numbers::pi / 180.0;
+
+SensorModel parse_sensor_model(const Fields& f) {
+  SensorModel m;
+  const std::string preset = f.choice("preset", {kHdns2051.name, kAdns3080.name});
+  const SensorPreset& p = preset == kHdns2051.name ? kHdns2051 : kAdns3080;
+  m.preset = p.name;
+  m.cpi = f.positive("cpi", p.cpi);
+  m.max_speed = f.positive("max_speed", p.max_speed);
+  m.frame_rate = f.positive("frame_rate", p.frame_rate);
+  m.packets_per_row = f.has("packets_per_row")
+                          ? static_cast<int>(f.integer("packets_per_row", 1, 1000000))
+                          : static_cast<int>(std::max(1.0, std::round(m.frame_rate / 100.0)));
+  m.frame_noise = f.non_negative("frame_noise", 0.0);
+  m.relative_noise = f.non_negative("relative_noise", 0.0);
+  m.delta_limit =
+      f.has("delta_limit") ? static_cast<int>(f.integer("delta_limit", 0, 1 << 30)) : m.delta_limit;
+  m.squal = f.non_negative("squal", m.squal);
+  if (m.squal > 255.0) f.fail("squal", fmt::format("must be within [0, 255] (found {})", m.squal));
+  m.squal_jitter = f.non_negative("squal_jitter", 0.0);
+  return m;
+}
+
+std::vector<std::string> sensor_names(const Fields& f, std::size_t count) {
+  std::vector<std::string> names;
+  if (!f.has("names")) {
+    for (std::size_t i = 0; i < count; ++i) names.push_back(fmt::format("m{}", i + 1));
+    return names;
+  }
+  const YAML::Node node = f.required("names");
+  if (!node.IsSequence()) {
+    f.fail("names", fmt::format("expected a list of names, found {}", describe_kind(node)));
+  }
+  if (node.size() != count) {
+    f.fail("names",
+           fmt::format("expected {} names (one per sensor), found {}", count, node.size()));
+  }
+  for (const auto& item : node) {
+    if (!item.IsScalar()) f.fail_at(item, "names", "expected a name");
+    names.push_back(item.Scalar());
+  }
+  return names;
+}
+
+// The nominal robot's sensors: a layout generator or an explicit list.
+io::RobotConfig parse_sensors(const Source& source, const YAML::Node& node,
+                              const SensorModel& model) {
+  SensorMount prototype;
+  prototype.cpi = model.cpi;
+  prototype.max_speed = model.max_speed;
+  io::RobotConfig config;
+  std::vector<SensorMount> mounts;
+  if (node.IsSequence()) {
+    for (std::size_t i = 0; i < node.size(); ++i) {
+      const Fields s(source, node[i], fmt::format("sensors[{}]", i),
+                     {"name", "position", "yaw", "mirrored", "cpi"});
+      SensorMount m = prototype;
+      const auto p = s.numbers("position", 2);
+      m.position = {p[0], p[1]};
+      m.yaw = s.number("yaw");
+      m.mirrored = s.boolean("mirrored", false);
+      m.cpi = s.positive("cpi", m.cpi);
+      config.names.push_back(s.text("name"));
+      mounts.push_back(m);
+    }
+  } else {
+    const Fields f(source, node, "sensors",
+                   {"layout", "names", "angles_deg", "distance", "n", "radius", "theta"});
+    const std::string layout = f.choice("layout", {"radial", "polygon"});
+    if (layout == "radial") {
+      for (const auto key : {"n", "radius", "theta"}) {
+        if (f.has(key)) f.fail(key, "not used by layout 'radial' (it takes angles_deg, distance)");
+      }
+      const auto angles = f.numbers("angles_deg");
+      const double d = f.positive("distance");
+      for (const double a : angles) {
+        // Sekimori & Miyazaki: position d (cos phi, sin phi), x axis radial.
+        SensorMount m = prototype;
+        m.position = d * Eigen::Vector2d(std::cos(a * kDegree), std::sin(a * kDegree));
+        m.yaw = a * kDegree;
+        mounts.push_back(m);
+      }
+    } else {
+      for (const auto key : {"angles_deg", "distance"}) {
+        if (f.has(key)) f.fail(key, "not used by layout 'polygon' (it takes n, radius, theta)");
+      }
+      const int n = static_cast<int>(f.integer("n", 1, kMaxSensors));
+      mounts = regular_polygon(n, f.positive("radius"), f.number("theta", 0.0), prototype).mounts();
+    }
+    config.names = sensor_names(f, mounts.size());
+  }
+  if (mounts.size() < 2 || mounts.size() > static_cast<std::size_t>(kMaxSensors)) {
+    source.fail(node, fmt::format("key 'sensors': {} sensors, expected 2 to {}", mounts.size(),
+                                  kMaxSensors));
+  }
+  for (std::size_t i = 0; i < config.names.size(); ++i) {
+    const std::string& name = config.names[i];
+    const bool bad = name.empty() || std::any_of(name.begin(), name.end(), [](char c) {
+                       return c == ',' || c == ' ' || static_cast<unsigned char>(c) < 0x20;
+                     });
+    if (bad) source.fail(node, fmt::format("key 'sensors': invalid sensor name '{}'", name));
+    if (std::find(config.names.begin(), config.names.begin() + static_cast<long>(i), name) !=
+        config.names.begin() + static_cast<long>(i)) {
+      source.fail(node, fmt::format("key 'sensors': duplicate sensor name '{}'", name));
+    }
+  }
+  config.array = SensorArray(std::move(mounts));
+  return config;
+}
+
+int sensor_index(const Fields& f, std::string_view key, const YAML::Node& at,
+                 const io::RobotConfig& config) {
+  if (!at.IsScalar())
+    f.fail_at(at, key, fmt::format("expected a sensor name, found {}", describe_kind(at)));
+  const auto index = config.index_of(at.Scalar());
+  if (!index) {
+    std::string names;
+    for (const auto& n : config.names) names += (names.empty() ? "" : ", ") + n;
+    f.fail_at(at, key, fmt::format("no sensor called '{}' (sensors: {})", at.Scalar(), names));
+  }
+  return *index;
+}
+
+// The real robot: the nominal one with the listed deviations.
+io::RobotConfig parse_true_sensors(const Source& source, const YAML::Node& node,
+                                   const io::RobotConfig& nominal) {
+  io::RobotConfig truth = nominal;
+  if (!node.IsMap()) {
+    source.fail(node, fmt::format("key 'true_sensors': expected a map from sensor names to "
+                                  "deviations, found {}",
+                                  describe_kind(node)));
+  }
+  std::vector<bool> seen(nominal.names.size(), false);
+  for (const auto& entry : node) {
+    if (!entry.first.IsScalar())
+      source.fail(entry.first, "key 'true_sensors': a key is not a name");
+    const std::string& name = entry.first.Scalar();
+    const auto index = nominal.index_of(name);
+    if (!index) {
+      std::string names;
+      for (const auto& n : nominal.names) names += (names.empty() ? "" : ", ") + n;
+      source.fail(
+          entry.first,
+          fmt::format("key 'true_sensors': no sensor called '{}' (sensors: {})", name, names));
+    }
+    if (seen[static_cast<std::size_t>(*index)]) {
+      source.fail(entry.first, fmt::format("key 'true_sensors': duplicate sensor '{}'", name));
+    }
+    seen[static_cast<std::size_t>(*index)] = true;
+    const Fields f(source, entry.second, "true_sensors." + name,
+                   {"position_error", "position_scale", "yaw_error", "scale", "mirrored", "cpi"});
+    SensorMount& m = truth.array[*index];
+    m.position *= f.positive("position_scale", 1.0);
+    if (f.has("position_error")) {
+      const auto e = f.numbers("position_error", 2);
+      m.position += Eigen::Vector2d(e[0], e[1]);
+    }
+    m.yaw += f.number("yaw_error", 0.0);
+    if (f.has("scale")) {
+      const auto s = f.numbers("scale", 2);
+      if (!(s[0] > 0.0 && s[1] > 0.0)) f.fail("scale", "must be > 0");
+      m.scale = {s[0], s[1]};
+    }
+    m.mirrored = f.boolean("mirrored", m.mirrored);
+    m.cpi = f.positive("cpi", m.cpi);
+  }
+  return truth;
+}
+
+// The noise the estimators should assume, written into both configs: the
+// per-frame noise (additive, and relative at the rated speed) summed over a
+// row of K frames, as a velocity over the row's duration:
+//   sigma_v = sqrt(K (sigma_f^2 + (rho v_max k h)^2)) / (k K h),  k = cpi / 0.0254.
+// Three significant digits: it is a figure a user would write down.
+std::optional<double> config_noise(const SensorModel& m) {
+  if (m.frame_noise <= 0.0 && m.relative_noise <= 0.0) return std::nullopt;
+  const double k = m.cpi / kMetresPerInch;
+  const double h = 1.0 / m.frame_rate;
+  const double rel = m.relative_noise * m.max_speed * k * h;
+  const double per_frame = m.frame_noise * m.frame_noise + rel * rel;
+  const double kk = static_cast<double>(m.packets_per_row);
+  const double sigma = std::sqrt(kk * per_frame) / (k * kk * h);
+  return std::stod(fmt::format("{:.3g}", sigma));
+}
+
+DriveModel parse_drive(const Source& source, const YAML::Node& node, const SensorModel& sensor) {
+  DriveModel d;
+  d.rate = 1.0 / sensor.row_period();
+  const Fields probe(source, node, "drive",
+                     {"type", "wheel_distance", "wheel_angles_deg", "rate", "encoder_resolution",
+                      "slip", "noise_speed", "noise_rate"});
+  const std::string type = probe.choice("type", {"none", "omni3", "differential", "reference"});
+  if (type == "none") {
+    for (const auto key : {"wheel_distance", "wheel_angles_deg", "rate", "encoder_resolution",
+                           "slip", "noise_speed", "noise_rate"}) {
+      if (probe.has(key)) probe.fail(key, "not used by drive type 'none'");
+    }
+    return d;
+  }
+  d.rate = probe.positive("rate", d.rate);
+  d.noise_speed = probe.non_negative("noise_speed", 0.0);
+  d.noise_rate = probe.non_negative("noise_rate", 0.0);
+  if (type == "reference") {
+    d.type = DriveType::kReference;
+    for (const auto key : {"wheel_distance", "wheel_angles_deg", "encoder_resolution", "slip"}) {
+      if (probe.has(key)) probe.fail(key, "not used by drive type 'reference'");
+    }
+    return d;
+  }
+  d.type = type == "omni3" ? DriveType::kOmni3 : DriveType::kDifferential;
+  d.wheel_distance = probe.positive("wheel_distance");
+  d.encoder_resolution = probe.non_negative("encoder_resolution", 0.0);
+  const int wheels = d.wheel_count();
+  if (d.type == DriveType::kOmni3) {
+    const auto angles = probe.has("wheel_angles_deg") ? probe.numbers("wheel_angles_deg", 3)
+                                                      : std::vector<double>{90.0, 210.0, 330.0};
+    for (const double a : angles) d.wheel_angles.push_back(a * kDegree);
+    Eigen::Matrix3d w;
+    for (int j = 0; j < 3; ++j) {
+      const double a = d.wheel_angles[static_cast<std::size_t>(j)];
+      w.row(j) << -std::sin(a), std::cos(a), 1.0;
+    }
+    if (std::abs(w.determinant()) < 1e-6) {
+      probe.fail("wheel_angles_deg",
+                 "the three wheels cannot drive every twist (angles too close)");
+    }
+  } else if (probe.has("wheel_angles_deg")) {
+    probe.fail("wheel_angles_deg", "not used by drive type 'differential'");
+  }
+  d.slip.base.assign(static_cast<std::size_t>(wheels), 0.0);
+  if (const auto slip_node = probe.get("slip")) {
+    const Fields s(source, *slip_node, "drive.slip",
+                   {"base", "per_speed", "per_accel", "random", "random_time"});
+    if (const auto base = s.get("base")) {
+      if (base->IsSequence()) {
+        d.slip.base = s.numbers("base", static_cast<std::size_t>(wheels));
+      } else {
+        d.slip.base.assign(static_cast<std::size_t>(wheels), s.number("base"));
+      }
+      for (const double b : d.slip.base) {
+        if (b <= -1.0) s.fail("base", fmt::format("must be > -1 (found {})", b));
+      }
+    }
+    d.slip.per_speed = s.number("per_speed", 0.0);
+    d.slip.per_accel = s.number("per_accel", 0.0);
+    d.slip.random = s.non_negative("random", 0.0);
+    d.slip.random_time = s.positive("random_time", d.slip.random_time);
+  }
+  return d;
+}
+
+Pose2 to_pose(const Fields& f, std::string_view key, const YAML::Node& node) {
+  const auto v = f.to_numbers(key, node, 3);
+  return {{v[0], v[1]}, v[2]};
+}
+
+// Lateral velocity a differential drive cannot produce, m/s (or m per unit).
+constexpr double kLateralTolerance = 1e-9;
+
+Motion parse_waypoints(const Fields& f, bool differential) {
+  const YAML::Node list = f.required("waypoints");
+  if (!list.IsSequence()) {
+    f.fail("waypoints",
+           fmt::format("expected a list of [x, y, heading], found {}", describe_kind(list)));
+  }
+  if (list.size() < 2) f.fail("waypoints", "at least two waypoints are needed");
+  std::vector<Pose2> poses;
+  for (const auto& item : list) poses.push_back(to_pose(f, "waypoints", item));
+  const bool arc = f.has("interpolation") && f.choice("interpolation", {"linear", "arc"}) == "arc";
+  PathLimits limits;
+  limits.max_speed = f.positive("max_speed");
+  limits.max_rate = f.positive("max_rate");
+  limits.max_accel = f.positive("max_accel");
+  limits.max_angular_accel = f.positive("max_angular_accel");
+  const double pause = f.non_negative("pause", 0.0);
+  for (std::size_t i = 0; i + 1 < poses.size(); ++i) {
+    const Pose2& a = poses[i];
+    const Pose2& b = poses[i + 1];
+    const double turn = b.theta - a.theta;
+    if (std::abs(turn) >= 2.0 * std::numbers::pi && arc) {
+      f.fail_at(list[i + 1], "waypoints", "an arc segment cannot turn by 2 pi or more");
+    }
+    if (!differential) continue;
+    // A differential drive moves along its heading or turns on the spot.
+    double lateral = 0.0;
+    if (arc) {
+      lateral = std::abs(twist_between(a, b, 1.0).v.y());
+    } else {
+      const Eigen::Vector2d d = b.t - a.t;
+      const Eigen::Vector2d heading(std::cos(a.theta), std::sin(a.theta));
+      lateral = std::abs(heading.x() * d.y() - heading.y() * d.x());
+      if (d.norm() > kLateralTolerance && std::abs(turn) > 0.0)
+        lateral = std::max(lateral, d.norm());
+    }
+    if (lateral > kLateralTolerance) {
+      f.fail_at(list[i + 1], "waypoints",
+                fmt::format("segment {} -> {} needs sideways motion, which a differential drive "
+                            "cannot make",
+                            i + 1, i + 2));
+    }
+  }
+  return WaypointPath(std::move(poses), arc ? Interpolation::kArc : Interpolation::kLinear, limits,
+                      pause);
+}
+
+Motion parse_twists(const Source& source, const Fields& f, bool differential) {
+  TwistProgram program;
+  const YAML::Node list = f.required("segments");
+  if (!list.IsSequence() || list.size() == 0) {
+    f.fail("segments", fmt::format("expected a non-empty list of {{twist, duration}}, found {}",
+                                   describe_kind(list)));
+  }
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const Fields s(source, list[i], fmt::format("motion.segments[{}]", i), {"twist", "duration"});
+    const auto x = s.numbers("twist", 3);
+    if (differential && std::abs(x[1]) > 0.0) {
+      s.fail("twist", "a differential drive cannot move sideways (vy must be 0)");
+    }
+    program.segments.push_back({{{x[0], x[1]}, x[2]}, s.positive("duration")});
+  }
+  program.max_accel = f.non_negative("max_accel", 0.0);
+  program.max_angular_accel = f.non_negative("max_angular_accel", 0.0);
+  return program;
+}
+
+std::vector<Excitation::Sine> parse_sines(const Fields& f, std::string_view key) {
+  std::vector<Excitation::Sine> sines;
+  const auto node = f.get(key);
+  if (!node) return sines;
+  if (!node->IsSequence()) {
+    f.fail(key, fmt::format("expected a list of [amplitude, frequency_hz, phase_rad], found {}",
+                            describe_kind(*node)));
+  }
+  for (const auto& item : *node) {
+    const auto v = f.to_numbers(key, item, 3);
+    if (v[1] < 0.0) f.fail_at(item, key, fmt::format("frequency must be >= 0 (found {})", v[1]));
+    sines.push_back({v[0], v[1], v[2]});
+  }
+  return sines;
+}
+
+Motion parse_sines_motion(const Fields& f, bool differential) {
+  Excitation e;
+  e.vx = parse_sines(f, "vx");
+  e.vy = parse_sines(f, "vy");
+  e.omega = parse_sines(f, "omega");
+  if (f.has("offset")) {
+    const auto o = f.numbers("offset", 3);
+    e.offset = {{o[0], o[1]}, o[2]};
+  }
+  if (differential && (!e.vy.empty() || e.offset.v.y() != 0.0)) {
+    f.fail(f.has("vy") ? "vy" : "offset", "a differential drive cannot move sideways");
+  }
+  e.duration = f.positive("duration");
+  e.fade = f.non_negative("fade", 0.0);
+  if (2.0 * e.fade > e.duration) f.fail("fade", "longer than half the duration");
+  return e;
+}
+
+Motion parse_motion(const Source& source, const YAML::Node& node, bool differential) {
+  const Fields probe(source, node, "motion",
+                     {"type", "waypoints", "interpolation", "max_speed", "max_rate", "max_accel",
+                      "max_angular_accel", "pause", "segments", "vx", "vy", "omega", "offset",
+                      "duration", "fade"});
+  const std::string type = probe.choice("type", {"waypoints", "twists", "sines"});
+  const auto allowed = [&](std::initializer_list<std::string_view> keys) {
+    return Fields(source, node, "motion", keys);
+  };
+  if (type == "waypoints") {
+    return parse_waypoints(allowed({"type", "waypoints", "interpolation", "max_speed", "max_rate",
+                                    "max_accel", "max_angular_accel", "pause"}),
+                           differential);
+  }
+  if (type == "twists") {
+    return parse_twists(source, allowed({"type", "segments", "max_accel", "max_angular_accel"}),
+                        differential);
+  }
+  return parse_sines_motion(allowed({"type", "vx", "vy", "omega", "offset", "duration", "fade"}),
+                            differential);
+}
+
+void parse_faults(const Source& source, const YAML::Node& node, const io::RobotConfig& config,
+                  double duration, std::vector<SensorFaults>& faults) {
+  const Fields f(source, node, "faults", {"tracking_loss", "events"});
+  if (const auto loss_node = f.get("tracking_loss")) {
+    const Fields l(source, *loss_node, "faults.tracking_loss",
+                   {"rate", "mean_duration", "retained", "squal_factor", "sensors"});
+    TrackingLoss loss;
+    l.required("rate");
+    loss.rate = l.non_negative("rate", 0.0);
+    loss.mean_duration = l.positive("mean_duration");
+    if (l.has("retained")) {
+      const auto r = l.numbers("retained", 2);
+      if (r[0] < 0.0 || r[1] > 1.0 || r[0] > r[1]) {
+        l.fail("retained", "expected [min, max] with 0 <= min <= max <= 1");
+      }
+      loss.retained_min = r[0];
+      loss.retained_max = r[1];
+    }
+    loss.squal_factor = l.fraction("squal_factor", 1.0);
+    std::vector<int> which;
+    if (const auto sensors = l.get("sensors")) {
+      if (!sensors->IsSequence()) {
+        l.fail("sensors",
+               fmt::format("expected a list of sensor names, found {}", describe_kind(*sensors)));
+      }
+      for (const auto& item : *sensors) which.push_back(sensor_index(l, "sensors", item, config));
+    } else {
+      for (int i = 0; i < config.array.size(); ++i) which.push_back(i);
+    }
+    for (const int i : which) faults[static_cast<std::size_t>(i)].tracking_loss = loss;
+  }
+  const auto events = f.get("events");
+  if (!events) return;
+  if (!events->IsSequence()) {
+    f.fail("events",
+           fmt::format("expected a list of fault events, found {}", describe_kind(*events)));
+  }
+  for (std::size_t i = 0; i < events->size(); ++i) {
+    const YAML::Node item = (*events)[i];
+    const std::string path = fmt::format("faults.events[{}]", i);
+    const Fields probe(
+        source, item, path,
+        {"type", "sensor", "start", "end", "squal", "lift_flag", "retained", "rate", "magnitude"});
+    const std::string type = probe.choice("type", {"liftoff", "dirty", "spikes", "stuck"});
+    const Fields e =
+        type == "liftoff"
+            ? Fields(source, item, path, {"type", "sensor", "start", "end", "squal", "lift_flag"})
+        : type == "dirty"
+            ? Fields(source, item, path, {"type", "sensor", "start", "end", "squal", "retained"})
+        : type == "spikes"
+            ? Fields(source, item, path, {"type", "sensor", "start", "end", "rate", "magnitude"})
+            : Fields(source, item, path, {"type", "sensor", "start", "end"});
+    FaultWindow w;
+    const int sensor = sensor_index(e, "sensor", e.required("sensor"), config);
+    w.start = e.number("start");
+    w.end = e.number("end");
+    if (w.start < 0.0) e.fail("start", fmt::format("must be >= 0 (found {})", w.start));
+    if (w.end <= w.start) {
+      e.fail("end", fmt::format("must be after start ({} <= {})", w.end, w.start));
+    }
+    if (w.start >= duration) {
+      e.fail("start", fmt::format("after the end of the run ({} s)", duration));
+    }
+    const auto squal = [&](int fallback) {
+      return e.has("squal") ? static_cast<int>(e.integer("squal", 0, 255)) : fallback;
+    };
+    if (type == "liftoff") {
+      w.kind = kFaultLiftoff;
+      w.squal = squal(3);
+      w.lift_flag = e.boolean("lift_flag", true);
+    } else if (type == "dirty") {
+      w.kind = kFaultDirty;
+      w.squal = squal(15);
+      e.required("retained");
+      w.retained = e.fraction("retained", 0.0);
+    } else if (type == "spikes") {
+      w.kind = kFaultSpike;
+      w.rate = e.positive("rate");
+      w.magnitude = e.positive("magnitude");
+    } else {
+      w.kind = kFaultStuck;
+    }
+    faults[static_cast<std::size_t>(sensor)].windows.push_back(w);
+  }
+}
+
+CameraModel parse_camera(const Source& source, const YAML::Node& node) {
+  const Fields f(source, node, "camera", {"rate", "noise", "latency", "outliers"});
+  CameraModel c;
+  c.enabled = true;
+  c.rate = f.positive("rate");
+  f.required("noise");
+  c.noise = f.non_negative("noise", 0.0);
+  c.latency = f.non_negative("latency", 0.0);
+  if (const auto o = f.get("outliers")) {
+    const Fields of(source, *o, "camera.outliers", {"rate", "magnitude"});
+    of.required("rate");
+    c.outlier_rate = of.fraction("rate", 0.0);
+    c.outlier_magnitude = of.positive("magnitude");
+  }
+  return c;
+}
+
+}  // namespace
+
+std::int64_t Scenario::frame_count() const {
+  const double frames = duration * sensor_model.frame_rate;
+  const auto k = static_cast<std::int64_t>(sensor_model.packets_per_row);
+  // Whole rows; the 1e-9 keeps a duration that is a whole number of rows
+  // from gaining one through rounding.
+  const auto rows = static_cast<std::int64_t>(std::ceil(frames / static_cast<double>(k) - 1e-9));
+  return std::max<std::int64_t>(1, rows) * k;
+}
+
+Scenario parse_scenario(std::string_view yaml, std::string_view source_name) {
+  const Source source(source_name);
+  std::vector<YAML::Node> documents;
+  try {
+    documents = YAML::LoadAll(std::string(yaml));
+  } catch (const YAML::Exception& e) {
+    if (e.mark.is_null()) source.fail(fmt::format("invalid YAML: {}", e.msg));
+    throw io::Error(
+        io::printable(fmt::format("{}:{}: invalid YAML: {}", source_name, e.mark.line + 1, e.msg)));
+  }
+  if (documents.empty() || documents.front().IsNull()) source.fail("empty scenario");
+  if (documents.size() > 1) {
+    source.fail(fmt::format("expected one YAML document, found {}", documents.size()));
+  }
+  const YAML::Node root = documents.front();
+  if (!root.IsMap())
+    source.fail(root, fmt::format("expected a map, found {}", describe_kind(root)));
+
+  // The version first: a newer file may have keys this reader does not know.
+  for (const auto& entry : root) {
+    if (entry.first.IsScalar() && entry.first.Scalar() == "version") {
+      const YAML::Node& v = entry.second;
+      if (!v.IsScalar() || v.Scalar() != std::to_string(kScenarioVersion)) {
+        source.fail(v, fmt::format("key 'version': {} is not supported (expected {})",
+                                   v.IsScalar() ? v.Scalar() : describe_kind(v), kScenarioVersion));
+      }
+    }
+  }
+  const Fields top(source, root, "",
+                   {"version", "name", "description", "duration", "truth_rate", "sensor_model",
+                    "sensors", "true_sensors", "drive", "motion", "faults", "camera"});
+  top.required("version");
+
+  Scenario s;
+  s.name = top.text("name");
+  if (top.has("description")) s.description = top.text("description");
+  s.sensor_model = parse_sensor_model(
+      Fields(source, top.required("sensor_model"), "sensor_model",
+             {"preset", "cpi", "frame_rate", "max_speed", "packets_per_row", "frame_noise",
+              "relative_noise", "delta_limit", "squal", "squal_jitter"}));
+  s.nominal = parse_sensors(source, top.required("sensors"), s.sensor_model);
+  const auto noise = config_noise(s.sensor_model);
+  for (int i = 0; i < s.nominal.array.size(); ++i) s.nominal.array[i].noise = noise;
+  s.truth = s.nominal;
+  if (const auto t = top.get("true_sensors")) s.truth = parse_true_sensors(source, *t, s.nominal);
+  if (const auto d = top.get("drive")) s.drive = parse_drive(source, *d, s.sensor_model);
+  if (const auto c = top.get("camera")) s.camera = parse_camera(source, *c);
+  s.motion = parse_motion(source, top.required("motion"), s.drive.type == DriveType::kDifferential);
+  s.truth_rate = top.positive("truth_rate", 100.0);
+  const double motion_time = sim::duration(s.motion);
+  s.duration = motion_time;
+  if (top.has("duration")) {
+    s.duration = top.positive("duration");
+    if (s.duration < motion_time) {
+      top.fail("duration",
+               fmt::format("shorter than the motion ({} s < {} s)", s.duration, motion_time));
+    }
+  }
+  s.faults.assign(static_cast<std::size_t>(s.nominal.array.size()), {});
+  if (const auto f = top.get("faults")) parse_faults(source, *f, s.nominal, s.duration, s.faults);
+
+  // Both configs must be writable as config v1 (the writer checks ranges).
+  try {
+    (void)io::format_config(s.nominal);
+    (void)io::format_config(s.truth);
+  } catch (const io::Error& e) {
+    source.fail(fmt::format("the robot it describes is not a valid config: {}", e.what()));
+  }
+  return s;
+}
+
+std::vector<std::string> builtin_scenarios() {
+  std::vector<std::string> names;
+  for (std::size_t i = 0; i < detail::kBuiltinScenarioCount; ++i) {
+    names.emplace_back(detail::kBuiltinScenarios[i].name);
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+std::string_view builtin_scenario_text(std::string_view name) {
+  for (std::size_t i = 0; i < detail::kBuiltinScenarioCount; ++i) {
+    if (detail::kBuiltinScenarios[i].name == name) return detail::kBuiltinScenarios[i].text;
+  }
+  return {};
+}
+
+Scenario load_scenario(std::string_view name_or_path) {
+  if (const auto text = builtin_scenario_text(name_or_path); !text.empty()) {
+    return parse_scenario(text, fmt::format("{}.yaml (built in)", name_or_path));
+  }
+  const std::filesystem::path path{std::string(name_or_path)};
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) {
+    std::string names;
+    for (const auto& n : builtin_scenarios()) names += (names.empty() ? "" : ", ") + n;
+    throw io::Error(fmt::format("scenario '{}': not a built-in scenario ({}) and no such file",
+                                name_or_path, names));
+  }
+  if (std::filesystem::is_directory(path, ec)) {
+    throw io::Error(fmt::format("{}: cannot open (is a directory)", path.string()));
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw io::Error(fmt::format("{}: cannot open", path.string()));
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_scenario(text.str(), path.string());
+}
+
+}  // namespace moa::sim

@@ -1,0 +1,287 @@
+// `moa live` end to end through a pseudo-terminal: a test thread plays the
+// acquisition microcontroller (docs/serial-protocol.md) streaming a
+// synthesised motion; moa records it, Ctrl-C (SIGINT) ends the run, and the
+// recording replays with `moa odometry` to byte-identical odometry.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "moa/io/config.hpp"
+#include "moa/io/serial_protocol.hpp"
+#include "moa/se2.hpp"
+#include "support/pty.hpp"
+#include "support/run.hpp"
+#include "support/synth.hpp"
+
+extern char** environ;
+
+namespace moa::test {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+std::string read_text(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// Data lines of a CSV file (not comments, not the header).
+std::size_t data_lines(const fs::path& file) {
+  std::ifstream in(file);
+  std::string line;
+  std::size_t n = 0;
+  bool header = true;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    if (header) {
+      header = false;
+      continue;
+    }
+    ++n;
+  }
+  return n;
+}
+
+// moa started with a pid the test can signal.
+class Child {
+ public:
+  Child(const std::vector<std::string>& args, const fs::path& dir)
+      : out_(dir / "stdout"), err_(dir / "stderr") {
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, 1, out_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&actions, 2, err_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    std::vector<std::string> all{MOA_CLI_PATH};
+    all.insert(all.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (auto& a : all) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    if (posix_spawn(&pid_, MOA_CLI_PATH, &actions, nullptr, argv.data(), environ) != 0) pid_ = -1;
+    posix_spawn_file_actions_destroy(&actions);
+  }
+  ~Child() {
+    if (pid_ > 0) {
+      ::kill(pid_, SIGKILL);
+      ::waitpid(pid_, nullptr, 0);
+    }
+  }
+  bool started() const { return pid_ > 0; }
+  void signal(int sig) const { ::kill(pid_, sig); }
+  /// Exit code, or -1 if it had to be killed after `timeout`.
+  int wait(std::chrono::milliseconds timeout) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    int status = 0;
+    while (::waitpid(pid_, &status, WNOHANG) == 0) {
+      if (std::chrono::steady_clock::now() > deadline) return -1;
+      std::this_thread::sleep_for(5ms);
+    }
+    pid_ = -1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  }
+  std::string out() const { return read_text(out_); }
+  std::string err() const { return read_text(err_); }
+
+ private:
+  pid_t pid_ = -1;
+  fs::path out_, err_;
+};
+
+const std::vector<std::string> kNames{"m1", "m2", "m3", "m4"};
+constexpr double kDuration = 3.0;  // s of motion
+constexpr double kPeriod = 0.01;   // s per DATA frame (K = 1 at 100 frames/s)
+
+// The device's frames for the synthesised motion, one per 10 ms.
+std::vector<std::vector<std::uint8_t>> device_frames(const SynthLog& log) {
+  io::serial::Hello hello;
+  hello.k = 1;
+  hello.frame_rate = 100;
+  hello.cpi = 800;
+  hello.tick_hz = 1000000;
+  hello.names = {"m4", "m3", "m2", "m1"};  // not the config's order
+  std::vector<std::vector<std::uint8_t>> frames{io::serial::encode(hello)};
+  const std::size_t n = kNames.size();
+  for (std::size_t k = 1; k * n < log.rows.size(); ++k) {
+    io::serial::Data d;
+    d.sequence = static_cast<std::uint16_t>(k - 1);
+    d.timestamp = static_cast<std::uint32_t>(10000 * k);
+    d.n = static_cast<std::uint8_t>(n);
+    for (std::size_t j = 0; j < n; ++j) {
+      const SynthRow& r = log.rows[k * n + (n - 1 - j)];  // record j is sensor n-1-j
+      d.sensors[j].dx = static_cast<std::int16_t>(std::lround(r.counts.x()));
+      d.sensors[j].dy = static_cast<std::int16_t>(std::lround(r.counts.y()));
+      d.sensors[j].squal = 100;
+    }
+    frames.push_back(io::serial::encode(d));
+  }
+  return frames;
+}
+
+struct Scene {
+  fs::path dir = scratch_dir("live");
+  SensorArray array = skewed_array();
+  SynthLog log = synthesise(array, mixed_motion, kDuration, kPeriod);
+  fs::path config = dir / "robot.yaml";
+
+  Scene() {
+    io::RobotConfig c;
+    c.names = kNames;
+    c.array = array;
+    io::write_config(c, config);
+  }
+  ~Scene() { fs::remove_all(dir); }
+};
+
+// Plays the device: answers the HELLO_REQUEST, streams every frame, then
+// waits until moa has recorded all of them (the journal file is flushed
+// every status tick).
+void play_device(const PseudoTerminal& pty, const SynthLog& log, const fs::path& journal,
+                 std::atomic<bool>& done) {
+  if (!pty.wait_for_hello_request(10.0)) return;
+  for (const auto& frame : device_frames(log)) pty.write(frame);
+  const std::size_t expected = log.rows.size();  // a zero row per sensor, then 4 per frame
+  const auto deadline = std::chrono::steady_clock::now() + 10s;
+  while (std::chrono::steady_clock::now() < deadline) {
+    if (fs::exists(journal) && data_lines(journal) >= expected) break;
+    std::this_thread::sleep_for(10ms);
+  }
+  done = true;
+}
+
+TEST(Live, SerialRunStopsCleanlyOnCtrlCAndItsRecordingReplaysToTheSameOdometry) {
+  Scene scene;
+  PseudoTerminal pty;
+  const fs::path record = scene.dir / "rec";
+  const fs::path odometry = scene.dir / "live.csv";
+  Child moa(
+      {"live", "--config", scene.config.string(), "--serial", pty.device(), "--baud", "230400",
+       "--record", record.string(), "--out", odometry.string(), "--estimator", "ls"},
+      scene.dir);
+  ASSERT_TRUE(moa.started());
+  std::atomic<bool> done{false};
+  std::thread device([&] { play_device(pty, scene.log, record / "mice.csv.part", done); });
+  device.join();
+  ASSERT_TRUE(done.load()) << moa.err();
+  moa.signal(SIGINT);
+  ASSERT_EQ(moa.wait(10s), 0) << moa.err();
+
+  // Closed cleanly: the recording is complete under its final name.
+  EXPECT_FALSE(fs::exists(record / "mice.csv.part"));
+  ASSERT_TRUE(fs::exists(record / "mice.csv"));
+  EXPECT_EQ(data_lines(record / "mice.csv"), scene.log.rows.size());
+  ASSERT_TRUE(fs::exists(odometry));
+  EXPECT_NE(moa.out().find("recorded to " + (record / "mice.csv").string()), std::string::npos);
+
+  // Replay: byte-identical odometry.
+  const fs::path replay = scene.dir / "replay.csv";
+  const auto r = run_moa("odometry --config " + (record / "robot.yaml").string() + " --log " +
+                         record.string() + " --estimator ls --quiet --out " + replay.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(read_text(replay), read_text(odometry));
+
+  // And the odometry is right. The counts are noise-free and quantised with
+  // the fraction carried: a frame's error is r_k - r_(k-1), |r| <= 0.5
+  // count (<= 32 um at m4's 400 cpi). Heading is linear in the counts, so
+  // its errors telescope to one count-sized term, ~1e-4 rad over the ~0.1 m
+  // baseline. Position sums them rotated by the heading: by summation by
+  // parts the bound is |B r| (2 + total turn, <= 3 rad), under 0.2 mm. The
+  // tolerances below leave a factor of five over both.
+  std::istringstream lines(read_text(odometry));
+  std::string line, last;
+  while (std::getline(lines, line)) last = line;
+  std::istringstream fields(last);
+  std::string t, x, y, theta;
+  std::getline(fields, t, ',');
+  std::getline(fields, x, ',');
+  std::getline(fields, y, ',');
+  std::getline(fields, theta, ',');
+  const auto& truth = scene.log.truth.back();
+  EXPECT_NEAR(std::stod(t), kDuration, 1e-9);
+  EXPECT_NEAR(std::stod(x), truth.pose.t.x(), 1e-3);
+  EXPECT_NEAR(std::stod(y), truth.pose.t.y(), 1e-3);
+  EXPECT_NEAR(std::stod(theta), truth.pose.theta, 5e-4);
+}
+
+TEST(Live, DeviceHangUpEndsTheRunWithEverythingWritten) {
+  Scene scene;
+  PseudoTerminal pty;
+  const fs::path record = scene.dir / "rec";
+  Child moa({"live", "--config", scene.config.string(), "--serial", pty.device(), "--record",
+             record.string(), "--out", "-"},
+            scene.dir);
+  ASSERT_TRUE(moa.started());
+  std::atomic<bool> done{false};
+  std::thread device([&] { play_device(pty, scene.log, record / "mice.csv.part", done); });
+  device.join();
+  ASSERT_TRUE(done.load()) << moa.err();
+  pty.close_master();
+  ASSERT_EQ(moa.wait(10s), 0) << moa.err();
+  EXPECT_NE(moa.err().find("moa live: warning: " + pty.device() + ": device lost ("),
+            std::string::npos)
+      << moa.err();
+  EXPECT_EQ(data_lines(record / "mice.csv"), scene.log.rows.size());
+  // Odometry on stdout is the same text `moa odometry` writes from the recording.
+  const fs::path replay = scene.dir / "replay.csv";
+  const auto r = run_moa("odometry --config " + (record / "robot.yaml").string() + " --log " +
+                         record.string() + " --quiet --out " + replay.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(moa.out(), read_text(replay));
+}
+
+TEST(Live, CtrlCBeforeTheDeviceSpeaksFailsAndWritesNothing) {
+  Scene scene;
+  PseudoTerminal pty;
+  const fs::path record = scene.dir / "rec";
+  Child moa({"live", "--config", scene.config.string(), "--serial", pty.device(), "--record",
+             record.string(), "--out", (scene.dir / "odo.csv").string()},
+            scene.dir);
+  ASSERT_TRUE(moa.started());
+  ASSERT_TRUE(pty.wait_for_hello_request(10.0));
+  moa.signal(SIGINT);
+  EXPECT_EQ(moa.wait(10s), 1);
+  EXPECT_EQ(moa.err(),
+            "moa live: error: " + pty.device() + ": stopped before the device started streaming\n");
+  EXPECT_FALSE(fs::exists(record));
+  EXPECT_FALSE(fs::exists(scene.dir / "odo.csv"));
+}
+
+TEST(Live, BadArgumentsAreRejected) {
+  Scene scene;
+  const std::string config = " --config " + scene.config.string();
+  auto r = run_moa("live" + config);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(r.err,
+            "moa live: error: give either --mouse NAME=DEV (one per mouse) or --serial DEV\n");
+  r = run_moa("live" + config + " --mouse zz=/dev/null");
+  EXPECT_EQ(r.err, "moa live: error: --mouse zz=/dev/null: no sensor 'zz' in " +
+                       scene.config.string() + "\n");
+  r = run_moa("live" + config + " --mouse m1=/dev/null");
+  EXPECT_EQ(r.err, "moa live: warning: 1 of the 4 sensors of " + scene.config.string() +
+                       " have a mouse; the others read as still\n"
+                       "moa live: error: /dev/null: not an input event device (EVIOCGVERSION: "
+                       "Inappropriate ioctl for device)\n");
+  r = run_moa("live" + config + " --serial " + (scene.dir / "ttyNONE").string());
+  EXPECT_EQ(r.err, "moa live: error: " + (scene.dir / "ttyNONE").string() +
+                       ": cannot open (No such file or directory)\n");
+  r = run_moa("live" + config + " --serial /dev/null --mouse m1=/dev/null");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("excludes"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace moa::test

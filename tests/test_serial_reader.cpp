@@ -1,0 +1,385 @@
+// The serial reader (io/serial_reader.hpp) through a pseudo-terminal: a test
+// thread plays the microcontroller (docs/serial-protocol.md) on the master
+// side with good, corrupt, truncated, lost and random frames.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "moa/io/config.hpp"
+#include "moa/io/error.hpp"
+#include "moa/io/serial_reader.hpp"
+#include "support/pty.hpp"
+#include "support/synth.hpp"
+
+namespace moa::io {
+namespace {
+
+using Bytes = std::vector<std::uint8_t>;
+using serial::Data;
+using serial::Hello;
+
+template <class F>
+std::string error_of(F&& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "(no io::Error thrown)";
+}
+
+RobotConfig two_sensors() {
+  return parse_config(
+      "version: 1\n"
+      "sensors:\n"
+      "  - {name: a, position: [0.1, 0], yaw: 0, cpi: 800}\n"
+      "  - {name: b, position: [-0.1, 0], yaw: 0, cpi: 800}\n",
+      "robot.yaml");
+}
+
+Hello hello_ba(std::uint16_t k = 4, std::uint16_t rate = 400) {
+  Hello h;
+  h.k = k;
+  h.frame_rate = rate;
+  h.cpi = 800;
+  h.tick_hz = 1000000;
+  h.names = {"b", "a"};  // the device's order differs from the config's
+  return h;
+}
+
+Data data(std::uint16_t sequence, std::uint32_t timestamp, std::int16_t b_dx, std::int16_t a_dy) {
+  Data d;
+  d.sequence = sequence;
+  d.timestamp = timestamp;
+  d.n = 2;
+  d.sensors[0] = {b_dx, 1, 90, 0};
+  d.sensors[1] = {-3, a_dy, 40, 1};
+  return d;
+}
+
+SerialOptions fast_options() {
+  SerialOptions options;
+  options.baud = 230400;
+  options.start_timeout = 5.0;
+  return options;
+}
+
+LiveHooks collecting(std::vector<std::string>& warnings) {
+  LiveHooks hooks;
+  hooks.tick_period = 0.01;
+  hooks.warn = [&warnings](const std::string& w) { warnings.push_back(w); };
+  return hooks;
+}
+
+bool contains_text(const std::vector<std::string>& lines, const std::string& text) {
+  for (const auto& line : lines) {
+    if (line.find(text) != std::string::npos) return true;
+  }
+  return false;
+}
+
+// Reads rows until the stream ends, counting them for the device thread.
+std::vector<SensorRow> read_rows(SerialReader& reader, std::atomic<int>& seen) {
+  std::vector<SensorRow> rows;
+  while (const auto row = reader.next()) {
+    rows.push_back(*row);
+    ++seen;
+  }
+  return rows;
+}
+
+void wait_for(const std::atomic<int>& seen, int count) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (seen.load() < count && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  // Let the reader's next poll see nothing more before the hang-up.
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+}
+
+TEST(SerialReader, StreamsRowsAndCountsLostAndCorruptFrames) {
+  test::PseudoTerminal pty;
+  std::vector<std::string> warnings;
+  std::atomic<int> seen{0};
+  SerialReader reader(pty.device(), two_sensors(), fast_options(), collecting(warnings));
+
+  // What the test sends, and what should arrive: frames 20 (corrupted on
+  // the line) and 30 (never sent) are lost; their counts with them.
+  const int n_frames = 100;
+  std::int64_t sum_b_dx = 0, sum_a_dy = 0;
+  std::vector<double> times;
+  std::thread device([&] {
+    ASSERT_TRUE(pty.wait_for_hello_request(5.0));
+    pty.write(serial::encode(hello_ba()));
+    std::mt19937 rng(1);
+    std::uniform_int_distribution<int> byte(1, 255);
+    for (int k = 0; k < n_frames; ++k) {
+      const auto d = data(static_cast<std::uint16_t>(k), 1'000'000u + 10'000u * k,
+                          static_cast<std::int16_t>(k - 50), static_cast<std::int16_t>(2 * k));
+      Bytes wire = serial::encode(d);
+      if (k == 10) {
+        // Garbage between frames: one corrupt block, then in step again.
+        Bytes garbage{0};
+        for (int i = 0; i < 40; ++i) garbage.push_back(static_cast<std::uint8_t>(byte(rng)));
+        garbage.push_back(0);
+        pty.write(garbage);
+      }
+      if (k == 30) continue;
+      if (k == 20) {
+        wire[5] = static_cast<std::uint8_t>(wire[5] == 0x55 ? 0x56 : 0x55);
+      }
+      pty.write(wire);
+    }
+    wait_for(seen, 2 * (n_frames - 2));
+    pty.close_master();
+  });
+  EXPECT_EQ(reader.start_time(), 0.0);
+  const auto rows = read_rows(reader, seen);
+  device.join();
+
+  for (int k = 0; k < n_frames; ++k) {
+    if (k == 20 || k == 30) continue;
+    sum_b_dx += k - 50;
+    sum_a_dy += 2 * k;
+    // Rows are relative to the first window's start: K / rate = 10 ms
+    // before the first frame's timestamp.
+    times.push_back(0.01 + 0.01 * k);
+  }
+  ASSERT_EQ(rows.size(), 2u * (n_frames - 2));
+  std::int64_t got_b_dx = 0, got_a_dy = 0, got_a_dx = 0;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const SensorRow& row = rows[i];
+    EXPECT_NEAR(row.t, times[i / 2], 1e-9) << i;
+    if (row.sensor == 1) {  // "b" is the config's second sensor
+      got_b_dx += static_cast<std::int64_t>(row.counts.x());
+      EXPECT_EQ(row.squal, 90);
+      EXPECT_EQ(row.flags, 0);
+    } else {
+      ASSERT_EQ(row.sensor, 0);
+      got_a_dy += static_cast<std::int64_t>(row.counts.y());
+      got_a_dx += static_cast<std::int64_t>(row.counts.x());
+      EXPECT_EQ(row.squal, 40);
+      EXPECT_EQ(row.flags, 1);
+    }
+  }
+  EXPECT_EQ(got_b_dx, sum_b_dx);
+  EXPECT_EQ(got_a_dy, sum_a_dy);
+  EXPECT_EQ(got_a_dx, -3 * (n_frames - 2));
+  const auto& stats = reader.stats();
+  EXPECT_EQ(stats.data_frames, static_cast<std::uint64_t>(n_frames - 2));
+  EXPECT_EQ(stats.lost_frames, 2u);
+  EXPECT_EQ(stats.corrupt, 2u);  // the garbage block and frame 20
+  EXPECT_EQ(stats.overflow_rows, static_cast<std::uint64_t>(n_frames - 2));
+  EXPECT_EQ(reader.hello().names, (std::vector<std::string>{"b", "a"}));
+  EXPECT_TRUE(contains_text(warnings, "DATA frames lost so far")) << warnings.size();
+  EXPECT_TRUE(contains_text(warnings, "corrupt frames so far"));
+  EXPECT_TRUE(contains_text(warnings, pty.device() + ": device lost ("));
+}
+
+TEST(SerialReader, JoinsAfterRandomBytesAndSkipsDataBeforeHello) {
+  test::PseudoTerminal pty;
+  std::vector<std::string> warnings;
+  std::atomic<int> seen{0};
+  SerialReader reader(pty.device(), two_sensors(), fast_options(), collecting(warnings));
+  std::thread device([&] {
+    ASSERT_TRUE(pty.wait_for_hello_request(5.0));
+    std::mt19937 rng(2);
+    std::uniform_int_distribution<int> byte(0, 255);
+    Bytes noise(5000);
+    for (auto& b : noise) b = static_cast<std::uint8_t>(byte(rng));
+    noise.push_back(0);
+    pty.write(noise);
+    pty.write(serial::encode(data(7, 500, 1, 1)));  // before any HELLO: unusable
+    pty.write(serial::encode(hello_ba(1, 0)));      // rate unknown: no window
+    for (int k = 0; k < 5; ++k) {
+      pty.write(serial::encode(data(static_cast<std::uint16_t>(8 + k), 1000u * k, 4, 5)));
+    }
+    wait_for(seen, 10);
+    pty.close_master();
+  });
+  reader.start_time();
+  const auto rows = read_rows(reader, seen);
+  device.join();
+  ASSERT_EQ(rows.size(), 10u);
+  EXPECT_EQ(rows.front().t, 0.0);
+  EXPECT_NEAR(rows.back().t, 0.004, 1e-12);
+  EXPECT_EQ(reader.stats().before_hello, 1u);
+  EXPECT_EQ(reader.stats().lost_frames, 0u);
+}
+
+TEST(SerialReader, DeviceClockSteppingBackIsRebasedAndWrapsAreUnwrapped) {
+  test::PseudoTerminal pty;
+  std::vector<std::string> warnings;
+  std::atomic<int> seen{0};
+  SerialReader reader(pty.device(), two_sensors(), fast_options(), collecting(warnings));
+  const std::vector<std::uint32_t> stamps{4294960000u, 4294965000u, 2704u, 7704u, 100u, 5100u};
+  std::thread device([&] {
+    ASSERT_TRUE(pty.wait_for_hello_request(5.0));
+    pty.write(serial::encode(hello_ba(1, 200)));  // 5 ms windows
+    for (std::size_t k = 0; k < stamps.size(); ++k) {
+      pty.write(serial::encode(data(static_cast<std::uint16_t>(k), stamps[k], 1, 1)));
+    }
+    wait_for(seen, 12);
+    pty.close_master();
+  });
+  reader.start_time();
+  const auto rows = read_rows(reader, seen);
+  device.join();
+  ASSERT_EQ(rows.size(), 12u);
+  // 5 ms window, then 5 ms steps across the 2^32 wrap; then the clock
+  // restarts (7704 -> 100): that frame is put at the previous time, and
+  // the next follows 5 ms later.
+  const std::vector<double> expected{0.005, 0.010, 0.015, 0.020, 0.020, 0.025};
+  for (std::size_t i = 0; i < rows.size(); ++i) EXPECT_NEAR(rows[i].t, expected[i / 2], 1e-9) << i;
+  EXPECT_EQ(reader.stats().clock_steps, 1u);
+  EXPECT_TRUE(contains_text(warnings, "the device clock went back"));
+}
+
+TEST(SerialReader, DataWithAnotherSensorCountIsDropped) {
+  test::PseudoTerminal pty;
+  std::vector<std::string> warnings;
+  std::atomic<int> seen{0};
+  SerialReader reader(pty.device(), two_sensors(), fast_options(), collecting(warnings));
+  std::thread device([&] {
+    ASSERT_TRUE(pty.wait_for_hello_request(5.0));
+    pty.write(serial::encode(hello_ba()));
+    pty.write(serial::encode(data(0, 0, 1, 1)));
+    Data three = data(1, 10000, 1, 1);
+    three.n = 3;
+    pty.write(serial::encode(three));
+    pty.write(serial::encode(data(2, 20000, 1, 1)));
+    wait_for(seen, 4);
+    pty.close_master();
+  });
+  reader.start_time();
+  EXPECT_EQ(read_rows(reader, seen).size(), 4u);
+  device.join();
+  EXPECT_EQ(reader.stats().mismatched, 1u);
+  EXPECT_EQ(reader.stats().lost_frames, 0u);  // sequence 1 arrived, though unusable
+}
+
+TEST(SerialReader, SetsThePortRawAtTheBaudRate) {
+  test::PseudoTerminal pty;
+  SerialReader reader(pty.device(), two_sensors(), fast_options(), {});
+  termios tio{};
+  ASSERT_EQ(::tcgetattr(pty.slave_fd(), &tio), 0);
+  EXPECT_EQ(::cfgetispeed(&tio), static_cast<speed_t>(B230400));
+  EXPECT_EQ(::cfgetospeed(&tio), static_cast<speed_t>(B230400));
+  EXPECT_EQ(tio.c_lflag & (ICANON | ECHO | ISIG), 0u);
+  EXPECT_EQ(tio.c_iflag & (IXON | ICRNL | INLCR), 0u);
+  EXPECT_EQ(tio.c_oflag & OPOST, 0u);
+  EXPECT_EQ(tio.c_cflag & CSIZE, static_cast<tcflag_t>(CS8));
+  EXPECT_EQ(tio.c_cflag & (PARENB | CSTOPB), 0u);
+  EXPECT_NE(tio.c_cflag & CLOCAL, 0u);
+}
+
+TEST(SerialReader, SendsHostCommandsAsFrames) {
+  test::PseudoTerminal pty;
+  SerialReader reader(pty.device(), two_sensors(), fast_options(), {});
+  reader.send(serial::HelloRequest{});
+  EXPECT_TRUE(pty.wait_for_hello_request(2.0));
+}
+
+TEST(SerialReader, SensorTheConfigLacksIsAnError) {
+  test::PseudoTerminal pty;
+  SerialReader reader(pty.device(), two_sensors(), fast_options(), {});
+  std::thread device([&] {
+    ASSERT_TRUE(pty.wait_for_hello_request(5.0));
+    Hello h = hello_ba();
+    h.names = {"a", "zz"};
+    pty.write(serial::encode(h));
+  });
+  EXPECT_EQ(error_of([&] { reader.start_time(); }),
+            pty.device() +
+                ": the device names sensor 'zz', which the robot config does not have (config "
+                "sensors: a, b)");
+  device.join();
+}
+
+TEST(SerialReader, SilentDeviceTimesOutAfterAskingForHello) {
+  test::PseudoTerminal pty;
+  SerialOptions options = fast_options();
+  options.start_timeout = 0.3;
+  SerialReader reader(pty.device(), two_sensors(), options, {});
+  std::atomic<bool> asked{false};
+  std::thread device([&] { asked = pty.wait_for_hello_request(2.0); });
+  EXPECT_EQ(error_of([&] { reader.start_time(); }),
+            pty.device() +
+                ": no HELLO from the device within 0.3 s (0 bytes, 0 corrupt frames received; "
+                "wrong port or baud rate?)");
+  device.join();
+  EXPECT_TRUE(asked.load());
+}
+
+TEST(SerialReader, StopBeforeStreamingIsAnError) {
+  test::PseudoTerminal pty;
+  LiveHooks hooks;
+  hooks.stop = [] { return true; };
+  SerialReader reader(pty.device(), two_sensors(), fast_options(), hooks);
+  EXPECT_EQ(error_of([&] { reader.start_time(); }),
+            pty.device() + ": stopped before the device started streaming");
+}
+
+TEST(SerialReader, HangUpBeforeStreamingIsAnError) {
+  test::PseudoTerminal pty;
+  SerialReader reader(pty.device(), two_sensors(), fast_options(), {});
+  pty.close_master();
+  const std::string error = error_of([&] { reader.start_time(); });
+  EXPECT_EQ(error, pty.device() + ": device lost before it started streaming");
+}
+
+TEST(SerialReader, PortErrorsAreNamed) {
+  const auto dir = test::scratch_dir("serial-bad");
+  const auto file = dir / "not-a-port";
+  std::ofstream(file) << "x";
+  EXPECT_EQ(error_of([&] { SerialReader r(file, two_sensors(), fast_options(), {}); }),
+            file.string() + ": not a serial port (tcgetattr: " + std::strerror(ENOTTY) + ")");
+  const auto missing = dir / "ttyUSB9";
+  EXPECT_EQ(error_of([&] { SerialReader r(missing, two_sensors(), fast_options(), {}); }),
+            missing.string() + ": cannot open (" + std::strerror(ENOENT) + ")");
+  test::PseudoTerminal pty;
+  SerialOptions odd = fast_options();
+  odd.baud = 12345;
+  EXPECT_EQ(error_of([&] { SerialReader r(pty.device(), two_sensors(), odd, {}); }),
+            pty.device() + ": baud rate 12345 is not supported");
+  std::filesystem::remove_all(dir);
+}
+
+TEST(SerialReader, ReadsACapturedStreamFromAFile) {
+  // configure_port off: a file of captured bytes replays like a port.
+  const auto dir = test::scratch_dir("serial-file");
+  const auto file = dir / "capture.bin";
+  {
+    std::ofstream out(file, std::ios::binary);
+    for (const auto& wire : {serial::encode(hello_ba(2, 200)), serial::encode(data(0, 0, 5, 6)),
+                             serial::encode(data(1, 10000, 7, 8))}) {
+      out.write(reinterpret_cast<const char*>(wire.data()),
+                static_cast<std::streamsize>(wire.size()));
+    }
+  }
+  SerialOptions options;
+  options.configure_port = false;
+  SerialReader reader(file, two_sensors(), options, {});
+  std::atomic<int> seen{0};
+  const auto rows = read_rows(reader, seen);
+  ASSERT_EQ(rows.size(), 4u);
+  EXPECT_NEAR(rows[0].t, 0.01, 1e-12);
+  EXPECT_NEAR(rows[2].t, 0.02, 1e-12);
+  EXPECT_EQ(rows[2].counts.x() + rows[0].counts.x(), 12.0);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace moa::io
