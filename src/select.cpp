@@ -64,7 +64,7 @@ void NoiseModel::measure(const ArraySample& sample, const Twist2& predicted, Poi
     if (max_speed_[s] > 0.0) {
       const double ratio = predicted_speed / (options_.speed_onset * max_speed_[s]);
       const double r2 = ratio * ratio, r4 = r2 * r2;
-      factor *= 1.0 + r4 * r4;
+      factor *= std::min(options_.speed_cap, 1.0 + r4 * r4);
       if (ratio >= 1.0) f |= kNoiseOverSpeed;
     }
     if (sample.squal[s] < options_.min_squal) {
