@@ -14,6 +14,8 @@ DEBIAN_PACKAGES := g++ make cmake libeigen3-dev libyaml-cpp-dev libcli11-dev lib
                    gcc-avr avr-libc binutils-avr simavr libsimavr-dev
 # moa report: Chart.js, inlined into the page at build time; Chromium for its browser test.
 DEBIAN_PACKAGES += libjs-chart.js chromium
+# The core cross-compiled for a Cortex-M4F (embedded/): GCC, newlib, libstdc++.
+DEBIAN_PACKAGES += gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
 
 # Under CI (CI=true) warnings are errors.
 ifeq ($(CI),true)
@@ -59,7 +61,7 @@ demo: build
 	@echo "moa demo: odometry written to $(DEMO_OUT)/odometry.csv"
 	$(MOA) simulate --scenario sekimori-b --seed 1 --out $(DEMO_OUT)/sekimori-b
 	$(MOA) odometry --config $(DEMO_OUT)/sekimori-b/robot.yaml --log $(DEMO_OUT)/sekimori-b \
-	  --estimator ls --out $(DEMO_OUT)/sekimori-b/odometry.csv
+	  --estimator consensus --out $(DEMO_OUT)/sekimori-b/odometry.csv
 	$(MOA) evaluate --truth $(DEMO_OUT)/sekimori-b/truth.csv \
 	  --odometry $(DEMO_OUT)/sekimori-b/odometry.csv
 	@echo "moa demo: simulated log, its odometry and truth in $(DEMO_OUT)/sekimori-b"

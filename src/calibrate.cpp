@@ -173,11 +173,7 @@ IntervalAccumulator::IntervalAccumulator(int n_sensors, double t0, std::vector<d
 }
 
 std::optional<RowError> IntervalAccumulator::add(const SensorRow& row) {
-  if (!std::isfinite(row.t)) return RowError::kTimeNotFinite;
-  if (row.t < t0_) return RowError::kTimeBeforeStart;
-  if (row.t < last_row_t_) return RowError::kTimeBackwards;
-  if (row.sensor < 0 || row.sensor >= n_) return RowError::kUnknownSensor;
-  if (!row.counts.allFinite()) return RowError::kCountsNotFinite;
+  if (auto error = check_row(row, n_, t0_, last_row_t_)) return error;
 
   const auto i = static_cast<std::size_t>(row.sensor);
   const double a = std::max(last_t_[i], row.t - max_row_interval_);

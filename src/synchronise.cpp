@@ -33,11 +33,12 @@ Synchroniser::Synchroniser(int n_sensors, double t0, SynchroniserOptions options
   for (std::size_t k = 0; k < slots; ++k) reset(static_cast<std::int64_t>(k));
 }
 
-std::optional<RowError> Synchroniser::check(const SensorRow& row) const {
+std::optional<RowError> check_row(const SensorRow& row, int n_sensors, double t0,
+                                  double last_row_t) {
   if (!std::isfinite(row.t)) return RowError::kTimeNotFinite;
-  if (row.t < t0_) return RowError::kTimeBeforeStart;
-  if (row.t < last_row_t_) return RowError::kTimeBackwards;
-  if (row.sensor < 0 || row.sensor >= n_) return RowError::kUnknownSensor;
+  if (row.t < t0) return RowError::kTimeBeforeStart;
+  if (row.t < last_row_t) return RowError::kTimeBackwards;
+  if (row.sensor < 0 || row.sensor >= n_sensors) return RowError::kUnknownSensor;
   if (!row.counts.allFinite()) return RowError::kCountsNotFinite;
   return std::nullopt;
 }

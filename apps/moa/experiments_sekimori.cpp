@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
+#include "experiments.hpp"
 #include "moa/sim/scenario.hpp"
 #include "moa/sim/simulate.hpp"
-#include "experiments.hpp"
 #include "replay.hpp"
 
 namespace moa::cli {
@@ -23,7 +23,7 @@ struct Method {
   const char* name;
   ReplayMethod method;
   SensorMask mask;
-  std::optional<double> paper_mm[2];   ///< speeds (a), (b)
+  std::optional<double> paper_mm[2];  ///< speeds (a), (b)
   std::optional<double> paper_deg[2];
 };
 
@@ -32,7 +32,11 @@ const std::vector<Method>& table4_methods() {
   static const std::vector<Method> m{
       {"wheels", ReplayMethod::kWheels, 0u, {191.499, 239.397}, {14.970, 19.264}},
       {"2 mice", ReplayMethod::kLs, 0b0101u, {44.516, 627.237}, {4.918, 40.638}},
-      {"4 mice, voting (Sekimori)", ReplayMethod::kSekimori, 0b1111u, {38.011, 61.593}, {4.607, 8.588}},
+      {"4 mice, voting (Sekimori)",
+       ReplayMethod::kSekimori,
+       0b1111u,
+       {38.011, 61.593},
+       {4.607, 8.588}},
       {"4 mice, consensus", ReplayMethod::kConsensus, 0b1111u, {}, {}},
       {"4 mice, oracle selection", ReplayMethod::kOracle, 0b1111u, {}, {}},
   };
@@ -59,7 +63,8 @@ int run_sekimori_table4(int runs, std::uint64_t seed, bool json) {
   for (int s = 0; s < 2; ++s) {
     const sim::Scenario scenario = sim::load_scenario(std::string("sekimori-") + speeds[s]);
     for (int run = 1; run <= runs; ++run) {
-      progress(speeds[s] == std::string("a") ? "table 4, speed (a)" : "table 4, speed (b)", run, runs);
+      progress(speeds[s] == std::string("a") ? "table 4, speed (a)" : "table 4, speed (b)", run,
+               runs);
       const sim::SimLog log = sim::simulate(scenario, seed + static_cast<std::uint64_t>(run - 1));
       for (std::size_t m = 0; m < methods.size(); ++m) {
         ReplayOptions o;
@@ -87,12 +92,14 @@ int run_sekimori_table4(int runs, std::uint64_t seed, bool json) {
             p.paper_deg[s] ? fmt::format("{:.6g}", *p.paper_deg[s] / kDeg) : "null");
       }
     }
-    fmt::print("{{\"experiment\": \"sekimori-table4\", \"runs\": {}, \"rows\": [{}]}}\n", runs, rows);
+    fmt::print("{{\"experiment\": \"sekimori-table4\", \"runs\": {}, \"rows\": [{}]}}\n", runs,
+               rows);
     return 0;
   }
-  fmt::print("Sekimori & Miyazaki Table 4 on the simulator: average over {} runs of the maximum\n"
-             "error along the Table 3 path (seeds {}..{}). Paper: their robot and floor.\n\n",
-             runs, seed, seed + static_cast<std::uint64_t>(runs) - 1);
+  fmt::print(
+      "Sekimori & Miyazaki Table 4 on the simulator: average over {} runs of the maximum\n"
+      "error along the Table 3 path (seeds {}..{}). Paper: their robot and floor.\n\n",
+      runs, seed, seed + static_cast<std::uint64_t>(runs) - 1);
   fmt::print("{:<6} {:<27} | {:>10} {:>10} | {:>10} {:>10}\n", "speed", "method", "ours mm",
              "paper mm", "ours deg", "paper deg");
   for (int s = 0; s < 2; ++s) {
@@ -113,8 +120,11 @@ int run_sekimori_fig6(int runs, std::uint64_t seed, bool json) {
     double max_m = 0, rms_m = 0, max_rad = 0, rms_rad = 0;
     bool heading = true;
   };
-  std::vector<Row> rows{{"camera alone"}, {"wheel dead reckoning"}, {"wheels + camera (EKF)"},
-                        {"mouse dead reckoning (consensus)"}, {"mice + camera (EKF)"}};
+  std::vector<Row> rows{{"camera alone"},
+                        {"wheel dead reckoning"},
+                        {"wheels + camera (EKF)"},
+                        {"mouse dead reckoning (consensus)"},
+                        {"mice + camera (EKF)"}};
   rows[0].heading = false;
   for (int run = 1; run <= runs; ++run) {
     progress("fig. 6, speed (b)", run, runs);
@@ -155,12 +165,14 @@ int run_sekimori_fig6(int runs, std::uint64_t seed, bool json) {
           r.name, r.max_m, r.rms_m, r.heading ? fmt::format("{:.6g}", r.max_rad) : "null",
           r.heading ? fmt::format("{:.6g}", r.rms_rad) : "null");
     }
-    fmt::print("{{\"experiment\": \"sekimori-fig6\", \"runs\": {}, \"rows\": [{}]}}\n", runs, items);
+    fmt::print("{{\"experiment\": \"sekimori-fig6\", \"runs\": {}, \"rows\": [{}]}}\n", runs,
+               items);
     return 0;
   }
-  fmt::print("Sekimori & Miyazaki Section 4.3 / Fig. 6 on the simulator, speed (b): position-only\n"
-             "camera fixes fused by the EKF; mean over {} runs (seeds {}..{}) of max and RMS errors.\n\n",
-             runs, seed, seed + static_cast<std::uint64_t>(runs) - 1);
+  fmt::print(
+      "Sekimori & Miyazaki Section 4.3 / Fig. 6 on the simulator, speed (b): position-only\n"
+      "camera fixes fused by the EKF; mean over {} runs (seeds {}..{}) of max and RMS errors.\n\n",
+      runs, seed, seed + static_cast<std::uint64_t>(runs) - 1);
   fmt::print("{:<34} | {:>9} {:>9} | {:>9} {:>9}\n", "method", "max mm", "rms mm", "max deg",
              "rms deg");
   for (const Row& r : rows) {
@@ -168,8 +180,8 @@ int run_sekimori_fig6(int runs, std::uint64_t seed, bool json) {
       fmt::print("{:<34} | {:>9.1f} {:>9.1f} | {:>9.2f} {:>9.2f}\n", r.name, 1e3 * r.max_m,
                  1e3 * r.rms_m, kDeg * r.max_rad, kDeg * r.rms_rad);
     } else {
-      fmt::print("{:<34} | {:>9.1f} {:>9.1f} | {:>9} {:>9}\n", r.name, 1e3 * r.max_m,
-                 1e3 * r.rms_m, "-", "-");
+      fmt::print("{:<34} | {:>9.1f} {:>9.1f} | {:>9} {:>9}\n", r.name, 1e3 * r.max_m, 1e3 * r.rms_m,
+                 "-", "-");
     }
   }
   return 0;
@@ -177,15 +189,21 @@ int run_sekimori_fig6(int runs, std::uint64_t seed, bool json) {
 
 namespace {
 
-const ExperimentRegistration kTable4{
-    "sekimori-table4",
-    "Sekimori & Miyazaki Table 4: max errors of wheels, 2 mice, voting, consensus, oracle (default 10 runs)",
-    [](const ExperimentOptions& o) { return run_sekimori_table4(o.runs > 0 ? o.runs : 10, o.seed, o.json); }};
+const ExperimentRegistration kTable4{"sekimori-table4",
+                                     "Sekimori & Miyazaki Table 4: max errors of wheels, 2 mice, "
+                                     "voting, consensus, oracle (default 10 runs)",
+                                     [](const ExperimentOptions& o) {
+                                       return run_sekimori_table4(o.runs > 0 ? o.runs : 10, o.seed,
+                                                                  o.json);
+                                     }};
 
-const ExperimentRegistration kFig6{
-    "sekimori-fig6",
-    "Sekimori & Miyazaki Fig. 6: camera, wheels, mice, and each fused by the EKF, speed (b) (default 5 runs)",
-    [](const ExperimentOptions& o) { return run_sekimori_fig6(o.runs > 0 ? o.runs : 5, o.seed, o.json); }};
+const ExperimentRegistration kFig6{"sekimori-fig6",
+                                   "Sekimori & Miyazaki Fig. 6: camera, wheels, mice, and each "
+                                   "fused by the EKF, speed (b) (default 5 runs)",
+                                   [](const ExperimentOptions& o) {
+                                     return run_sekimori_fig6(o.runs > 0 ? o.runs : 5, o.seed,
+                                                              o.json);
+                                   }};
 
 }  // namespace
 

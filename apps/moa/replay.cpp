@@ -45,9 +45,11 @@ TrajectoryError replay(const sim::SimLog& log, const io::RobotConfig& config,
   std::size_t next_wheel = 0, next_fix = 0;
 
   std::optional<LsEstimator> ls;
-  if (options.method == ReplayMethod::kLs) ls = get_or_throw(LsEstimator::create(array, mask, period));
+  if (options.method == ReplayMethod::kLs)
+    ls = get_or_throw(LsEstimator::create(array, mask, period));
   std::optional<SekimoriEstimator> sekimori;
-  if (options.method == ReplayMethod::kSekimori) sekimori = get_or_throw(SekimoriEstimator::create(array));
+  if (options.method == ReplayMethod::kSekimori)
+    sekimori = get_or_throw(SekimoriEstimator::create(array));
   std::optional<ConsensusEstimator> consensus;
   if (options.method == ReplayMethod::kConsensus) {
     consensus = get_or_throw(ConsensusEstimator::create(array));
@@ -101,7 +103,8 @@ TrajectoryError replay(const sim::SimLog& log, const io::RobotConfig& config,
         const ArraySample& f = fault_samples.front();
         SensorMask good = 0;
         for (int i = 0; i < n; ++i) {
-          if (contains(mask, i) && f.flags[static_cast<std::size_t>(i)] == 0) good |= SensorMask{1} << i;
+          if (contains(mask, i) && f.flags[static_cast<std::size_t>(i)] == 0)
+            good |= SensorMask{1} << i;
         }
         noise.measure(s, last, points, noise_flags);
         const auto fit = oracle.fit(good, points);

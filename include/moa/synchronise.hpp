@@ -44,6 +44,12 @@ enum class RowError {
 };
 const char* describe(RowError error);
 
+/// The checks every consumer of rows makes: a finite time not before t0 nor
+/// before the previous row's (`last_row_t`), a sensor index below n_sensors,
+/// finite counts.
+std::optional<RowError> check_row(const SensorRow& row, int n_sensors, double t0,
+                                  double last_row_t);
+
 struct SynchroniserOptions {
   double period = 0.01;            ///< s, epoch length (100 Hz)
   double max_row_interval = 0.05;  ///< s, longest interval one row can cover
@@ -59,7 +65,7 @@ class Synchroniser {
   /// invalid (nothing is changed then).
   template <class Sink>
   std::optional<RowError> push(const SensorRow& row, Sink&& sink) {
-    if (auto error = check(row)) return error;
+    if (auto error = check_row(row, n_, t0_, last_row_t_)) return error;
     // Epochs that end before this row's interval can start are final now;
     // emitting them first keeps the pending span within the ring.
     emit_until(final_time(row.t), sink);
@@ -87,7 +93,6 @@ class Synchroniser {
   const SynchroniserOptions& options() const { return options_; }
 
  private:
-  std::optional<RowError> check(const SensorRow& row) const;
   void add(const SensorRow& row);
   double final_time(double t_row) const;
   double start_of(std::int64_t k) const { return t0_ + static_cast<double>(k) * options_.period; }

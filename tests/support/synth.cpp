@@ -3,6 +3,7 @@
 #include <cmath>
 #include <fstream>
 #include <random>
+#include <vector>
 
 #include "moa/io/config.hpp"
 
@@ -94,12 +95,30 @@ void write_log(const SynthLog& log, const SensorArray& array, const std::vector<
   io::write_config(config, dir / "robot.yaml");
 }
 
+namespace {
+
+/// Removes every scratch directory when the test program ends, so that the
+/// tests that keep theirs until the end (to show a failure) leave nothing.
+struct ScratchDirs {
+  std::vector<std::filesystem::path> made;
+  ~ScratchDirs() {
+    for (const auto& dir : made) {
+      std::error_code ignored;
+      std::filesystem::remove_all(dir, ignored);
+    }
+  }
+};
+
+}  // namespace
+
 std::filesystem::path scratch_dir(const std::string& tag) {
   static std::mt19937_64 rng(std::random_device{}());
+  static ScratchDirs dirs;
   const auto dir = std::filesystem::temp_directory_path() /
                    ("moa-test-" + tag + "-" + std::to_string(rng() % 1000000000ULL));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
+  dirs.made.push_back(dir);
   return dir;
 }
 

@@ -50,7 +50,8 @@ SensorArray skewed_array();
 void write_log(const SynthLog& log, const SensorArray& array, const std::vector<std::string>& names,
                const std::filesystem::path& dir);
 
-/// A fresh empty directory under the system temp dir, named after `tag`.
+/// A fresh empty directory under the system temp dir, named after `tag`;
+/// removed with its contents when the test program ends.
 std::filesystem::path scratch_dir(const std::string& tag);
 
 }  // namespace moa::test

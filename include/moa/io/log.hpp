@@ -54,9 +54,9 @@ struct WheelRow {
   Twist2 twist;    ///< robot frame, m/s and rad/s
 };
 struct CameraRow {
-  double t = 0.0;                  ///< s
-  Eigen::Vector2d position{0, 0};  ///< m, world frame
-  std::optional<double> theta;     ///< rad
+  double t = 0.0;                        ///< s
+  Eigen::Vector2d position{0, 0};        ///< m, world frame
+  std::optional<double> theta;           ///< rad
   std::optional<Eigen::Vector2d> sigma;  ///< m, (sx, sy)
 };
 struct TruthRow {
@@ -76,7 +76,7 @@ class RowReader {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
-using WheelsReader = RowReader<WheelRow>;  ///< wheels.csv: t,vx,vy,omega
+using WheelsReader = RowReader<WheelRow>;   ///< wheels.csv: t,vx,vy,omega
 using CameraReader = RowReader<CameraRow>;  ///< camera.csv: t,x,y[,theta][,sx,sy]
 using TruthReader = RowReader<TruthRow>;    ///< truth.csv: t,x,y,theta
 
