@@ -465,7 +465,7 @@ std::vector<SensorObservability> decide(const std::vector<SensorMount>& mounts, 
 // plausible sensor matrix (this is where mirroring is found), else nominal.
 std::vector<SensorMount> initial_mounts(const Data& d, const SensorArray& nominal,
                                         std::vector<bool>& from_data) {
-  std::vector<SensorMount> start = nominal.mounts();
+  std::vector<SensorMount> start(nominal.mounts().begin(), nominal.mounts().end());
   std::fill(from_data.begin(), from_data.end(), false);
   const Eigen::Matrix3d gram = d.w * d.w.transpose();
   const Eigen::FullPivLU<Eigen::Matrix3d> gram_lu(gram);
@@ -502,7 +502,7 @@ Eigen::MatrixXd calibration_information(const SensorArray& array, std::span<cons
     z.col(static_cast<Eigen::Index>(k)) = twists[k].vector() * dt[k];
     d(static_cast<Eigen::Index>(k)) = dt[k];
   }
-  return information_at(array.mounts(), z, z, d, noise);
+  return information_at({array.mounts().begin(), array.mounts().end()}, z, z, d, noise);
 }
 
 std::variant<ExactCalibration, CalibrationError> calibrate_exact(
@@ -659,7 +659,9 @@ std::variant<ExactCalibration, CalibrationError> calibrate_exact(
   std::vector<SensorMount> out_mounts = current.mounts;
   for (int i = 0; i < n; ++i) {
     const auto u = static_cast<std::size_t>(i);
-    out_mounts[u].yaw = wrap_angle(out_mounts[u].yaw);
+    // The yaw nearest the nominal's representation: a config that says 225 deg
+    // gets 227 deg back, not -133 deg (and a yaw kept at nominal is unchanged).
+    out_mounts[u].yaw = nominal[i].yaw + wrap_angle(out_mounts[u].yaw - nominal[i].yaw);
     SensorCalibration s;
     s.nominal = nominal[i];
     s.calibrated = out_mounts[u];

@@ -89,7 +89,7 @@ std::optional<Solution> solve(const SensorArray& nominal, const GuidedInput& in,
       x << parts->yaw, parts->scale.x(), parts->scale.y();
       lm.minimize(x);
       if (!x.allFinite()) return std::nullopt;
-      m.yaw = wrap_angle(x(0));
+      m.yaw += wrap_angle(x(0) - m.yaw);  // nearest the nominal's representation
       m.scale = x.tail<2>();
       m.mirrored = parts->mirrored;
       Eigen::VectorXd f(4);
@@ -104,7 +104,7 @@ std::optional<Solution> solve(const SensorArray& nominal, const GuidedInput& in,
         SensorMount c = m;
         c.mirrored = mirrored;
         c.scale = {s, s * anisotropy};
-        c.yaw = std::atan2(-(mirrored ? -1.0 : 1.0) * a.y(), a.x());
+        c.yaw += wrap_angle(std::atan2(-(mirrored ? -1.0 : 1.0) * a.y(), a.x()) - c.yaw);
         c.position =
             position_from_rotation_response(c.counts_from_robot_velocity(), in.spin[u] / angle);
         return c;

@@ -1,7 +1,6 @@
 #include "moa/consensus.hpp"
 
 #include <Eigen/LU>
-#include <algorithm>
 #include <cmath>
 
 #include "moa/chi2.hpp"
@@ -22,15 +21,18 @@ ConsensusEstimator::ConsensusEstimator(const SensorArray& array, ConsensusOption
     threshold_[static_cast<std::size_t>(dof)] = chi2_quantile(1.0 - options_.alpha, dof);
   }
   wheel_threshold_ = chi2_quantile(1.0 - options_.alpha, 3);
-  if (n_ <= kMaxExhaustive) {
-    for (SensorMask m = 1; m < (SensorMask{1} << n_); ++m) {
-      if (count_sensors(m) >= 2) subsets_.push_back(m);
-    }
-    std::stable_sort(subsets_.begin(), subsets_.end(), [](SensorMask a, SensorMask b) {
-      return count_sensors(a) > count_sensors(b);
-    });
-  }
 }
+
+namespace {
+// The next larger mask with the same number of bits set (Gosper's hack):
+// the lowest run of ones moves up by one place and the rest of it drops to
+// the bottom, so all k-subsets come in increasing numeric order.
+SensorMask next_same_size(SensorMask m) {
+  const SensorMask lowest = m & (~m + 1u);
+  const SensorMask ripple = m + lowest;
+  return (((ripple ^ m) >> 2) / lowest) | ripple;
+}
+}  // namespace
 
 bool ConsensusEstimator::consider(SensorMask mask, const std::optional<Twist2>& wheels,
                                   const Eigen::Matrix3d& wheel_cov,
@@ -53,12 +55,13 @@ std::optional<ConsensusEstimator::Candidate> ConsensusEstimator::search(
     const Eigen::Matrix3d& wheel_cov) const {
   std::optional<Candidate> best;
   if (n_ <= kMaxExhaustive) {
-    int size_found = 0;
-    for (const SensorMask m : subsets_) {
-      const int k = count_sensors(m);
-      if (k < size_found) break;  // a larger consistent set exists
-      if ((m & ~candidates) != 0) continue;
-      if (consider(m, wheels, wheel_cov, best)) size_found = k;
+    // Largest subsets first; the first size with a consistent subset wins.
+    const SensorMask end = SensorMask{1} << n_;
+    for (int k = count_sensors(candidates); k >= 2; --k) {
+      for (SensorMask m = all_sensors(k); m < end; m = next_same_size(m)) {
+        if ((m & ~candidates) == 0) consider(m, wheels, wheel_cov, best);
+      }
+      if (best) return best;
     }
     return best;
   }

@@ -125,6 +125,27 @@ TEST(CalibrateExact, NoRotationKeepsPositionsAtNominal) {
   }
 }
 
+TEST(CalibrateExact, CalibratedYawKeepsTheNominalsRepresentation) {
+  // A config may write a yaw as 3.78 rad (216 deg) rather than -2.5 rad:
+  // the calibrated yaw must come back within pi of it, so that the config
+  // written reads as a small change, and a yaw kept at nominal is unchanged.
+  SensorArray nominal = test::four_sensor_nominal();
+  nominal[2].yaw += 2.0 * std::numbers::pi;
+  nominal[3].yaw += 2.0 * std::numbers::pi;
+  std::mt19937_64 rng(12);
+  const SensorArray truth = test::perturbed(nominal, rng, 0.008, 0.07, 0.04, 1);
+  const auto mixed = test::reference_samples(truth, test::mixed_motion, 8.0, 0.02, false);
+  const ExactCalibration cal = calibrate(nominal, mixed);
+  for (int i = 0; i < 4; ++i) EXPECT_NEAR(cal.calibrated[i].yaw, truth[i].yaw, 1e-6) << i;
+
+  const auto spin = test::reference_samples(truth, self_rotation, 8.0, 0.02, false);
+  const ExactCalibration kept = calibrate(nominal, spin);
+  for (int i = 0; i < 4; ++i) {
+    ASSERT_FALSE(kept.sensors[static_cast<std::size_t>(i)].estimated[2]);
+    EXPECT_EQ(kept.calibrated[i].yaw, nominal[i].yaw) << i;
+  }
+}
+
 TEST(CalibrateExact, NoLateralMotionKeepsOneScaleAtNominal) {
   // vy = 0: only M_i e_x and q_i are seen, four numbers for five parameters.
   // A sensor aligned with the robot (yaw 0) then cannot see its y scale;

@@ -103,6 +103,23 @@ TEST(CalibrateGuided, WithoutPushYIsotropicSensorsAreRecoveredAndMirroringFound)
   }
 }
 
+TEST(CalibrateGuided, CalibratedYawKeepsTheNominalsRepresentation) {
+  // Nominal yaws written beyond pi come back within pi of themselves, with
+  // and without push-y.
+  SensorArray nominal = test::four_sensor_nominal();
+  nominal[2].yaw += 2.0 * kPi;
+  nominal[3].yaw += 2.0 * kPi;
+  std::mt19937_64 rng(24);
+  SensorArray truth = test::perturbed(nominal, rng, 0.005, 0.05, 0.0, 1);
+  for (int i = 0; i < 4; ++i) truth[i].scale = Eigen::Vector2d::Constant(1.0 + 0.01 * i);
+  for (const bool with_y : {true, false}) {
+    const GuidedCalibration cal = calibrate(nominal, input_for(truth, with_y));
+    for (int i = 0; i < 4; ++i) {
+      EXPECT_NEAR(cal.calibrated[i].yaw, truth[i].yaw, kYawTol) << "sensor " << i << with_y;
+    }
+  }
+}
+
 TEST(CalibrateGuided, DetectsBackwardPushesAndClockwiseSpin) {
   std::mt19937_64 rng(24);
   const SensorArray nominal = test::four_sensor_nominal();

@@ -514,7 +514,7 @@ const BadInput kBadInputs[] = {
      [](const fs::path& d) {
        io::RobotConfig c = io::read_config(d / "cal.yaml");
        c.names.pop_back();
-       std::vector<SensorMount> m = c.array.mounts();
+       std::vector<SensorMount> m(c.array.mounts().begin(), c.array.mounts().end());
        m.pop_back();
        c.array = SensorArray(m);
        io::write_config(c, d / "cal.yaml");

@@ -2,9 +2,11 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <cstdint>
-#include <vector>
+#include <initializer_list>
+#include <span>
 
 #include "moa/sensor.hpp"
 
@@ -39,20 +41,39 @@ enum SensorFlag : std::uint8_t {
   kFlagLift = 1u << 1,      ///< sensor reported lift
 };
 
-/// The mounts of all sensors of one robot, in config order.
-/// Built once (it may allocate then); read-only afterwards.
+/// The mounts of all sensors of one robot, in config order. Held in place
+/// (no heap, so that the estimators run on microcontrollers without one):
+/// at most kMaxSensors mounts, which every reader checks. An array given
+/// more keeps the first kMaxSensors but reports its full size(), so that
+/// every estimator refuses it (GeometryError::kTooManySensors).
 class SensorArray {
  public:
   SensorArray() = default;
-  explicit SensorArray(std::vector<SensorMount> mounts) : mounts_(std::move(mounts)) {}
+  explicit SensorArray(std::span<const SensorMount> mounts) { assign(mounts); }
+  SensorArray(std::initializer_list<SensorMount> mounts) {
+    assign(std::span<const SensorMount>(mounts.begin(), mounts.size()));
+  }
+  /// n copies of `mount`.
+  SensorArray(int n, const SensorMount& mount) : n_(std::max(n, 0)) {
+    std::fill_n(mounts_.begin(), std::min(n_, kMaxSensors), mount);
+  }
 
-  int size() const { return static_cast<int>(mounts_.size()); }
+  int size() const { return n_; }
   const SensorMount& operator[](int i) const { return mounts_[static_cast<std::size_t>(i)]; }
   SensorMount& operator[](int i) { return mounts_[static_cast<std::size_t>(i)]; }
-  const std::vector<SensorMount>& mounts() const { return mounts_; }
+  std::span<const SensorMount> mounts() const {
+    return std::span<const SensorMount>(mounts_).first(
+        static_cast<std::size_t>(std::min(n_, kMaxSensors)));
+  }
 
  private:
-  std::vector<SensorMount> mounts_;
+  void assign(std::span<const SensorMount> mounts) {
+    n_ = static_cast<int>(mounts.size());
+    std::copy_n(mounts.begin(), std::min(mounts.size(), mounts_.size()), mounts_.begin());
+  }
+
+  int n_ = 0;
+  std::array<SensorMount, kMaxSensors> mounts_{};
 };
 
 /// Kim & Lee eq. (1): N mice at the vertices of a regular polygon of radius

@@ -87,7 +87,7 @@ struct ExactOptions {
 
 struct SensorCalibration {
   SensorMount nominal;
-  SensorMount calibrated;
+  SensorMount calibrated;  ///< yaw within pi of the nominal yaw (its representation kept)
   std::array<bool, kMountParameters> estimated{};  ///< false: kept at nominal
   bool mirror_from_data = false;  ///< mirroring decided by the data, not the nominal config
   MountMatrix covariance = MountMatrix::Zero();          ///< of (px, py, yaw, sx, sy); 0 where kept

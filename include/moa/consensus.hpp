@@ -14,13 +14,14 @@
 //     wheel distance, when present) wins.
 //  3. Nothing passes: the wheel twist (source wheels) or, without wheels,
 //     the last good twist with its covariance grown (source hold).
-// Subsets are enumerated from a list built at construction (N <= 10); for
-// larger arrays the worst sensor is dropped greedily. Per-sample cost does
-// not depend on the log's length and nothing is allocated.
+// Subsets of each size are enumerated in increasing bit order as they are
+// needed (N <= 10, so at most 1013 fits and no table to store); for larger
+// arrays the worst sensor is dropped greedily. Per-sample cost does not
+// depend on the log's length and nothing is allocated, not even at
+// construction (the estimator runs on microcontrollers without a heap).
 #pragma once
 
 #include <optional>
-#include <vector>
 
 #include "moa/select.hpp"
 
@@ -64,7 +65,6 @@ class ConsensusEstimator {
   NoiseModel noise_;
   std::array<double, 2 * kMaxSensors> threshold_{};  ///< by dof
   double wheel_threshold_ = 0.0;
-  std::vector<SensorMask> subsets_;  ///< by decreasing size, built once
   // State carried between samples.
   PointMeasurements measurements_;
   Fallback fallback_;

@@ -303,7 +303,9 @@ io::RobotConfig parse_sensors(const Source& source, const YAML::Node& node,
         if (f.has(key)) f.fail(key, "not used by layout 'polygon' (it takes n, radius, theta)");
       }
       const int n = static_cast<int>(f.integer("n", 1, kMaxSensors));
-      mounts = regular_polygon(n, f.positive("radius"), f.number("theta", 0.0), prototype).mounts();
+      const SensorArray polygon =
+          regular_polygon(n, f.positive("radius"), f.number("theta", 0.0), prototype);
+      mounts.assign(polygon.mounts().begin(), polygon.mounts().end());
     }
     config.names = sensor_names(f, mounts.size());
   }
