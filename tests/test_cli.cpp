@@ -5,6 +5,10 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "moa/evaluate.hpp"
 #include "moa/io/log.hpp"
@@ -107,6 +111,51 @@ TEST(Cli, EveryEstimatorTracksNoiseFreeLog) {
                                  dir.string() + " --estimator magic --out x.csv");
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_THAT(bad.err, HasSubstr("magic"));
+  fs::remove_all(dir);
+}
+
+/// How many rows of an odometry.csv have each value of the `source` column.
+std::map<std::string, int> sources(const fs::path& odometry) {
+  std::ifstream in(odometry);
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> header;
+  std::stringstream h(line);
+  for (std::string field; std::getline(h, field, ',');) header.push_back(field);
+  const auto column = std::find(header.begin(), header.end(), "source") - header.begin();
+  std::map<std::string, int> count;
+  while (std::getline(in, line)) {
+    std::stringstream row(line);
+    std::string field;
+    for (long k = 0; k <= column; ++k) std::getline(row, field, ',');
+    ++count[field];
+  }
+  return count;
+}
+
+TEST(Cli, VotingThresholdsComeFromTheCommandLine) {
+  // Eq. (7): a sensor is reliable with r_i >= r_th agreeing pairs, and each
+  // of N = 4 sensors has only N - 1 = 3 pairs: r_th = 4 trusts no sensor, so
+  // every epoch falls back (no wheels: the held twist); the default r_th = 2
+  // trusts all on fault-free data.
+  const auto dir = test::scratch_dir("thresholds");
+  const SensorArray array = test::skewed_array();
+  const auto log = test::synthesise(array, test::mixed_motion, 2.0, 0.01);
+  test::write_log(log, array, {"a", "b", "c", "d"}, dir);
+  const std::string common = "odometry --config " + (dir / "robot.yaml").string() + " --log " +
+                             dir.string() + " --estimator sekimori --out ";
+  ASSERT_EQ(test::run_moa(common + (dir / "default.csv").string()).exit_code, 0);
+  const auto strict = test::run_moa(common + (dir / "strict.csv").string() + " --r-th 4");
+  ASSERT_EQ(strict.exit_code, 0) << strict.err;
+  EXPECT_EQ(sources(dir / "default.csv"), (std::map<std::string, int>{{"mice", 200}}));
+  EXPECT_EQ(sources(dir / "strict.csv"), (std::map<std::string, int>{{"hold", 200}}));
+  // Out of range values are refused, naming the option.
+  for (const std::string bad : {" --r-th 0", " --e-th -1", " --alpha 0.9"}) {
+    const auto r = test::run_moa(common + (dir / "bad.csv").string() + bad);
+    EXPECT_NE(r.exit_code, 0) << bad;
+    EXPECT_THAT(r.err, HasSubstr(bad.substr(1, bad.find(' ', 1) - 1))) << bad;
+    EXPECT_FALSE(fs::exists(dir / "bad.csv")) << bad;
+  }
   fs::remove_all(dir);
 }
 

@@ -394,9 +394,10 @@ Report run_kimlee(const CalibrateArgs& args, const io::RobotConfig& config, Sens
     r.warnings.push_back(fmt::format(
         "S is rank deficient ({} < {}): the motion determines only {} combinations of the {} "
         "position corrections; this is the minimum-norm correction (Kim & Lee's S has rank 3 for "
-        "any motion to first order: row 3 of every S_k is omega (p - 2 p_nominal)); use --method "
-        "exact for the true positions",
-        cal.rank, 2 * n, cal.rank, 2 * n));
+        "any motion to first order: row 3 of every S_k is omega (p - 2 p_nominal)); the 1-sigma "
+        "covers the determined combinations only, along the other {} directions the data say "
+        "nothing; use --method exact for the true positions",
+        cal.rank, 2 * n, cal.rank, 2 * n, 2 * n - cal.rank));
   }
   if (cal.too_few_measurements()) {
     r.warnings.push_back(fmt::format("M = {} measurements < 2N - 2 = {} (Kim & Lee eq. (49))",

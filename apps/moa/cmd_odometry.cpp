@@ -111,6 +111,19 @@ void add_odometry(CLI::App& app, Action& action) {
                   "Sekimori & Miyazaki), consensus (largest consistent set)")
       ->check(CLI::IsMember({"ls", "sekimori", "consensus"}))
       ->capture_default_str();
+  cmd->add_option("--e-th", args->pipeline.sekimori.e_th,
+                  "sekimori: E_th of eq. (7), m^2, threshold on a pair's displacement residual "
+                  "per epoch ((0.2 mm)^2 at 100 Hz; sekimori.hpp says why)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--r-th", args->pipeline.sekimori.r_th,
+                  "sekimori: r_th of eq. (7), agreeing pairs a sensor needs to be reliable "
+                  "(default max(1, N - 2))")
+      ->check(CLI::Range(1, kMaxSensors));
+  cmd->add_option("--alpha", args->pipeline.consensus.alpha,
+                  "consensus: false-rejection rate of the chi-square consistency test")
+      ->check(CLI::Range(1e-12, 0.5))
+      ->capture_default_str();
   cmd->add_option("--out", args->out, "Output odometry.csv (written whole or not at all)")
       ->required();
   cmd->add_option("--rate", args->pipeline.rate, "Epoch rate of the synchroniser, Hz")

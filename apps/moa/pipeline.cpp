@@ -58,19 +58,22 @@ std::string sd(double variance) {
 
 }  // namespace
 
-std::unique_ptr<TwistSource> TwistSource::create(const std::string& name, const SensorArray& array,
-                                                 double period, const std::string& config_path) {
+std::unique_ptr<TwistSource> TwistSource::create(const PipelineOptions& options,
+                                                 const SensorArray& array,
+                                                 const std::string& config_path) {
+  const std::string& name = options.estimator;
+  const double period = 1.0 / options.rate;
   if (name == "ls") {
     return std::make_unique<LsSource>(
         built_or_throw(LsEstimator::create(array, all_sensors(array.size()), period), config_path));
   }
   if (name == "sekimori") {
     return std::make_unique<RobustSource<SekimoriEstimator>>(
-        built_or_throw(SekimoriEstimator::create(array), config_path));
+        built_or_throw(SekimoriEstimator::create(array, options.sekimori), config_path));
   }
   if (name == "consensus") {
     return std::make_unique<RobustSource<ConsensusEstimator>>(
-        built_or_throw(ConsensusEstimator::create(array), config_path));
+        built_or_throw(ConsensusEstimator::create(array, options.consensus), config_path));
   }
   throw io::Error(fmt::format("unknown estimator '{}' (ls, sekimori, consensus)", name));
 }
@@ -180,9 +183,9 @@ Pipeline::Pipeline(const io::RobotConfig& config, const std::string& config_path
   const double period = 1.0 / options.rate;
   impl_ = std::unique_ptr<Impl>(new Impl{
       Synchroniser(config.array.size(), t0, {period, options.max_row_interval}),
-      TwistSource::create(options.estimator, config.array, period, config_path), std::move(wheels),
-      WheelAverager{}, false, DeadReckoner(options.initial.value_or(Pose2{})), std::move(sink),
-      std::move(camera), options, std::nullopt, std::nullopt, FixCounts{}, t0});
+      TwistSource::create(options, config.array, config_path), std::move(wheels), WheelAverager{},
+      false, DeadReckoner(options.initial.value_or(Pose2{})), std::move(sink), std::move(camera),
+      options, std::nullopt, std::nullopt, FixCounts{}, t0});
   if (impl_->camera) impl_->start_filter();
 }
 

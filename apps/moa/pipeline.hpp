@@ -10,8 +10,10 @@
 #include <vector>
 
 #include "moa/array.hpp"
+#include "moa/consensus.hpp"
 #include "moa/io/config.hpp"
 #include "moa/io/log.hpp"
+#include "moa/sekimori.hpp"
 #include "moa/select.hpp"
 #include "moa/synchronise.hpp"
 
@@ -26,6 +28,8 @@ struct PipelineOptions {
   double camera_latency = 0.0;         ///< s from capture (camera.csv t) to arrival
   double camera_sigma = 0.005;         ///< m, fix sd when camera.csv has no sx, sy
   double camera_heading_sigma = 0.02;  ///< rad, when camera.csv has theta
+  SekimoriOptions sekimori;            ///< E_th, r_th of the voting (sekimori.hpp)
+  ConsensusOptions consensus;          ///< chi-square alpha, noise model (consensus.hpp)
 };
 
 /// Counts of what happened to the camera fixes.
@@ -48,8 +52,9 @@ class TwistSource {
   virtual std::optional<RobustEstimate> estimate(const ArraySample& sample,
                                                  const std::optional<Twist2>& wheels) = 0;
   /// Throws io::Error naming `config_path` when the geometry is refused.
-  static std::unique_ptr<TwistSource> create(const std::string& name, const SensorArray& array,
-                                             double period, const std::string& config_path);
+  static std::unique_ptr<TwistSource> create(const PipelineOptions& options,
+                                             const SensorArray& array,
+                                             const std::string& config_path);
 };
 
 class Pipeline {
