@@ -16,20 +16,12 @@
 
 #include "moa/io/config.hpp"
 #include "moa/io/error.hpp"
+#include "support/error_of.hpp"
 
 namespace moa::io {
 namespace {
 
-// The message of the io::Error that f throws, or a marker that none was thrown.
-template <class F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no io::Error thrown)";
-}
+using test::error_of;
 
 std::string parse_error(const std::string& yaml) {
   return error_of([&] { parse_config(yaml, "robot.yaml"); });

@@ -19,6 +19,7 @@
 
 #include "moa/io/error.hpp"
 #include "moa/io/evdev.hpp"
+#include "support/error_of.hpp"
 #include "support/synth.hpp"
 
 namespace moa::io {
@@ -27,15 +28,7 @@ namespace {
 namespace fs = std::filesystem;
 using Bytes = std::vector<std::uint8_t>;
 
-template <class F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no io::Error thrown)";
-}
+using test::error_of;
 
 // Raw bytes of events, built with the kernel's own struct.
 struct Events {

@@ -13,6 +13,7 @@
 
 #include "moa/io/error.hpp"
 #include "moa/io/evemu.hpp"
+#include "support/error_of.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"
 
@@ -23,15 +24,7 @@ namespace fs = std::filesystem;
 
 const fs::path kData = fs::path(MOA_TEST_DATA_DIR) / "evemu";
 
-template <class F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no io::Error thrown)";
-}
+using test::error_of;
 
 fs::path write_file(const fs::path& file, const std::string& text) {
   std::ofstream(file, std::ios::binary) << text;

@@ -16,19 +16,12 @@
 #include "moa/io/config.hpp"
 #include "moa/io/error.hpp"
 #include "moa/io/log.hpp"
+#include "support/error_of.hpp"
 
 namespace moa::io {
 namespace {
 
-template <class F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no io::Error thrown)";
-}
+using test::error_of;
 
 // A fresh directory, removed with everything in it at the end of the test.
 class TempDir {

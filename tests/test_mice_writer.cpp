@@ -14,6 +14,7 @@
 #include "moa/io/error.hpp"
 #include "moa/io/log.hpp"
 #include "moa/io/mice_writer.hpp"
+#include "support/error_of.hpp"
 #include "support/synth.hpp"
 
 namespace moa::io {
@@ -22,15 +23,7 @@ namespace {
 namespace fs = std::filesystem;
 using Durability = MiceWriter::Durability;
 
-template <class F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no io::Error thrown)";
-}
+using test::error_of;
 
 std::string read_text(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);

@@ -20,6 +20,7 @@
 #include "moa/io/config.hpp"
 #include "moa/io/error.hpp"
 #include "moa/io/serial_reader.hpp"
+#include "support/error_of.hpp"
 #include "support/pty.hpp"
 #include "support/synth.hpp"
 
@@ -30,15 +31,7 @@ using Bytes = std::vector<std::uint8_t>;
 using serial::Data;
 using serial::Hello;
 
-template <class F>
-std::string error_of(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no io::Error thrown)";
-}
+using test::error_of;
 
 RobotConfig two_sensors() {
   return parse_config(
