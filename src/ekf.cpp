@@ -5,32 +5,6 @@
 
 namespace moa {
 
-namespace {
-
-/// s = sin(phi)/phi, c = (1 - cos phi)/phi and their derivatives in phi,
-/// Taylor series below kSmallAngle (as in exp()).
-struct VTerms {
-  double s, c, ds, dc;
-};
-VTerms v_terms(double phi) {
-  if (std::abs(phi) < kSmallAngle) {
-    const double p2 = phi * phi;
-    return {1.0 - p2 / 6.0 + p2 * p2 / 120.0, phi / 2.0 - phi * p2 / 24.0,
-            -phi / 3.0 + phi * p2 / 30.0, 0.5 - p2 / 8.0 + p2 * p2 / 144.0};
-  }
-  const double sn = std::sin(phi), cs = std::cos(phi), half = std::sin(phi / 2.0);
-  const double s = sn / phi, c = 2.0 * half * half / phi;
-  return {s, c, (cs - s) / phi, (sn - c) / phi};
-}
-
-Eigen::Matrix2d v_matrix(double s, double c) {
-  Eigen::Matrix2d v;
-  v << s, -c, c, s;
-  return v;
-}
-
-}  // namespace
-
 const char* describe(FixResult result) {
   switch (result) {
     case FixResult::kApplied:

@@ -10,24 +10,32 @@ double wrap_angle(double angle) {
   return a;
 }
 
+VTerms v_terms(double phi) {
+  if (std::abs(phi) < kSmallAngle) {
+    const double p2 = phi * phi;
+    return {1.0 - p2 / 6.0 + p2 * p2 / 120.0, phi / 2.0 - phi * p2 / 24.0 + phi * p2 * p2 / 720.0,
+            -phi / 3.0 + phi * p2 / 30.0, 0.5 - p2 / 8.0 + p2 * p2 / 144.0};
+  }
+  // 1 - cos(phi) = 2 sin^2(phi/2) avoids the cancellation that costs
+  // (1 - cos(phi)) / phi about 1e-12 of accuracy near phi = 1e-4.
+  const double sn = std::sin(phi), half = std::sin(phi / 2.0);
+  const double s = sn / phi, c = 2.0 * half * half / phi;
+  return {s, c, (std::cos(phi) - s) / phi, (sn - c) / phi};
+}
+
 Pose2 exp(const Twist2& twist, double dt) {
   const double phi = twist.omega * dt;
-  double s = 0.0;  // sin(phi) / phi
-  double c = 0.0;  // (1 - cos(phi)) / phi
-  if (std::abs(phi) < kSmallAngle) {
-    const double phi2 = phi * phi;
-    s = 1.0 - phi2 / 6.0 + phi2 * phi2 / 120.0;
-    c = phi / 2.0 - phi * phi2 / 24.0 + phi * phi2 * phi2 / 720.0;
-  } else {
-    // 1 - cos(phi) = 2 sin^2(phi/2) avoids the cancellation that costs
-    // (1 - cos(phi)) / phi about 1e-12 of accuracy near phi = 1e-4.
-    const double half = std::sin(phi / 2.0);
-    s = std::sin(phi) / phi;
-    c = 2.0 * half * half / phi;
-  }
-  Eigen::Matrix2d v;
-  v << s, -c, c, s;
-  return {v * twist.v * dt, phi};
+  const VTerms v = v_terms(phi);
+  return {v_matrix(v.s, v.c) * twist.v * dt, phi};
+}
+
+Twist2 twist_between(const Pose2& from, const Pose2& to, double dt) {
+  const Eigen::Vector2d d = rotation(-from.theta) * (to.t - from.t);
+  const double phi = to.theta - from.theta;
+  const VTerms v = v_terms(phi);
+  const double n = v.s * v.s + v.c * v.c;
+  const Eigen::Vector2d u((v.s * d.x() + v.c * d.y()) / n, (-v.c * d.x() + v.s * d.y()) / n);
+  return {u / dt, phi / dt};
 }
 
 Pose2 integrate_exact(const Pose2& pose, const Twist2& twist, double dt) {

@@ -3,12 +3,10 @@
 
 #include <cmath>
 #include <numbers>
-#include <random>
 
 #include "moa/sim/scenario.hpp"
 #include "moa/sim/simulate.hpp"
 #include "moa/sim/trajectory.hpp"
-#include "support/checks.hpp"
 
 namespace moa::sim {
 namespace {
@@ -20,26 +18,6 @@ const std::vector<Pose2> kTable3 = {
     {{0.0, 0.0}, 0.0}, {{0.5, 0.0}, 0.0}, {{0.5, 0.0}, kPi / 2}, {{0.5, 0.5}, kPi / 2},
     {{0.5, 0.5}, 0.0}, {{1.0, 0.5}, 0.0}, {{1.0, 0.5}, kPi / 2}, {{1.0, 1.0}, kPi / 2},
     {{1.0, 1.0}, 0.0}, {{1.5, 1.0}, 0.0}};
-
-TEST(SimTrajectory, TwistBetweenInvertsExp) {
-  std::mt19937_64 rng(7);
-  for (int i = 0; i < 200; ++i) {
-    const Twist2 x = test::random_twist(rng);
-    const double dt = 0.01 + 0.5 * std::uniform_real_distribution<double>(0, 1)(rng);
-    const Pose2 from{{0.3 * i, -0.1 * i}, 0.05 * i};
-    const Pose2 to = integrate_exact(from, x, dt);
-    const Twist2 back = twist_between(from, to, dt);
-    EXPECT_NEAR(back.v.x(), x.v.x(), 1e-9);
-    EXPECT_NEAR(back.v.y(), x.v.y(), 1e-9);
-    EXPECT_NEAR(back.omega, x.omega, 1e-9);
-  }
-  // Near zero rotation (the Taylor branch).
-  const Twist2 slow{{0.2, -0.1}, 1e-7};
-  const Twist2 back = twist_between({}, exp(slow, 0.5), 0.5);
-  EXPECT_NEAR(back.v.x(), 0.2, 1e-12);
-  EXPECT_NEAR(back.v.y(), -0.1, 1e-12);
-  EXPECT_NEAR(back.omega, 1e-7, 1e-15);
-}
 
 TEST(SimTrajectory, TrapezoidCoversUnitDistanceWithinLimits) {
   // Closed forms: cruise reached iff rate^2 / accel < 1; duration then

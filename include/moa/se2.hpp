@@ -59,11 +59,34 @@ struct Pose2 {
 /// (1 - cos a)/a; at 1e-4 the truncation error of three terms is ~1e-22.
 inline constexpr double kSmallAngle = 1e-4;
 
+/// The coefficients of V(phi) = [[s, -c], [c, s]] that exp() and its
+/// Jacobians use: s = sin(phi)/phi, c = (1 - cos(phi))/phi and their
+/// derivatives ds, dc in phi; Taylor series below kSmallAngle.
+struct VTerms {
+  double s, c, ds, dc;
+};
+VTerms v_terms(double phi);
+
+/// [[s, -c], [c, s]].
+inline Eigen::Matrix2d v_matrix(double s, double c) {
+  Eigen::Matrix2d v;
+  v << s, -c, c, s;
+  return v;
+}
+
 /// Exact motion over dt of a body moving with a constant twist (the SE(2)
 /// exponential map of twist * dt):
 ///   phi = omega dt,  t = V(phi) v dt,  V = [[s, -c], [c, s]],
 ///   s = sin(phi)/phi,  c = (1 - cos(phi))/phi.
 Pose2 exp(const Twist2& twist, double dt);
+
+/// The constant twist that carries `from` to `to` in dt seconds, the inverse
+/// of exp (the SE(2) logarithm of from^-1 to, over dt): with
+/// d = R(-theta_from)(t_to - t_from) and phi = theta_to - theta_from,
+///   v = V(phi)^-1 d / dt,  omega = phi / dt,
+///   V^-1 = [[s, c], [-c, s]] / (s^2 + c^2).
+/// Valid for |phi| < 2 pi.
+Twist2 twist_between(const Pose2& from, const Pose2& to, double dt);
 
 /// world_T_robot after dt of constant twist, integrated exactly:
 /// pose * exp(twist, dt).

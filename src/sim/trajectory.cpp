@@ -33,26 +33,6 @@ double sum_of_sines(const std::vector<Excitation::Sine>& sines, double t) {
 
 }  // namespace
 
-Twist2 twist_between(const Pose2& from, const Pose2& to, double dt) {
-  const Eigen::Vector2d d = rotation(-from.theta) * (to.t - from.t);
-  const double phi = to.theta - from.theta;
-  double s = 0.0;  // sin(phi) / phi
-  double c = 0.0;  // (1 - cos(phi)) / phi
-  if (std::abs(phi) < kSmallAngle) {
-    const double phi2 = phi * phi;
-    s = 1.0 - phi2 / 6.0 + phi2 * phi2 / 120.0;
-    c = phi / 2.0 - phi * phi2 / 24.0 + phi * phi2 * phi2 / 720.0;
-  } else {
-    const double half = std::sin(phi / 2.0);
-    s = std::sin(phi) / phi;
-    c = 2.0 * half * half / phi;
-  }
-  // V^-1 = [[s, c], [-c, s]] / (s^2 + c^2).
-  const double n = s * s + c * c;
-  const Eigen::Vector2d v((s * d.x() + c * d.y()) / n, (-c * d.x() + s * d.y()) / n);
-  return {v / dt, phi / dt};
-}
-
 Trapezoid::Trapezoid(double max_rate, double max_accel) : accel_(max_accel) {
   assert(max_rate > 0.0 && max_accel > 0.0);
   accel_time_ = max_rate / max_accel;

@@ -7,7 +7,7 @@
 // measurement model applied to the same twists) and the truth agree to
 // rounding. For waypoint paths the frame's twist is the one that carries the
 // analytic pose at the frame's start to the analytic pose at its end
-// (twist_between), so the truth passes through every waypoint exactly.
+// (moa::twist_between), so the truth passes through every waypoint exactly.
 #pragma once
 
 #include <variant>
@@ -16,14 +16,6 @@
 #include "moa/se2.hpp"
 
 namespace moa::sim {
-
-/// The constant twist that carries `from` to `to` in dt seconds: the SE(2)
-/// logarithm of from^-1 to, divided by dt. With d = R(-theta_from)(t_to - t_from)
-/// and phi = theta_to - theta_from,
-///   v = V(phi)^-1 d / dt,  omega = phi / dt,  V = [[s, -c], [c, s]],
-///   s = sin(phi)/phi, c = (1 - cos(phi))/phi   (inverse of moa::exp).
-/// Valid for |phi| < 2 pi.
-Twist2 twist_between(const Pose2& from, const Pose2& to, double dt);
 
 /// A rest-to-rest trapezoidal profile of a coordinate s from 0 to 1 with
 /// rate limit `max_rate` (1/s) and acceleration limit `max_accel` (1/s^2):
