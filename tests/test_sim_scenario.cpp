@@ -159,7 +159,7 @@ INSTANTIATE_TEST_SUITE_P(
                 "version: 1\nname: t\nsensor_model: {preset: HDNS-2051, frame_rate: fast}\n",
                 "s.yaml:3: key 'sensor_model.frame_rate': 'fast' is not a number"},
         BadCase{"not finite", "version: 1\nname: t\nsensor_model: {preset: HDNS-2051, cpi: .inf}\n",
-                "s.yaml:3: key 'sensor_model.cpi': '.inf' is not a number"},
+                "s.yaml:3: key 'sensor_model.cpi': '.inf' is not a finite number"},
         BadCase{"not positive",
                 "version: 1\nname: t\nsensor_model: {preset: HDNS-2051, frame_rate: 0}\n",
                 "s.yaml:3: key 'sensor_model.frame_rate': must be > 0 (found 0)"},

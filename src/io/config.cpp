@@ -66,30 +66,9 @@ double to_number(const Context& context, std::string_view key, const YAML::Node&
   if (!node.IsScalar()) {
     context.fail_key(key, fmt::format("expected a number, found {}", describe_kind(node)));
   }
-  const std::string& text = node.Scalar();
-  std::string_view digits = text;
-  if (digits.size() > 1 && digits[0] == '+' && digits[1] != '-') digits.remove_prefix(1);
-  double value = 0.0;
-  const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), value,
-                                         std::chars_format::general);
-  const bool whole = end == digits.data() + digits.size();
-  // YAML spells them .nan, .inf, -.Inf; plain C spellings are caught too.
-  std::string lower(text);
-  std::transform(lower.begin(), lower.end(), lower.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  std::string_view word = lower;
-  if (!word.empty() && (word[0] == '-' || word[0] == '+')) word.remove_prefix(1);
-  if (!word.empty() && word[0] == '.') word.remove_prefix(1);
-  const bool spelled_non_finite = word == "nan" || word == "inf" || word == "infinity";
-  if ((ec == std::errc{} && whole && !std::isfinite(value)) ||
-      (ec != std::errc{} && spelled_non_finite)) {
-    context.fail_key(key, fmt::format("'{}' is not a finite number", text));
-  }
-  if (ec == std::errc::result_out_of_range && whole) {
-    context.fail_key(key, fmt::format("'{}' is out of range", text));
-  }
-  if (ec != std::errc{} || !whole) context.fail_key(key, fmt::format("'{}' is not a number", text));
-  return value;
+  const auto parsed = parse_number(node.Scalar());
+  if (const auto* error = std::get_if<std::string>(&parsed)) context.fail_key(key, *error);
+  return std::get<double>(parsed);
 }
 
 Eigen::Vector2d to_pair(const Context& context, std::string_view key, const YAML::Node& node,

@@ -3,8 +3,10 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
+#include <string>
 #include <system_error>
 
 #include "moa/io/error.hpp"
@@ -106,21 +108,37 @@ bool CsvReader::next() {
   return true;
 }
 
-double CsvReader::number(std::size_t column) const {
-  const std::string_view text = fields_[column];
-  if (text.empty()) fail_field(column, "empty field");
+std::variant<double, std::string> parse_number(std::string_view text) {
   const std::string_view digits = without_plus(text);
   double value = 0.0;
   const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), value,
                                          std::chars_format::general);
-  if (ec == std::errc::result_out_of_range && end == digits.data() + digits.size()) {
-    fail_field(column, fmt::format("'{}' is out of range", text));
+  const bool whole = end == digits.data() + digits.size();
+  // YAML spells them .nan, .inf, -.Inf, which from_chars does not take.
+  std::string word(text);
+  std::transform(word.begin(), word.end(), word.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::string_view bare = word;
+  if (!bare.empty() && (bare[0] == '-' || bare[0] == '+')) bare.remove_prefix(1);
+  if (!bare.empty() && bare[0] == '.') bare.remove_prefix(1);
+  const bool spelled_non_finite = bare == "nan" || bare == "inf" || bare == "infinity";
+  if ((ec == std::errc{} && whole && !std::isfinite(value)) ||
+      (ec != std::errc{} && spelled_non_finite)) {
+    return fmt::format("'{}' is not a finite number", text);
   }
-  if (ec != std::errc{} || end != digits.data() + digits.size()) {
-    fail_field(column, fmt::format("'{}' is not a number", text));
+  if (ec == std::errc::result_out_of_range && whole) {
+    return fmt::format("'{}' is out of range", text);
   }
-  if (!std::isfinite(value)) fail_field(column, fmt::format("'{}' is not a finite number", text));
+  if (ec != std::errc{} || !whole) return fmt::format("'{}' is not a number", text);
   return value;
+}
+
+double CsvReader::number(std::size_t column) const {
+  const std::string_view text = fields_[column];
+  if (text.empty()) fail_field(column, "empty field");
+  const auto parsed = parse_number(text);
+  if (const auto* error = std::get_if<std::string>(&parsed)) fail_field(column, *error);
+  return std::get<double>(parsed);
 }
 
 std::int64_t CsvReader::integer(std::size_t column, std::int64_t min, std::int64_t max) const {

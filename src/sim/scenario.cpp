@@ -190,17 +190,9 @@ class Fields {
     if (!node.IsScalar()) {
       fail_at(node, key, fmt::format("expected a number, found {}", describe_kind(node)));
     }
-    const std::string& text = node.Scalar();
-    std::string_view digits = text;
-    if (digits.size() > 1 && digits[0] == '+' && digits[1] != '-') digits.remove_prefix(1);
-    double value = 0.0;
-    const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), value,
-                                           std::chars_format::general);
-    if (ec != std::errc{} || end != digits.data() + digits.size()) {
-      fail_at(node, key, fmt::format("'{}' is not a number", text));
-    }
-    if (!std::isfinite(value)) fail_at(node, key, fmt::format("'{}' is not finite", text));
-    return value;
+    const auto parsed = io::parse_number(node.Scalar());
+    if (const auto* error = std::get_if<std::string>(&parsed)) fail_at(node, key, *error);
+    return std::get<double>(parsed);
   }
 
  private:

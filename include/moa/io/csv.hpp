@@ -16,6 +16,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <variant>
 #include <vector>
 
 namespace moa::io {
@@ -23,6 +24,13 @@ namespace moa::io {
 /// `text` with control characters written as \xNN, so that an error message
 /// quoting input stays on one line.
 std::string printable(std::string_view text);
+
+/// The finite number `text` spells (std::from_chars general format, a
+/// leading '+' allowed), or why it is not one: "'x' is not a number",
+/// "'x' is out of range", "'x' is not a finite number" (nan, inf and YAML's
+/// .nan, .inf spellings). The one number parser of moa's readers: CSV
+/// fields, the robot config and the simulator's scenarios.
+std::variant<double, std::string> parse_number(std::string_view text);
 
 class CsvReader {
  public:
