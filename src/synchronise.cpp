@@ -17,6 +17,9 @@ const char* describe(RowError error) {
       return "unknown sensor";
     case RowError::kCountsNotFinite:
       return "counts are not finite numbers";
+    case RowError::kTimeJump:
+      return "time jumps forward by more than the longest gap allowed (--max-gap): recordings "
+             "made at different times?";
   }
   return "invalid row";
 }
@@ -33,11 +36,12 @@ Synchroniser::Synchroniser(int n_sensors, double t0, SynchroniserOptions options
   for (std::size_t k = 0; k < slots; ++k) reset(static_cast<std::int64_t>(k));
 }
 
-std::optional<RowError> check_row(const SensorRow& row, int n_sensors, double t0,
-                                  double last_row_t) {
+std::optional<RowError> check_row(const SensorRow& row, int n_sensors, double t0, double last_row_t,
+                                  double max_gap) {
   if (!std::isfinite(row.t)) return RowError::kTimeNotFinite;
   if (row.t < t0) return RowError::kTimeBeforeStart;
   if (row.t < last_row_t) return RowError::kTimeBackwards;
+  if (row.t - last_row_t > max_gap) return RowError::kTimeJump;
   if (row.sensor < 0 || row.sensor >= n_sensors) return RowError::kUnknownSensor;
   if (!row.counts.allFinite()) return RowError::kCountsNotFinite;
   return std::nullopt;

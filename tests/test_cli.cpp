@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <sstream>
 #include <string>
@@ -87,6 +88,35 @@ TEST(Cli, BadInputFailsWithOneLineAndNoOutputFile) {
   for (const auto& entry : fs::directory_iterator(dir)) {
     EXPECT_THAT(entry.path().filename().string(), ::testing::Not(HasSubstr("odom")));
   }
+  fs::remove_all(dir);
+}
+
+TEST(Cli, SilenceLongerThanMaxGapIsAnErrorAndWritesNothing) {
+  // One second of motion, then a last row 60 s later: 60 s of still epochs
+  // are fine under --max-gap 100 and an error under --max-gap 10 (a gap is
+  // written epoch by epoch, so recordings glued from different days would
+  // write millions of rows).
+  const auto dir = test::scratch_dir("gap");
+  const SensorArray array = test::skewed_array();
+  const auto log = test::synthesise(array, test::mixed_motion, 1.0, 0.01);
+  test::write_log(log, array, {"a", "b", "c", "d"}, dir);
+  {
+    std::ofstream mice(dir / "mice.csv", std::ios::app);
+    mice << "61,a,0,0\n";
+  }
+  const std::string common = "odometry --config " + (dir / "robot.yaml").string() + " --log " +
+                             dir.string() + " --out " + (dir / "odom.csv").string();
+  const auto refused = test::run_moa(common + " --max-gap 10");
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_THAT(refused.err, HasSubstr("mice.csv:"));
+  EXPECT_THAT(refused.err, HasSubstr("--max-gap"));
+  EXPECT_FALSE(fs::exists(dir / "odom.csv"));
+  const auto accepted = test::run_moa(common + " --max-gap 100");
+  ASSERT_EQ(accepted.exit_code, 0) << accepted.err;
+  std::ifstream odometry(dir / "odom.csv");
+  const auto lines =
+      std::count(std::istreambuf_iterator<char>(odometry), std::istreambuf_iterator<char>(), '\n');
+  EXPECT_EQ(lines, 1 + 6100);  // header, one row per 10 ms epoch up to t = 61 s
   fs::remove_all(dir);
 }
 

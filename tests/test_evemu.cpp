@@ -1,8 +1,10 @@
 // evemu recordings (io/evemu.hpp) and `moa import-evemu`: real recordings
 // keep every count, both file layouts, frames grouped by SYN_REPORT, and
 // each malformed input rejected with its exact "FILE:LINE: what".
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
@@ -21,6 +23,7 @@ namespace moa::io {
 namespace {
 
 namespace fs = std::filesystem;
+using ::testing::HasSubstr;
 
 const fs::path kData = fs::path(MOA_TEST_DATA_DIR) / "evemu";
 
@@ -473,6 +476,10 @@ TEST(ImportEvemu, WritesALogThatKeepsEveryCountOfEveryRecording) {
   EXPECT_EQ(mice.first.at("thin"), 0.0);
   // The ps2's first frame ends at its SYN_REPORT, 1329846856.201621 s.
   EXPECT_EQ(mice.first.at("ps2"), 1329846856.201621);
+  // Recordings made decades apart: said, as `moa odometry` would refuse the gap.
+  EXPECT_THAT(r.err, HasSubstr("warning: ps2 starts"));
+  EXPECT_THAT(r.err, HasSubstr("after thin ends"));
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   fs::remove_all(dir);
 }
 

@@ -142,5 +142,18 @@ TEST(Synchroniser, InvalidRowsAreRejectedAndChangeNothing) {
   EXPECT_STREQ(describe(RowError::kTimeBackwards), "time goes backwards");
 }
 
+TEST(Synchroniser, SilenceLongerThanMaxGapIsRefusedAndChangesNothing) {
+  SynchroniserOptions options{0.01, 0.05, 2.0};
+  Synchroniser sync(1, 0.0, options);
+  Collected out;
+  ASSERT_FALSE(sync.push(row(0.01, 0, 1, 0), std::ref(out)));
+  const std::size_t before = out.samples.size();
+  EXPECT_EQ(sync.push(row(2.02, 0, 1, 0), std::ref(out)), RowError::kTimeJump);
+  EXPECT_EQ(out.samples.size(), before);                       // the refused row emitted nothing
+  ASSERT_FALSE(sync.push(row(2.01, 0, 1, 0), std::ref(out)));  // exactly max_gap later
+  sync.finish(2.01, std::ref(out));
+  EXPECT_EQ(out.samples.size(), 201u);
+}
+
 }  // namespace
 }  // namespace moa

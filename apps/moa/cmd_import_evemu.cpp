@@ -8,6 +8,7 @@
 #include <memory>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "commands.hpp"
@@ -18,6 +19,9 @@
 
 namespace moa::cli {
 namespace {
+
+/// s between recordings beyond which they were not made together.
+constexpr double kApartWarning = 60.0;
 
 struct ImportEvemuArgs {
   std::vector<std::string> sensors;
@@ -48,8 +52,30 @@ int run_import_evemu(const ImportEvemuArgs& args) {
   if (ec) throw io::Error(fmt::format("{}: cannot create directory ({})", args.out, ec.message()));
   io::MiceWriter writer(dir / "mice.csv", names, false, io::MiceWriter::Durability::kWholeOrNothing,
                         comments);
-  while (const auto row = reader.next()) writer.write(*row);
+  // Each recording's span of rows (s), to tell recordings made apart.
+  std::vector<std::pair<double, double>> span(inputs.size(), {0.0, -1.0});
+  while (const auto row = reader.next()) {
+    writer.write(*row);
+    auto& [first, last] = span[static_cast<std::size_t>(row->sensor)];
+    if (last < first) first = row->t;
+    last = row->t;
+  }
   writer.commit();
+  // Rows are timed from the earliest event of all recordings: recordings
+  // made at different times leave a silence that `moa odometry` fills with
+  // still epochs (and refuses beyond --max-gap).
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    for (std::size_t j = 0; j < inputs.size(); ++j) {
+      const double apart = span[j].first - span[i].second;
+      if (i != j && span[i].second >= span[i].first && span[j].second >= span[j].first &&
+          apart > kApartWarning) {
+        fmt::print(stderr,
+                   "moa import-evemu: warning: {} starts {:.0f} s after {} ends: recordings of "
+                   "one run should overlap in time\n",
+                   names[j], apart, names[i]);
+      }
+    }
+  }
 
   for (std::size_t i = 0; i < inputs.size(); ++i) {
     const auto& stats = reader.stats(static_cast<int>(i));

@@ -22,6 +22,7 @@
 #include <cstdio>
 #include <deque>
 #include <filesystem>
+#include <limits>
 #include <memory>
 #include <numbers>
 #include <optional>
@@ -74,6 +75,14 @@ class StopSignals {
   struct sigaction old_term_ {};
 };
 
+/// No limit on silences: live rows come at the pace of real time, so a
+/// robot parked for hours is no runaway of still epochs.
+PipelineOptions live_pipeline_options() {
+  PipelineOptions options;
+  options.max_gap = std::numeric_limits<double>::infinity();
+  return options;
+}
+
 struct LiveArgs {
   std::string config;
   std::vector<std::string> mice;
@@ -81,7 +90,7 @@ struct LiveArgs {
   int baud = 115200;
   std::string record;
   std::string out;
-  PipelineOptions pipeline;
+  PipelineOptions pipeline = live_pipeline_options();
   std::vector<double> initial_pose{0.0, 0.0, 0.0};
   double duration = 0.0;
   double start_timeout = 5.0;

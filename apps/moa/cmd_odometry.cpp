@@ -134,6 +134,11 @@ void add_odometry(CLI::App& app, Action& action) {
                   "was still before its row)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  cmd->add_option("--max-gap", args->pipeline.max_gap,
+                  "Longest time all sensors may stay silent, s (a gap is no motion, written "
+                  "epoch by epoch; a longer one is an error)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   cmd->add_option("--initial-pose", args->initial_pose,
                   "Initial pose X,Y,THETA in the world frame (m, m, rad)")
       ->expected(3)

@@ -182,7 +182,7 @@ Pipeline::Pipeline(const io::RobotConfig& config, const std::string& config_path
     : t_last_(t0) {
   const double period = 1.0 / options.rate;
   impl_ = std::unique_ptr<Impl>(new Impl{
-      Synchroniser(config.array.size(), t0, {period, options.max_row_interval}),
+      Synchroniser(config.array.size(), t0, {period, options.max_row_interval, options.max_gap}),
       TwistSource::create(options, config.array, config_path), std::move(wheels), WheelAverager{},
       false, DeadReckoner(options.initial.value_or(Pose2{})), std::move(sink), std::move(camera),
       options, std::nullopt, std::nullopt, FixCounts{}, t0});

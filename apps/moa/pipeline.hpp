@@ -23,6 +23,7 @@ struct PipelineOptions {
   std::string estimator = "consensus";  ///< ls | sekimori | consensus
   double rate = 100.0;                  ///< Hz, epochs
   double max_row_interval = 0.05;       ///< s
+  double max_gap = 3600.0;              ///< s, longest silence of all sensors
   std::optional<Pose2> initial;        ///< world_T_robot at t0; default: identity, or the first fix
   bool fuse_camera = false;            ///< EKF with camera.csv fixes
   double camera_latency = 0.0;         ///< s from capture (camera.csv t) to arrival

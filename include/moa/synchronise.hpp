@@ -19,6 +19,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -41,18 +42,23 @@ enum class RowError {
   kTimeBackwards,    ///< t earlier than the previous row's
   kUnknownSensor,    ///< index outside the array
   kCountsNotFinite,
+  kTimeJump,  ///< t later than the previous row's by more than max_gap
 };
 const char* describe(RowError error);
 
 /// The checks every consumer of rows makes: a finite time not before t0 nor
-/// before the previous row's (`last_row_t`), a sensor index below n_sensors,
-/// finite counts.
-std::optional<RowError> check_row(const SensorRow& row, int n_sensors, double t0,
-                                  double last_row_t);
+/// before the previous row's (`last_row_t`) nor more than `max_gap` (s)
+/// after it, a sensor index below n_sensors, finite counts.
+std::optional<RowError> check_row(const SensorRow& row, int n_sensors, double t0, double last_row_t,
+                                  double max_gap = std::numeric_limits<double>::infinity());
 
 struct SynchroniserOptions {
   double period = 0.01;            ///< s, epoch length (100 Hz)
   double max_row_interval = 0.05;  ///< s, longest interval one row can cover
+  /// s, longest silence of all sensors accepted. A gap is no motion and is
+  /// emitted epoch by epoch, so a log glued from recordings made days apart
+  /// would emit (and a writer write) millions of still epochs: refused.
+  double max_gap = 3600.0;
 };
 
 class Synchroniser {
@@ -65,7 +71,7 @@ class Synchroniser {
   /// invalid (nothing is changed then).
   template <class Sink>
   std::optional<RowError> push(const SensorRow& row, Sink&& sink) {
-    if (auto error = check_row(row, n_, t0_, last_row_t_)) return error;
+    if (auto error = check_row(row, n_, t0_, last_row_t_, options_.max_gap)) return error;
     // Epochs that end before this row's interval can start are final now;
     // emitting them first keeps the pending span within the ring.
     emit_until(final_time(row.t), sink);
