@@ -120,6 +120,21 @@ TEST(Cli, SilenceLongerThanMaxGapIsAnErrorAndWritesNothing) {
   fs::remove_all(dir);
 }
 
+TEST(Cli, EpochRateAndRowIntervalAreBounded) {
+  // Epochs are written one per period and the synchroniser keeps a slot per
+  // period of the longest row interval: absurd values would write or
+  // allocate without bound, so they are refused up front, naming the option.
+  const std::string common = "odometry --config " MOA_SOURCE_DIR
+                             "/examples/logs/mixed-motion/robot.yaml "
+                             "--log " MOA_SOURCE_DIR "/examples/logs/mixed-motion --out never.csv";
+  for (const std::string bad : {"--rate 1e9", "--rate 0", "--max-row-interval 1e9"}) {
+    const auto r = test::run_moa(common + " " + bad);
+    EXPECT_NE(r.exit_code, 0) << bad;
+    EXPECT_THAT(r.err, HasSubstr(bad.substr(0, bad.find(' ')))) << bad;
+    EXPECT_FALSE(fs::exists("never.csv"));
+  }
+}
+
 TEST(Cli, EveryEstimatorTracksNoiseFreeLog) {
   // On fault-free data all three estimators use every sensor and agree with truth.
   const auto dir = test::scratch_dir("estimators");

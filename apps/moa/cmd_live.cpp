@@ -345,11 +345,11 @@ void add_live(CLI::App& app, Action& action) {
       ->check(CLI::IsMember({"ls", "sekimori", "consensus"}))
       ->capture_default_str();
   cmd->add_option("--rate", args->pipeline.rate, "Epoch rate of the synchroniser, Hz")
-      ->check(CLI::PositiveNumber)
+      ->check(CLI::Range(0.1, 10000.0))
       ->capture_default_str();
   cmd->add_option("--max-row-interval", args->pipeline.max_row_interval,
                   "Longest interval one row may cover, s")
-      ->check(CLI::PositiveNumber)
+      ->check(CLI::Range(1e-4, 10.0))
       ->capture_default_str();
   cmd->add_option("--initial-pose", args->initial_pose,
                   "Initial pose X,Y,THETA in the world frame (m, m, rad)")

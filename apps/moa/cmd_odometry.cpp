@@ -127,12 +127,12 @@ void add_odometry(CLI::App& app, Action& action) {
   cmd->add_option("--out", args->out, "Output odometry.csv (written whole or not at all)")
       ->required();
   cmd->add_option("--rate", args->pipeline.rate, "Epoch rate of the synchroniser, Hz")
-      ->check(CLI::PositiveNumber)
+      ->check(CLI::Range(0.1, 10000.0))
       ->capture_default_str();
   cmd->add_option("--max-row-interval", args->pipeline.max_row_interval,
                   "Longest interval one mice.csv row may cover, s (a sensor silent for longer "
                   "was still before its row)")
-      ->check(CLI::PositiveNumber)
+      ->check(CLI::Range(1e-4, 10.0))
       ->capture_default_str();
   cmd->add_option("--max-gap", args->pipeline.max_gap,
                   "Longest time all sensors may stay silent, s (a gap is no motion, written "
