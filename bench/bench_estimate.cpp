@@ -10,9 +10,9 @@
 #include <vector>
 
 #include "baselines.hpp"
-#include "moa/consensus.hpp"
-#include "moa/estimate.hpp"
-#include "moa/sekimori.hpp"
+#include "moa/core/consensus.hpp"
+#include "moa/core/estimate.hpp"
+#include "moa/core/sekimori.hpp"
 
 namespace {
 

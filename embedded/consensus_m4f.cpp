@@ -13,10 +13,11 @@
 #include <type_traits>
 #include <variant>
 
-#include "moa/array.hpp"
-#include "moa/consensus.hpp"
-#include "moa/estimate.hpp"
-#include "moa/sensor.hpp"
+#include "moa/core/dead_reckoner.hpp"
+#include "moa/core/array.hpp"
+#include "moa/core/consensus.hpp"
+#include "moa/core/estimate.hpp"
+#include "moa/core/sensor.hpp"
 
 namespace {
 

@@ -5,10 +5,10 @@
 #include <variant>
 #include <vector>
 
-#include "moa/array.hpp"
-#include "moa/consensus.hpp"
-#include "moa/estimate.hpp"
-#include "moa/sekimori.hpp"
+#include "moa/core/array.hpp"
+#include "moa/core/consensus.hpp"
+#include "moa/core/estimate.hpp"
+#include "moa/core/sekimori.hpp"
 
 namespace moa {
 namespace {

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <random>
 
-#include "moa/calibrate.hpp"
+#include "moa/calibration/calibrate.hpp"
 #include "support/checks.hpp"
 
 namespace moa {

@@ -9,7 +9,7 @@
 #include <numbers>
 #include <random>
 
-#include "moa/calibrate_exact.hpp"
+#include "moa/calibration/exact.hpp"
 #include "support/calibration_data.hpp"
 
 namespace moa {

@@ -5,7 +5,7 @@
 #include <numbers>
 #include <random>
 
-#include "moa/calibrate_guided.hpp"
+#include "moa/calibration/guided.hpp"
 #include "support/calibration_data.hpp"
 
 namespace moa {

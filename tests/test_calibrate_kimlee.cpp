@@ -9,7 +9,7 @@
 #include <numbers>
 #include <random>
 
-#include "moa/calibrate_kimlee.hpp"
+#include "moa/calibration/kimlee.hpp"
 #include "support/calibration_data.hpp"
 #include "support/checks.hpp"
 

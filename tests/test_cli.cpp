@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "moa/evaluate.hpp"
+#include "moa/analysis/evaluate.hpp"
 #include "moa/io/log.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"

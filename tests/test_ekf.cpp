@@ -4,7 +4,7 @@
 #include <random>
 #include <vector>
 
-#include "moa/ekf.hpp"
+#include "moa/core/ekf.hpp"
 #include "support/checks.hpp"
 
 namespace moa {

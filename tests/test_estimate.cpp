@@ -5,7 +5,8 @@
 #include <numbers>
 #include <random>
 
-#include "moa/estimate.hpp"
+#include "moa/core/dead_reckoner.hpp"
+#include "moa/core/estimate.hpp"
 #include "support/checks.hpp"
 
 namespace moa {

@@ -4,7 +4,7 @@
 #include <numbers>
 #include <vector>
 
-#include "moa/evaluate.hpp"
+#include "moa/analysis/evaluate.hpp"
 
 namespace moa {
 namespace {

@@ -7,7 +7,7 @@
 #include <fstream>
 #include <random>
 
-#include "moa/evaluate.hpp"
+#include "moa/analysis/evaluate.hpp"
 #include "moa/io/config.hpp"
 #include "moa/io/log.hpp"
 #include "support/run.hpp"

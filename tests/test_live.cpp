@@ -21,7 +21,7 @@
 
 #include "moa/io/config.hpp"
 #include "moa/io/serial_protocol.hpp"
-#include "moa/se2.hpp"
+#include "moa/core/se2.hpp"
 #include "support/pty.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"

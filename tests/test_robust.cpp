@@ -7,9 +7,9 @@
 #include <numbers>
 #include <random>
 
-#include "moa/chi2.hpp"
-#include "moa/consensus.hpp"
-#include "moa/sekimori.hpp"
+#include "moa/core/chi2.hpp"
+#include "moa/core/consensus.hpp"
+#include "moa/core/sekimori.hpp"
 
 namespace moa {
 namespace {

@@ -6,7 +6,7 @@
 #include <numbers>
 #include <random>
 
-#include "moa/se2.hpp"
+#include "moa/core/se2.hpp"
 #include "support/checks.hpp"
 
 namespace moa {

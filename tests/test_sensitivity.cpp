@@ -2,7 +2,7 @@
 
 #include <random>
 
-#include "moa/sensitivity.hpp"
+#include "moa/analysis/sensitivity.hpp"
 #include "support/checks.hpp"
 
 namespace moa {

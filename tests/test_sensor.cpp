@@ -4,8 +4,8 @@
 #include <numbers>
 #include <random>
 
-#include "moa/array.hpp"
-#include "moa/sensor.hpp"
+#include "moa/core/array.hpp"
+#include "moa/core/sensor.hpp"
 #include "support/checks.hpp"
 
 namespace moa {

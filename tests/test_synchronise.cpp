@@ -3,7 +3,7 @@
 #include <random>
 #include <vector>
 
-#include "moa/synchronise.hpp"
+#include "moa/core/synchronise.hpp"
 
 namespace moa {
 namespace {

@@ -5,8 +5,8 @@
 
 #include <Eigen/Core>
 
-#include "moa/array.hpp"
-#include "moa/se2.hpp"
+#include "moa/core/array.hpp"
+#include "moa/core/se2.hpp"
 
 namespace moa::baseline {
 

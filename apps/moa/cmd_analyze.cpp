@@ -14,7 +14,7 @@
 #include "commands.hpp"
 #include "moa/io/config.hpp"
 #include "moa/io/error.hpp"
-#include "moa/sensitivity.hpp"
+#include "moa/analysis/sensitivity.hpp"
 
 namespace moa::cli {
 namespace {

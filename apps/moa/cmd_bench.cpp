@@ -15,9 +15,9 @@
 
 #include "baselines.hpp"
 #include "commands.hpp"
-#include "moa/consensus.hpp"
-#include "moa/estimate.hpp"
-#include "moa/sekimori.hpp"
+#include "moa/core/consensus.hpp"
+#include "moa/core/estimate.hpp"
+#include "moa/core/sekimori.hpp"
 
 namespace moa::cli {
 namespace {

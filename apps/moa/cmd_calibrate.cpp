@@ -24,9 +24,9 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "moa/calibrate_exact.hpp"
-#include "moa/calibrate_guided.hpp"
-#include "moa/calibrate_kimlee.hpp"
+#include "moa/calibration/exact.hpp"
+#include "moa/calibration/guided.hpp"
+#include "moa/calibration/kimlee.hpp"
 #include "moa/io/config.hpp"
 #include "moa/io/error.hpp"
 #include "moa/io/log.hpp"

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "moa/evaluate.hpp"
+#include "moa/analysis/evaluate.hpp"
 #include "moa/io/error.hpp"
 #include "moa/io/log.hpp"
 

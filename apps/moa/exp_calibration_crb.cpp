@@ -26,7 +26,7 @@
 #include <vector>
 
 #include "experiments.hpp"
-#include "moa/calibrate_exact.hpp"
+#include "moa/calibration/exact.hpp"
 #include "moa/io/error.hpp"
 
 namespace moa::cli {

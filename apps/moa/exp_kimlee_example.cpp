@@ -22,9 +22,9 @@
 #include <vector>
 
 #include "experiments.hpp"
-#include "moa/calibrate_exact.hpp"
-#include "moa/calibrate_kimlee.hpp"
-#include "moa/estimate.hpp"
+#include "moa/calibration/exact.hpp"
+#include "moa/calibration/kimlee.hpp"
+#include "moa/core/estimate.hpp"
 #include "moa/io/error.hpp"
 
 namespace moa::cli {

@@ -9,13 +9,14 @@
 #include <string>
 #include <vector>
 
-#include "moa/array.hpp"
-#include "moa/consensus.hpp"
+#include "moa/core/array.hpp"
+#include "moa/core/consensus.hpp"
 #include "moa/io/config.hpp"
 #include "moa/io/log.hpp"
-#include "moa/sekimori.hpp"
-#include "moa/select.hpp"
-#include "moa/synchronise.hpp"
+#include "moa/core/sekimori.hpp"
+#include "moa/core/fallback.hpp"
+#include "moa/core/noise_model.hpp"
+#include "moa/core/synchronise.hpp"
 
 namespace moa::cli {
 

@@ -6,13 +6,14 @@
 #include <optional>
 #include <vector>
 
-#include "moa/consensus.hpp"
-#include "moa/ekf.hpp"
-#include "moa/estimate.hpp"
+#include "moa/core/dead_reckoner.hpp"
+#include "moa/core/consensus.hpp"
+#include "moa/core/ekf.hpp"
+#include "moa/core/estimate.hpp"
 #include "moa/io/error.hpp"
-#include "moa/sekimori.hpp"
-#include "moa/synchronise.hpp"
-#include "moa/wheels.hpp"
+#include "moa/core/sekimori.hpp"
+#include "moa/core/synchronise.hpp"
+#include "moa/core/wheels.hpp"
 
 namespace moa::cli {
 namespace {

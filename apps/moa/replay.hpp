@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "moa/evaluate.hpp"
+#include "moa/analysis/evaluate.hpp"
 #include "moa/io/config.hpp"
 #include "moa/sim/simulate.hpp"
 

@@ -7,7 +7,8 @@
 #include <numbers>
 #include <variant>
 
-#include "moa/estimate.hpp"
+#include "moa/core/dead_reckoner.hpp"
+#include "moa/core/estimate.hpp"
 
 int main() {
   moa::SensorMount adns;  // ADNS-3080 at 1600 cpi

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "moa/array.hpp"
+#include "moa/core/array.hpp"
 
 namespace moa::sim {
 

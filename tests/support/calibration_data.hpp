@@ -7,7 +7,7 @@
 #include <random>
 #include <vector>
 
-#include "moa/calibrate.hpp"
+#include "moa/calibration/calibrate.hpp"
 #include "support/synth.hpp"
 
 namespace moa::test {

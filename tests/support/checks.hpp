@@ -4,7 +4,7 @@
 #include <Eigen/Core>
 #include <random>
 
-#include "moa/sensor.hpp"
+#include "moa/core/sensor.hpp"
 
 namespace moa::test {
 

@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
-#include "moa/array.hpp"
-#include "moa/evaluate.hpp"
-#include "moa/se2.hpp"
+#include "moa/core/array.hpp"
+#include "moa/analysis/evaluate.hpp"
+#include "moa/core/se2.hpp"
 
 namespace moa::test {
 

@@ -22,7 +22,7 @@
 #include <string_view>
 #include <vector>
 
-#include "moa/array.hpp"
+#include "moa/core/array.hpp"
 
 namespace moa::io {
 

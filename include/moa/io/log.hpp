@@ -16,8 +16,8 @@
 #include <vector>
 
 #include "moa/io/config.hpp"
-#include "moa/se2.hpp"
-#include "moa/synchronise.hpp"
+#include "moa/core/se2.hpp"
+#include "moa/core/synchronise.hpp"
 
 namespace moa::io {
 

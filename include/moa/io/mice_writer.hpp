@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "moa/synchronise.hpp"
+#include "moa/core/synchronise.hpp"
 
 namespace moa::io {
 

@@ -12,7 +12,7 @@
 
 #include <Eigen/Core>
 
-#include "moa/se2.hpp"
+#include "moa/core/se2.hpp"
 #include "moa/sim/random.hpp"
 
 namespace moa::sim {

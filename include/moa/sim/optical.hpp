@@ -39,7 +39,7 @@
 #include <string>
 #include <vector>
 
-#include "moa/sensor.hpp"
+#include "moa/core/sensor.hpp"
 #include "moa/sim/random.hpp"
 
 namespace moa::sim {

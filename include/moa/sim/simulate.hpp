@@ -17,7 +17,7 @@
 #include <functional>
 #include <vector>
 
-#include "moa/se2.hpp"
+#include "moa/core/se2.hpp"
 #include "moa/sim/camera.hpp"
 #include "moa/sim/optical.hpp"
 #include "moa/sim/scenario.hpp"

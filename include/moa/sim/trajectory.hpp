@@ -13,7 +13,7 @@
 #include <variant>
 #include <vector>
 
-#include "moa/se2.hpp"
+#include "moa/core/se2.hpp"
 
 namespace moa::sim {
 

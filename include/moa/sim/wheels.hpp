@@ -27,7 +27,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "moa/se2.hpp"
+#include "moa/core/se2.hpp"
 #include "moa/sim/random.hpp"
 
 namespace moa::sim {

@@ -1,0 +1,126 @@
+// An extended Kalman filter on the planar pose (x, y, theta), world frame:
+// dead reckoning from the estimator's twists, corrected by absolute fixes
+// (Sekimori & Miyazaki Section 4.3: a ceiling camera that gives position).
+//
+// Prediction over dt with twist xi = (vx, vy, omega) and its covariance Q:
+//   pose' = pose * exp(xi dt)                         (exact SE(2) step)
+//   t'    = t + R(theta) V(phi) v dt,  theta' = theta + phi,  phi = omega dt
+//   F = d pose'/d pose = [[I, R(theta) J d], [0, 1]],  d = V(phi) v dt
+//   G = d pose'/d xi   = [[R(theta) V(phi) dt, R(theta) V'(phi) v dt^2], [0, 0, dt]]
+//   P' = F P F^T + G (Q + Q_floor) G^T
+// Q_floor is a process-noise floor for what the twist covariance does not
+// hold (resolution errors that are systematic over a run), white in time:
+// Q_floor(dt) = diag(floor^2) (0.01 s / dt), so that splitting a step in
+// two leaves the pose covariance of the whole step unchanged.
+//
+// Update with a fix z (position, optionally heading), noise R:
+//   1. innovation y = z - h(pose), heading component wrapped to (-pi, pi]
+//   2. S = H P H^T + R
+//   3. gate: reject when y^T S^-1 y > gate (Mahalanobis, chi-square quantile)
+//   4. K = P H^T S^-1
+//   5. pose += K y
+//   6. P = (I - K H) P (I - K H)^T + K R K^T   (Joseph form: stays symmetric
+//      positive definite despite rounding)
+//
+// Late fixes: the filter keeps the last kHistory prediction steps. A fix
+// captured at t_fix earlier than the newest prediction is applied at its own
+// time: the state is rolled back to the step that contains t_fix, predicted
+// to t_fix, updated, and re-predicted with the stored twists. A fix older
+// than the history is refused (counted), never applied at the wrong time.
+// Recovery: when max_consecutive_rejections fixes in a row fail the gate,
+// the dead reckoning has left the camera behind (a systematic drift the
+// process noise did not hold); P gains diag(y y^T) and the fix is applied.
+// Fixed-size matrices only: no allocation per step.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstddef>
+#include <optional>
+
+#include "moa/core/ring.hpp"
+#include "moa/core/se2.hpp"
+
+namespace moa {
+
+/// d pose' / d pose (3x3) of integrate_exact(pose, twist, dt).
+Eigen::Matrix3d exact_step_pose_jacobian(const Pose2& pose, const Twist2& twist, double dt);
+/// d pose' / d twist (3x3) of integrate_exact(pose, twist, dt).
+Eigen::Matrix3d exact_step_twist_jacobian(const Pose2& pose, const Twist2& twist, double dt);
+
+struct EkfOptions {
+  /// Process-noise floor added to every twist covariance: sd of vx, vy
+  /// (m/s) and omega (rad/s) of a twist averaged over 10 ms; white, so over
+  /// a step of dt its variance is floor^2 * (0.01 s / dt).
+  Eigen::Vector3d twist_noise_floor{0.05, 0.05, 0.1};
+  /// Further twist noise in proportion to the twist itself (sd = relative *
+  /// |v| or |omega| over 10 ms, white like the floor): resolution and
+  /// mounting errors grow with speed.
+  double twist_noise_relative = 0.05;
+  /// After this many fixes in a row fail the gate the filter is taken to be
+  /// lost, not the camera: the next fix is applied after the position and
+  /// heading covariance are widened by its innovation.
+  int max_consecutive_rejections = 5;
+  /// Mahalanobis gate on the innovation: chi-square 2 dof at 1 - 1e-3.
+  double gate_position = 13.815510557964274;
+  /// With heading: chi-square 3 dof at 1 - 1e-3.
+  double gate_pose = 16.26623619623813;
+};
+
+enum class FixResult {
+  kApplied,
+  kRejected,  ///< gated out as an outlier
+  kTooOld,    ///< older than the kept history
+  kFuture,    ///< later than the newest prediction: predict first
+  kInvalid,   ///< non-finite values or a covariance that is not positive
+};
+const char* describe(FixResult result);
+
+class PoseEkf {
+ public:
+  /// Prediction steps kept for late fixes (2.56 s at 100 Hz, 0.256 s at 1 kHz).
+  static constexpr std::size_t kHistory = 256;
+
+  PoseEkf(double t0, const Pose2& initial, const Eigen::Matrix3d& covariance,
+          EkfOptions options = {});
+
+  /// Predicts over (t - dt, t] with the twist and its covariance.
+  void predict(double t, const Twist2& twist, const Eigen::Matrix3d& twist_covariance, double dt);
+
+  /// A position fix captured at t (world frame, m) with covariance r (m^2).
+  FixResult update_position(double t, const Eigen::Vector2d& z, const Eigen::Matrix2d& r);
+  /// A position and heading fix (heading rad; r 3x3).
+  FixResult update_pose(double t, const Eigen::Vector3d& z, const Eigen::Matrix3d& r);
+
+  const Pose2& pose() const { return pose_; }
+  const Eigen::Matrix3d& covariance() const { return cov_; }
+  double time() const { return t_; }
+  /// Squared Mahalanobis distance of the last fix's innovation.
+  double last_distance() const { return last_distance_; }
+
+ private:
+  struct Step {
+    double t_begin, t_end;
+    Twist2 twist;
+    Eigen::Matrix3d q;  ///< twist covariance incl. the floor
+    Pose2 pose_before;  ///< state at t_begin
+    Eigen::Matrix3d cov_before;
+  };
+  void propagate(const Twist2& twist, const Eigen::Matrix3d& q, double dt);
+  template <int M>
+  FixResult update(double t, const Eigen::Matrix<double, M, 1>& z,
+                   const Eigen::Matrix<double, M, M>& r, double gate);
+  template <int M>
+  FixResult correct(const Eigen::Matrix<double, M, 1>& z, const Eigen::Matrix<double, M, M>& r,
+                    double gate);
+
+  EkfOptions options_;
+  double t_;
+  Pose2 pose_;
+  Eigen::Matrix3d cov_;
+  FixedRing<Step, kHistory> history_;
+  double last_distance_ = 0.0;
+  int consecutive_rejections_ = 0;
+};
+
+}  // namespace moa

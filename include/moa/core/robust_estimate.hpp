@@ -1,0 +1,47 @@
+// The output of a robust estimator for one sample: the twist with its
+// covariance, where it came from, and per sensor whether it was used and, if
+// not, why; the noise-inflation flags of each sensor.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "moa/core/array.hpp"
+#include "moa/core/estimate.hpp"
+
+namespace moa {
+
+/// Where a sample's twist came from.
+enum class Source : std::uint8_t {
+  kMice,    ///< a set of mouse sensors
+  kWheels,  ///< wheel odometry (too few sensors could be trusted)
+  kHold,    ///< the last good twist, covariance grown (no sensor, no wheels)
+};
+const char* describe(Source source);
+
+/// Why a sensor was not used in a sample.
+enum class Exclusion : std::uint8_t {
+  kNone,          ///< used
+  kLift,          ///< the sensor reported lift (flags bit 1)
+  kInconsistent,  ///< not in the largest subset consistent with one rigid twist
+  kUnreliable,    ///< Sekimori & Miyazaki eq. (7): reliability r_i below r_th
+  kFallback,      ///< no set of two or more sensors could be trusted
+  kUnselected,    ///< not among the sensors the estimator was given (--sensors, wheels)
+  kFaulty,        ///< oracle: the simulator reports a fault in the epoch
+};
+const char* describe(Exclusion exclusion);
+
+/// Conditions that inflated a sensor's noise in a sample (bit set).
+enum NoiseFlag : std::uint8_t {
+  kNoiseOverSpeed = 1u << 0,  ///< predicted speed near or over the rated max_speed
+  kNoiseLowSqual = 1u << 1,   ///< SQUAL below the threshold
+  kNoiseOverflow = 1u << 2,   ///< counter overflow reported
+};
+struct RobustEstimate {
+  TwistEstimate estimate;  ///< twist, covariance, used sensors
+  Source source = Source::kMice;
+  std::array<Exclusion, kMaxSensors> excluded{};
+  std::array<std::uint8_t, kMaxSensors> noise_flags{};
+};
+
+}  // namespace moa

@@ -1,0 +1,106 @@
+// One optical mouse sensor: where it sits, how it is turned, how it counts.
+//
+// The measurement model of spec/config.md, used by every part of moa. For a
+// robot twist (v, omega) in the robot frame and J = [[0,-1],[1,0]]:
+//   u_i = v + omega J p_i                 velocity of the sensor point (robot frame)
+//   w_i = R(yaw_i)^T u_i                  the same in the sensor frame
+//   w_i.y = -w_i.y   if mirrored_i        (sensor y axis clockwise from x)
+//   counts_i = k_i diag(scale_i) w_i dt,  k_i = cpi_i / 0.0254  counts per metre
+// Written as one linear map, counts_i / dt = G_i u_i = G_i A_i (v, omega) with
+//   G_i = k_i diag(scale_i) F_i R(yaw_i)^T,  F_i = diag(1, mirrored ? -1 : 1),
+//   A_i = [I | J p_i]  (Kim & Lee eq. (6), Sekimori & Miyazaki eq. (3) rows).
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+
+#include "moa/core/se2.hpp"
+
+namespace moa {
+
+inline constexpr double kMetresPerInch = 0.0254;
+
+struct SensorMount {
+  Eigen::Vector2d position{0.0, 0.0};  ///< m, sensor centre in the robot frame
+  double yaw = 0.0;                    ///< rad, sensor x axis in the robot frame
+  double cpi = 800.0;                  ///< nominal counts per inch
+  Eigen::Vector2d scale{1.0, 1.0};     ///< per-axis correction of cpi
+  bool mirrored = false;               ///< sensor y axis clockwise from x
+  std::optional<double> max_speed;     ///< m/s, rated tracking speed
+  std::optional<double> noise;         ///< m/s, std. dev. of each velocity axis
+
+  /// k = cpi / 0.0254: counts per metre before the per-axis scale.
+  double counts_per_metre() const { return cpi / kMetresPerInch; }
+
+  /// G_i: maps the sensor point's robot-frame velocity (m/s) to counts/s.
+  Eigen::Matrix2d counts_from_robot_velocity() const;
+  /// G_i^-1: maps counts/s to the sensor point's robot-frame velocity (m/s).
+  Eigen::Matrix2d robot_velocity_from_counts() const;
+
+  /// A_i = [I | J p_i] (2x3): robot twist to the sensor point's velocity,
+  /// robot frame. Kim & Lee eq. (6), two rows per mouse.
+  Eigen::Matrix<double, 2, 3> point_jacobian() const;
+
+  /// H_i = G_i A_i (2x3): d(counts_i / dt) / d(vx, vy, omega).
+  Eigen::Matrix<double, 2, 3> twist_jacobian() const {
+    return counts_from_robot_velocity() * point_jacobian();
+  }
+
+  /// Counts (real valued, before quantisation) for a constant twist over dt.
+  Eigen::Vector2d counts(const Twist2& twist, double dt) const {
+    return twist_jacobian() * twist.vector() * dt;
+  }
+
+  /// d(counts_i / dt) / d(px, py, yaw, scale_x, scale_y) at a given twist (2x5):
+  /// the Jacobian with respect to the mounting parameters, as a calibration
+  /// needs it.
+  Eigen::Matrix<double, 2, 5> parameter_jacobian(const Twist2& twist) const;
+};
+
+/// A sensor's rated figures (datasheets, as quoted in reference/papers.md).
+struct SensorPreset {
+  const char* name;
+  double cpi;         ///< counts per inch (the default setting)
+  double max_speed;   ///< m/s
+  double frame_rate;  ///< frames (packets) per second
+};
+
+/// Agilent HDNS-2051 (Sekimori & Miyazaki): 800 cpi, 14 in/s, 2300 Hz.
+inline constexpr SensorPreset kHdns2051{"HDNS-2051", 800.0, 14.0 * kMetresPerInch, 2300.0};
+/// Avago ADNS-3080 (Kim & Lee Table I) at their setting: 1600 cpi (400 also
+/// selectable), 40 in/s at 6400 fps (the sensor allows up to 6469 fps).
+inline constexpr SensorPreset kAdns3080{"ADNS-3080", 1600.0, 40.0 * kMetresPerInch, 6400.0};
+inline constexpr double kAdns3080LowCpi = 400.0;
+inline constexpr double kAdns3080MaxFrameRate = 6469.0;
+
+/// Kim & Lee eq. (50): the velocity (m/s) along one sensor axis from the sum
+/// of K packets' counts, each packet one frame of 1/fps s:
+///   v = (sum CNT_j / CPI) / (K / FPS)  in/s,  times 0.0254 for m/s.
+inline double velocity_from_counts(double count_sum, double cpi, int packets, double fps) {
+  return count_sum / cpi / (static_cast<double>(packets) / fps) * kMetresPerInch;
+}
+
+/// The acquisition microcontroller of Kim & Lee Section V: accumulates the
+/// counts of every packet and emits their sum once every K packets.
+class Downsampler {
+ public:
+  explicit Downsampler(int packets_per_output) : k_(packets_per_output) {}
+
+  /// Adds one packet; returns the accumulated (dx, dy) on every K-th packet.
+  std::optional<Eigen::Vector2i> push(int dx, int dy) {
+    sum_ += Eigen::Vector2i(dx, dy);
+    if (++count_ < k_) return std::nullopt;
+    const Eigen::Vector2i out = sum_;
+    sum_.setZero();
+    count_ = 0;
+    return out;
+  }
+  int packets_per_output() const { return k_; }
+
+ private:
+  int k_;
+  int count_ = 0;
+  Eigen::Vector2i sum_{0, 0};
+};
+
+}  // namespace moa

@@ -1,0 +1,145 @@
+// From per-sensor rows at arbitrary times to array samples at common epochs.
+//
+// Epoch k covers (t0 + k P, t0 + (k+1) P], P the period (default 10 ms).
+// A row of sensor i at time t carries the counts accumulated over its own
+// interval (a, t], a = max(previous row of i (or t0), t - max_row_interval):
+// the counts are spread over the epochs in proportion to overlap, so rows
+// already on the epoch grid map onto exactly one epoch each and are used as
+// they are. A row with an empty interval (the first row at t0, or a repeat
+// of the same time) goes whole into the epoch that contains t. No rows means
+// no motion: epochs nobody reported in are emitted with zero counts.
+//
+// Why max_row_interval: a sensor that reports only while moving (a USB
+// mouse) has rows far apart after a pause; its first row then covers the
+// last report period, not the whole pause.
+//
+// Streaming: an epoch is final once no later row can overlap it, i.e. its
+// end is <= max(t_row - max_row_interval, min_i last_t_i). Pending epochs
+// live in a fixed ring of kMaxPendingEpochs (no heap): max_row_interval
+// may span at most kMaxPendingEpochs - 3 periods (SynchroniserOptions::
+// validate says so).
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <optional>
+
+#include "moa/core/array.hpp"
+#include "moa/core/ring.hpp"
+
+namespace moa {
+
+/// One sensor's report: counts in its own frame over the interval ending at t.
+struct SensorRow {
+  double t = 0.0;  ///< s
+  int sensor = 0;  ///< index in the SensorArray
+  Eigen::Vector2d counts{0.0, 0.0};
+  std::optional<std::uint8_t> squal;
+  std::uint8_t flags = 0;
+  std::uint8_t faults = 0;  ///< simulated fault bits (faults.csv), for the oracle
+};
+
+enum class RowError {
+  kTimeNotFinite,
+  kTimeBeforeStart,  ///< t < t0
+  kTimeBackwards,    ///< t earlier than the previous row's
+  kUnknownSensor,    ///< index outside the array
+  kCountsNotFinite,
+  kTimeJump,  ///< t later than the previous row's by more than max_gap
+};
+const char* describe(RowError error);
+
+/// The checks every consumer of rows makes: a finite time not before t0 nor
+/// before the previous row's (`last_row_t`) nor more than `max_gap` (s)
+/// after it, a sensor index below n_sensors, finite counts.
+std::optional<RowError> check_row(const SensorRow& row, int n_sensors, double t0, double last_row_t,
+                                  double max_gap = std::numeric_limits<double>::infinity());
+
+/// Epochs that can be pending at once (each an ArraySample, ~300 bytes).
+inline constexpr std::size_t kMaxPendingEpochs = 64;
+
+struct SynchroniserOptions {
+  double period = 0.01;            ///< s, epoch length (100 Hz)
+  double max_row_interval = 0.05;  ///< s, longest interval one row can cover
+  /// s, longest silence of all sensors accepted. A gap is no motion and is
+  /// emitted epoch by epoch, so a log glued from recordings made days apart
+  /// would emit (and a writer write) millions of still epochs: refused.
+  double max_gap = 3600.0;
+
+  /// Empty when usable, else what is wrong, naming the field: period and
+  /// max_row_interval positive and finite, max_row_interval / period at most
+  /// kMaxPendingEpochs - 3, max_gap positive.
+  const char* validate() const;
+};
+
+class Synchroniser {
+ public:
+  /// n sensors (at most kMaxSensors), first epoch starting at t0 (the log's
+  /// first time); options.validate() must have passed.
+  Synchroniser(int n_sensors, double t0, SynchroniserOptions options = {});
+
+  /// Adds a row and calls sink(const ArraySample&) for every epoch that
+  /// became final, in time order. Returns the error instead when the row is
+  /// invalid (nothing is changed then).
+  template <class Sink>
+  std::optional<RowError> push(const SensorRow& row, Sink&& sink) {
+    if (auto error = check_row(row, n_, t0_, last_row_t_, options_.max_gap)) return error;
+    // Epochs that end before this row's interval can start are final now;
+    // emitting them first keeps the pending span within the ring.
+    emit_until(final_time(row.t), sink);
+    add(row);
+    emit_until(final_time(row.t), sink);
+    return std::nullopt;
+  }
+
+  /// Emits every remaining epoch up to t_end (the last epoch is cut at
+  /// t_end). Call once at the end of the stream.
+  template <class Sink>
+  void finish(double t_end, Sink&& sink) {
+    while (start_of(next_) < t_end) {
+      ArraySample& s = slot(next_);
+      if (end_of(next_) > t_end) {
+        s.dt = t_end - start_of(next_);
+        s.t = t_end;
+      }
+      sink(static_cast<const ArraySample&>(s));
+      pop();
+    }
+  }
+
+  double t0() const { return t0_; }
+  const SynchroniserOptions& options() const { return options_; }
+
+ private:
+  void add(const SensorRow& row);
+  double final_time(double t_row) const;
+  double start_of(std::int64_t k) const { return t0_ + static_cast<double>(k) * options_.period; }
+  double end_of(std::int64_t k) const { return start_of(k + 1); }
+  /// The pending epoch k >= next_, created empty (with those before it) if new.
+  ArraySample& slot(std::int64_t k);
+  /// Epoch next_ was emitted: drop it.
+  void pop() {
+    if (!ring_.empty()) ring_.pop_front();
+    ++next_;
+  }
+  /// Index of the epoch whose interval (start, end] contains t (0 for t0).
+  std::int64_t epoch_of(double t) const;
+
+  template <class Sink>
+  void emit_until(double t_final, Sink& sink) {
+    while (end_of(next_) <= t_final) {
+      sink(static_cast<const ArraySample&>(slot(next_)));
+      pop();
+    }
+  }
+
+  int n_;
+  double t0_;
+  SynchroniserOptions options_;
+  FixedRing<ArraySample, kMaxPendingEpochs> ring_;  // epochs next_ .. next_ + size - 1
+  std::array<double, kMaxSensors> last_t_{};        // per sensor, end of its previous row
+  std::int64_t next_ = 0;          // first epoch not yet emitted
+  double last_row_t_;
+};
+
+}  // namespace moa

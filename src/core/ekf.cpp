@@ -1,0 +1,169 @@
+#include "moa/core/ekf.hpp"
+
+#include <Eigen/LU>
+#include <cmath>
+
+namespace moa {
+
+const char* describe(FixResult result) {
+  switch (result) {
+    case FixResult::kApplied:
+      return "applied";
+    case FixResult::kRejected:
+      return "rejected by the gate";
+    case FixResult::kTooOld:
+      return "older than the filter's history";
+    case FixResult::kFuture:
+      return "later than the newest prediction";
+    case FixResult::kInvalid:
+      return "not finite or not positive definite";
+  }
+  return "?";
+}
+
+Eigen::Matrix3d exact_step_pose_jacobian(const Pose2& pose, const Twist2& twist, double dt) {
+  const VTerms v = v_terms(twist.omega * dt);
+  const Eigen::Vector2d d = v_matrix(v.s, v.c) * twist.v * dt;
+  Eigen::Matrix3d f = Eigen::Matrix3d::Identity();
+  f.block<2, 1>(0, 2) = rotation(pose.theta) * skew_unit() * d;
+  return f;
+}
+
+Eigen::Matrix3d exact_step_twist_jacobian(const Pose2& pose, const Twist2& twist, double dt) {
+  const VTerms v = v_terms(twist.omega * dt);
+  const Eigen::Matrix2d r = rotation(pose.theta);
+  Eigen::Matrix3d g = Eigen::Matrix3d::Zero();
+  g.block<2, 2>(0, 0) = r * v_matrix(v.s, v.c) * dt;
+  g.block<2, 1>(0, 2) = r * v_matrix(v.ds, v.dc) * twist.v * dt * dt;
+  g(2, 2) = dt;
+  return g;
+}
+
+PoseEkf::PoseEkf(double t0, const Pose2& initial, const Eigen::Matrix3d& covariance,
+                 EkfOptions options)
+    : options_(options), t_(t0), pose_(initial), cov_(covariance) {}
+
+void PoseEkf::propagate(const Twist2& twist, const Eigen::Matrix3d& q, double dt) {
+  const Eigen::Matrix3d f = exact_step_pose_jacobian(pose_, twist, dt);
+  const Eigen::Matrix3d g = exact_step_twist_jacobian(pose_, twist, dt);
+  pose_ = integrate_exact(pose_, twist, dt);
+  cov_ = f * cov_ * f.transpose() + g * q * g.transpose();
+}
+
+void PoseEkf::predict(double t, const Twist2& twist, const Eigen::Matrix3d& twist_covariance,
+                      double dt) {
+  constexpr double kFloorInterval = 0.01;  // s, see EkfOptions::twist_noise_floor
+  const Eigen::Vector3d relative =
+      options_.twist_noise_relative *
+      Eigen::Vector3d(twist.v.norm(), twist.v.norm(), std::abs(twist.omega));
+  const Eigen::Vector3d floor =
+      (options_.twist_noise_floor.cwiseAbs2() + relative.cwiseAbs2()) * (kFloorInterval / dt);
+  Step step{t - dt, t, twist, twist_covariance + Eigen::Matrix3d(floor.asDiagonal()), pose_, cov_};
+  if (history_.full()) history_.pop_front();
+  history_.push_back(step);
+  propagate(step.twist, step.q, dt);
+  t_ = t;
+}
+
+template <int M>
+FixResult PoseEkf::correct(const Eigen::Matrix<double, M, 1>& z,
+                           const Eigen::Matrix<double, M, M>& r, double gate) {
+  using HMatrix = Eigen::Matrix<double, M, 3>;
+  const HMatrix h = HMatrix::Identity();
+  // 1. innovation, heading wrapped
+  Eigen::Matrix<double, M, 1> y = z - h * Eigen::Vector3d(pose_.t.x(), pose_.t.y(), pose_.theta);
+  if constexpr (M == 3) y(2) = wrap_angle(y(2));
+  // 2. innovation covariance
+  const Eigen::Matrix<double, M, M> s = h * cov_ * h.transpose() + r;
+  const Eigen::Matrix<double, M, M> s_inv = s.inverse();
+  // 3. gate (with recovery after too many rejections in a row)
+  last_distance_ = y.dot(s_inv * y);
+  Eigen::Matrix<double, M, M> s_used_inv = s_inv;
+  if (!(last_distance_ <= gate)) {
+    if (++consecutive_rejections_ <= options_.max_consecutive_rejections) {
+      return FixResult::kRejected;
+    }
+    for (int i = 0; i < M; ++i) cov_(i, i) += y(i) * y(i);
+    if constexpr (M == 2) cov_(2, 2) += 0.01;  // heading unknown to this fix: 0.1 rad more
+    s_used_inv = (h * cov_ * h.transpose() + r).inverse();
+  }
+  consecutive_rejections_ = 0;
+  // 4. gain
+  const Eigen::Matrix<double, 3, M> k = cov_ * h.transpose() * s_used_inv;
+  // 5. state
+  const Eigen::Vector3d dx = k * y;
+  pose_.t += dx.head<2>();
+  pose_.theta += dx(2);
+  // 6. Joseph-form covariance
+  const Eigen::Matrix3d a = Eigen::Matrix3d::Identity() - k * h;
+  cov_ = a * cov_ * a.transpose() + k * r * k.transpose();
+  return FixResult::kApplied;
+}
+
+template <int M>
+FixResult PoseEkf::update(double t, const Eigen::Matrix<double, M, 1>& z,
+                          const Eigen::Matrix<double, M, M>& r, double gate) {
+  constexpr double kSameTime = 1e-9;  // s: a fix this close to a step boundary is on it
+  if (!std::isfinite(t) || !z.allFinite() || !r.allFinite() || !(r.determinant() > 0.0)) {
+    return FixResult::kInvalid;
+  }
+  if (t > t_ + kSameTime) return FixResult::kFuture;
+  if (t >= t_ - kSameTime || history_.empty()) {
+    if (history_.empty() && t < t_ - kSameTime) return FixResult::kTooOld;
+    return correct<M>(z, r, gate);
+  }
+  // Late fix: find the step (t_begin, t_end] that contains t.
+  std::size_t k = history_.size();
+  while (k > 0 && !(history_[k - 1].t_begin < t - kSameTime)) --k;
+  if (k == 0) return FixResult::kTooOld;
+  const std::size_t index = k - 1;
+  const Pose2 saved_pose = pose_;
+  const Eigen::Matrix3d saved_cov = cov_;
+  Step& step = history_[index];
+  pose_ = step.pose_before;
+  cov_ = step.cov_before;
+  const double dt = step.t_end - step.t_begin;
+  const double dt1 = t - step.t_begin;
+  const bool split = step.t_end - t > kSameTime;
+  // A twist averaged over part of the step is noisier by dt / dt_part (white
+  // noise), which keeps the pose covariance of the whole step unchanged.
+  propagate(step.twist, split ? Eigen::Matrix3d(step.q * (dt / dt1)) : step.q, dt1);
+  const FixResult result = correct<M>(z, r, gate);
+  if (result != FixResult::kApplied) {
+    pose_ = saved_pose;
+    cov_ = saved_cov;
+    return result;
+  }
+  std::size_t next = index + 1;
+  if (split) {
+    // Replace the step by its two parts; the second starts from the fixed state.
+    Step second{t, step.t_end, step.twist, step.q * (dt / (step.t_end - t)), pose_, cov_};
+    step.t_end = t;
+    step.q *= dt / dt1;
+    if (history_.full()) {  // make room by dropping the oldest step
+      history_.pop_front();
+      --next;
+    }
+    history_.insert(next, second);
+    propagate(second.twist, second.q, second.t_end - second.t_begin);
+    ++next;
+  }
+  // Re-predict the later steps from the corrected state.
+  for (std::size_t j = next; j < history_.size(); ++j) {
+    Step& later = history_[j];
+    later.pose_before = pose_;
+    later.cov_before = cov_;
+    propagate(later.twist, later.q, later.t_end - later.t_begin);
+  }
+  return FixResult::kApplied;
+}
+
+FixResult PoseEkf::update_position(double t, const Eigen::Vector2d& z, const Eigen::Matrix2d& r) {
+  return update<2>(t, z, r, options_.gate_position);
+}
+
+FixResult PoseEkf::update_pose(double t, const Eigen::Vector3d& z, const Eigen::Matrix3d& r) {
+  return update<3>(t, z, r, options_.gate_pose);
+}
+
+}  // namespace moa

@@ -1,0 +1,55 @@
+#include "moa/core/noise_model.hpp"
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+
+namespace moa {
+
+NoiseModel::NoiseModel(const SensorArray& array, NoiseModelOptions options)
+    : n_(array.size()), options_(options) {
+  for (int i = 0; i < n_ && i < kMaxSensors; ++i) {
+    const auto s = static_cast<std::size_t>(i);
+    c_[s] = array[i].robot_velocity_from_counts();
+    quant_[s] = c_[s] * c_[s].transpose() / 6.0;
+    a_[s] = array[i].point_jacobian();
+    noise2_[s] = array[i].noise ? *array[i].noise * *array[i].noise : 0.0;
+    max_speed_[s] = array[i].max_speed ? *array[i].max_speed : 0.0;
+  }
+}
+
+void NoiseModel::measure(const ArraySample& sample, const Twist2& predicted, PointMeasurements& out,
+                         std::array<std::uint8_t, kMaxSensors>& flags) const {
+  out.size = n_;
+  const Eigen::Vector3d x = predicted.vector();
+  const double inv_dt = 1.0 / sample.dt;
+  for (int i = 0; i < n_; ++i) {
+    const auto s = static_cast<std::size_t>(i);
+    out.u[s] = c_[s] * sample.counts[s] * inv_dt;
+    const double predicted_speed = (a_[s] * x).norm();
+    const double speed = std::min(out.u[s].norm(), predicted_speed);
+    const double rel = options_.relative * speed;
+    Eigen::Matrix2d cov = quant_[s] * (inv_dt * inv_dt);
+    cov.diagonal().array() += noise2_[s] + rel * rel;
+    double factor = 1.0;
+    std::uint8_t f = 0;
+    if (max_speed_[s] > 0.0) {
+      const double ratio = predicted_speed / (options_.speed_onset * max_speed_[s]);
+      const double r2 = ratio * ratio, r4 = r2 * r2;
+      factor *= std::min(options_.speed_cap, 1.0 + r4 * r4);
+      if (ratio >= 1.0) f |= kNoiseOverSpeed;
+    }
+    if (sample.squal[s] < options_.min_squal) {
+      factor *= options_.low_squal_factor;
+      f |= kNoiseLowSqual;
+    }
+    if (sample.flags[s] & kFlagOverflow) {
+      factor *= options_.overflow_factor;
+      f |= kNoiseOverflow;
+    }
+    out.info[s] = (factor * cov).inverse();
+    flags[s] = f;
+  }
+}
+
+}  // namespace moa

@@ -1,0 +1,110 @@
+#include "moa/core/sekimori.hpp"
+
+#include <Eigen/QR>
+#include <algorithm>
+#include <cmath>
+
+namespace moa {
+
+std::variant<SekimoriEstimator, GeometryError> SekimoriEstimator::create(const SensorArray& array,
+                                                                         SekimoriOptions options) {
+  const auto check = LsEstimator::create(array, all_sensors(array.size()), 0.01);
+  if (const auto* error = std::get_if<GeometryError>(&check)) return *error;
+  // Every pair must itself determine a twist, or its residual is undefined.
+  for (int i = 0; i < array.size(); ++i) {
+    for (int j = i + 1; j < array.size(); ++j) {
+      const SensorMask pair = (SensorMask{1} << i) | (SensorMask{1} << j);
+      if (std::holds_alternative<GeometryError>(LsEstimator::create(array, pair, 0.01))) {
+        return GeometryError::kRankDeficient;
+      }
+    }
+  }
+  return SekimoriEstimator(array, options);
+}
+
+SekimoriEstimator::SekimoriEstimator(const SensorArray& array, SekimoriOptions options)
+    : n_(array.size()),
+      options_(options),
+      r_th_(options.r_th >= 0 ? options.r_th : std::max(1, array.size() - 2)),
+      solver_(array) {
+  for (int i = 0; i < n_; ++i) {
+    const auto s = static_cast<std::size_t>(i);
+    c_[s] = array[i].robot_velocity_from_counts();
+    quant_[s] = c_[s] * c_[s].transpose() / 6.0;
+  }
+  for (int i = 0; i < n_; ++i) {
+    for (int j = i + 1; j < n_; ++j) {
+      Eigen::Matrix<double, 4, 3> a;
+      a.topRows<2>() = array[i].point_jacobian();
+      a.bottomRows<2>() = array[j].point_jacobian();
+      // The last column of the full Q of A spans the orthogonal complement.
+      const Eigen::HouseholderQR<Eigen::Matrix<double, 4, 3>> qr(a);
+      const Eigen::Matrix4d q = qr.householderQ();
+      normals_[static_cast<std::size_t>(pair_index(i, j))] = q.col(3);
+    }
+  }
+  for (int i = 0; i < n_; ++i) measurements_.info[static_cast<std::size_t>(i)].setIdentity();
+  measurements_.size = n_;
+}
+
+double SekimoriEstimator::pair_residual(int i, int j) const {
+  if (i > j) std::swap(i, j);
+  return residual_[static_cast<std::size_t>(pair_index(i, j))];
+}
+
+std::optional<RobustEstimate> SekimoriEstimator::estimate(const ArraySample& sample,
+                                                          const std::optional<Twist2>& wheels) {
+  if (!(std::isfinite(sample.dt) && sample.dt > 0.0) || sample.size != n_) return std::nullopt;
+  RobustEstimate out;
+  for (int i = 0; i < n_; ++i) {
+    const auto s = static_cast<std::size_t>(i);
+    measurements_.u[s] = c_[s] * sample.counts[s] / sample.dt;
+  }
+  // Eq. (4) and (7): pair residuals on displacements, then votes.
+  std::array<int, kMaxSensors> votes{};
+  for (int i = 0; i < n_; ++i) {
+    for (int j = i + 1; j < n_; ++j) {
+      const auto p = static_cast<std::size_t>(pair_index(i, j));
+      Eigen::Vector4d a;
+      a << measurements_.u[static_cast<std::size_t>(i)],
+          measurements_.u[static_cast<std::size_t>(j)];
+      const double e = normals_[p].dot(a * sample.dt);
+      residual_[p] = e * e;
+      if (residual_[p] <= options_.e_th) {
+        ++votes[static_cast<std::size_t>(i)];
+        ++votes[static_cast<std::size_t>(j)];
+      }
+    }
+  }
+  SensorMask reliable = 0;
+  for (int i = 0; i < n_; ++i) {
+    if (votes[static_cast<std::size_t>(i)] >= r_th_) reliable |= SensorMask{1} << i;
+  }
+  // Eqs. (8)-(9): unweighted least squares over the reliable sensors.
+  const auto fit = solver_.fit(reliable, measurements_);
+  if (fit) {
+    // Report the covariance the quantisation gives for this unweighted fit:
+    // Cov = N^-1 (sum A_i^T S_i A_i) N^-1 with N = sum A_i^T A_i.
+    Eigen::Matrix3d middle = Eigen::Matrix3d::Zero();
+    for (int i = 0; i < n_; ++i) {
+      if (!contains(reliable, i)) continue;
+      const auto& a = solver_.jacobian(i);
+      middle += a.transpose() * quant_[static_cast<std::size_t>(i)] * a / (sample.dt * sample.dt);
+    }
+    out.estimate.twist = fit->twist;
+    out.estimate.covariance = fit->covariance * middle * fit->covariance;
+    out.estimate.used = reliable;
+    out.source = Source::kMice;
+    for (int i = 0; i < n_; ++i) {
+      if (!contains(reliable, i))
+        out.excluded[static_cast<std::size_t>(i)] = Exclusion::kUnreliable;
+    }
+    fallback_.good(fit->twist, out.estimate.covariance, sample.t);
+    return out;
+  }
+  for (int i = 0; i < n_; ++i) out.excluded[static_cast<std::size_t>(i)] = Exclusion::kFallback;
+  fallback_.apply(out, wheels, options_.wheels, options_.hold, sample.t);
+  return out;
+}
+
+}  // namespace moa

@@ -1,0 +1,107 @@
+#include "moa/core/synchronise.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace moa {
+
+const char* describe(RowError error) {
+  switch (error) {
+    case RowError::kTimeNotFinite:
+      return "time is not a finite number";
+    case RowError::kTimeBeforeStart:
+      return "time is before the start of the log";
+    case RowError::kTimeBackwards:
+      return "time goes backwards";
+    case RowError::kUnknownSensor:
+      return "unknown sensor";
+    case RowError::kCountsNotFinite:
+      return "counts are not finite numbers";
+    case RowError::kTimeJump:
+      return "time jumps forward by more than the longest gap allowed (--max-gap): recordings "
+             "made at different times?";
+  }
+  return "invalid row";
+}
+
+const char* SynchroniserOptions::validate() const {
+  if (!(std::isfinite(period) && period > 0.0)) return "period must be positive and finite";
+  if (!(std::isfinite(max_row_interval) && max_row_interval > 0.0))
+    return "max_row_interval must be positive and finite";
+  if (max_row_interval / period > static_cast<double>(kMaxPendingEpochs - 3))
+    return "max_row_interval spans more epochs than the synchroniser holds (61 periods)";
+  if (!(max_gap > 0.0)) return "max_gap must be positive";
+  return "";
+}
+
+Synchroniser::Synchroniser(int n_sensors, double t0, SynchroniserOptions options)
+    : n_(std::min(n_sensors, kMaxSensors)), t0_(t0), options_(options), last_row_t_(t0) {
+  last_t_.fill(t0);
+}
+
+ArraySample& Synchroniser::slot(std::int64_t k) {
+  const auto index = static_cast<std::size_t>(k - next_);
+  while (ring_.size() <= index) {
+    const std::int64_t j = next_ + static_cast<std::int64_t>(ring_.size());
+    ArraySample& s = ring_.push_back();
+    s.t = end_of(j);
+    s.dt = options_.period;
+    s.size = n_;
+    for (int i = 0; i < n_; ++i) {
+      const auto u = static_cast<std::size_t>(i);
+      s.counts[u].setZero();
+      s.squal[u] = 255;
+      s.flags[u] = 0;
+      s.faults[u] = 0;
+    }
+  }
+  return ring_[index];
+}
+
+std::optional<RowError> check_row(const SensorRow& row, int n_sensors, double t0, double last_row_t,
+                                  double max_gap) {
+  if (!std::isfinite(row.t)) return RowError::kTimeNotFinite;
+  if (row.t < t0) return RowError::kTimeBeforeStart;
+  if (row.t < last_row_t) return RowError::kTimeBackwards;
+  if (row.t - last_row_t > max_gap) return RowError::kTimeJump;
+  if (row.sensor < 0 || row.sensor >= n_sensors) return RowError::kUnknownSensor;
+  if (!row.counts.allFinite()) return RowError::kCountsNotFinite;
+  return std::nullopt;
+}
+
+std::int64_t Synchroniser::epoch_of(double t) const {
+  const auto k = static_cast<std::int64_t>(std::ceil((t - t0_) / options_.period)) - 1;
+  return std::max<std::int64_t>(k, 0);
+}
+
+void Synchroniser::add(const SensorRow& row) {
+  const auto i = static_cast<std::size_t>(row.sensor);
+  const double a = std::max(last_t_[i], row.t - options_.max_row_interval);
+  const double b = row.t;
+  last_t_[i] = b;
+  last_row_t_ = b;
+  const auto deposit = [&](std::int64_t k, double fraction) {
+    // Rows are never older than the first pending epoch (see final_time()).
+    ArraySample& s = slot(std::max(k, next_));
+    s.counts[i] += fraction * row.counts;
+    if (row.squal) s.squal[i] = std::min(s.squal[i], *row.squal);
+    s.flags[i] |= row.flags;
+    s.faults[i] |= row.faults;
+  };
+  if (!(b > a)) {
+    deposit(epoch_of(b), 1.0);
+    return;
+  }
+  for (std::int64_t k = epoch_of(a); start_of(k) < b; ++k) {
+    const double overlap = std::min(b, end_of(k)) - std::max(a, start_of(k));
+    if (overlap > 0.0) deposit(k, overlap / (b - a));
+  }
+}
+
+double Synchroniser::final_time(double t_row) const {
+  if (n_ == 0) return t_row;
+  const double oldest = *std::min_element(last_t_.begin(), last_t_.begin() + n_);
+  return std::max(t_row - options_.max_row_interval, oldest);
+}
+
+}  // namespace moa
