@@ -45,6 +45,9 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
                   "consensus: false-rejection rate of the chi-square consistency test, in (0, 0.5)")
       ->check(kFinite & CLI::Range(1e-12, 0.5))
       ->capture_default_str();
+  cmd->add_flag("--no-motion-prior", f.no_motion_prior,
+                "consensus: no motion prior (the robot's limits, config key limits); a minority "
+                "subset is then judged against the wheels with its own covariance added");
   cmd->add_option("--rate", o.rate, "Epoch rate of the synchroniser, Hz (0.1 to 10000)")
       ->check(kFinite & CLI::Range(0.1, 10000.0))
       ->capture_default_str();
@@ -86,6 +89,8 @@ OdometryOptions resolve_odometry_flags(const OdometryFlags& f, const io::RobotCo
   if (!kind) throw io::Error(fmt::format("--estimator: unknown estimator '{}'", f.estimator));
   o.estimator = *kind;
   o.use_wheels = !f.no_wheels;
+  o.consensus.motion_prior = !f.no_motion_prior;
+  if (config.limits) o.consensus.limits = *config.limits;
   if (o.estimator == EstimatorKind::kWheels && f.no_wheels) {
     throw io::Error("--estimator wheels and --no-wheels exclude each other");
   }

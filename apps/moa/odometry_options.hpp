@@ -20,6 +20,7 @@ struct OdometryFlags {
   std::vector<std::string> sensors;  ///< names; empty: all
   std::vector<double> initial_pose;  ///< x, y, theta
   bool no_wheels = false;
+  bool no_motion_prior = false;
   OdometryOptions options;
 };
 

@@ -16,7 +16,11 @@ std::variant<ConsensusEstimator, GeometryError> ConsensusEstimator::create(
 }
 
 ConsensusEstimator::ConsensusEstimator(const SensorArray& array, ConsensusOptions options)
-    : n_(array.size()), options_(options), solver_(array), noise_(array, options.noise) {
+    : n_(array.size()),
+      options_(options),
+      solver_(array),
+      noise_(array, options.noise),
+      prior_(options.limits) {
   for (int dof = 1; dof < 2 * kMaxSensors; ++dof) {
     threshold_[static_cast<std::size_t>(dof)] = chi2_quantile(1.0 - options_.alpha, dof);
   }
@@ -34,32 +38,37 @@ SensorMask next_same_size(SensorMask m) {
 }
 }  // namespace
 
-bool ConsensusEstimator::consider(SensorMask mask, const std::optional<Twist2>& wheels,
-                                  const Eigen::Matrix3d& wheel_cov,
+bool ConsensusEstimator::consider(SensorMask mask, const References& refs,
                                   std::optional<Candidate>& best) const {
   const auto fit = solver_.fit(mask, measurements_);
   if (!fit || fit->chi2 > threshold_[static_cast<std::size_t>(fit->dof)]) return false;
+  const bool minority = 2 * count_sensors(mask) <= n_;
   double cost = fit->chi2;
-  if (wheels) {
-    const Eigen::Vector3d d = fit->twist.vector() - wheels->vector();
-    const double distance = d.dot((fit->covariance + wheel_cov).inverse() * d);
-    if (2 * count_sensors(mask) <= n_ && distance > wheel_threshold_) return false;
-    cost += distance;
+  for (int k = 0; k < refs.size; ++k) {
+    const Reference& ref = refs.r[static_cast<std::size_t>(k)];
+    const Eigen::Vector3d d = fit->twist.vector() - ref.x;
+    const double joint = d.dot((fit->covariance + ref.covariance).inverse() * d);
+    if (minority) {
+      // The reference's covariance alone (the subset's own would let a pair
+      // that under-reads alike through); before the prior: the joint one.
+      const double own = options_.motion_prior ? d.dot(ref.information * d) : joint;
+      if (own > wheel_threshold_) return false;
+    }
+    cost += joint;
   }
   if (!best || cost < best->cost) best = Candidate{*fit, mask, cost};
   return true;
 }
 
 std::optional<ConsensusEstimator::Candidate> ConsensusEstimator::search(
-    SensorMask candidates, const std::optional<Twist2>& wheels,
-    const Eigen::Matrix3d& wheel_cov) const {
+    SensorMask candidates, const References& refs) const {
   std::optional<Candidate> best;
   if (n_ <= kMaxExhaustive) {
     // Largest subsets first; the first size with a consistent subset wins.
     const SensorMask end = SensorMask{1} << n_;
     for (int k = count_sensors(candidates); k >= 2; --k) {
       for (SensorMask m = all_sensors(k); m < end; m = next_same_size(m)) {
-        if ((m & ~candidates) == 0) consider(m, wheels, wheel_cov, best);
+        if ((m & ~candidates) == 0) consider(m, refs, best);
       }
       if (best) return best;
     }
@@ -69,7 +78,7 @@ std::optional<ConsensusEstimator::Candidate> ConsensusEstimator::search(
   // residual until the rest is consistent.
   SensorMask mask = candidates;
   while (count_sensors(mask) >= 2) {
-    if (consider(mask, wheels, wheel_cov, best)) return best;
+    if (consider(mask, refs, best)) return best;
     const auto fit = solver_.fit(mask, measurements_);
     if (!fit) return std::nullopt;
     int worst = -1;
@@ -100,9 +109,18 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
       candidates |= SensorMask{1} << i;
     }
   }
-  const Eigen::Matrix3d wheel_cov =
-      wheels ? options_.wheels.covariance(*wheels) : Eigen::Matrix3d::Zero();
-  const auto best = search(candidates, wheels, wheel_cov);
+  References refs;
+  const auto add = [&](const Twist2& x, const Eigen::Matrix3d& covariance) {
+    Reference& r = refs.r[static_cast<std::size_t>(refs.size++)];
+    r.x = x.vector();
+    r.covariance = covariance;
+    r.information = covariance.inverse();
+  };
+  if (wheels) add(*wheels, options_.wheels.covariance(*wheels));
+  if (options_.motion_prior && prior_.valid()) {
+    add(prior_.twist(), prior_.covariance(sample.t, sample.dt));
+  }
+  const auto best = search(candidates, refs);
   if (best) {
     out.source = Source::kMice;
     out.estimate.twist = best->fit.twist;
@@ -114,12 +132,16 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
       }
     }
     fallback_.good(out.estimate.twist, out.estimate.covariance, sample.t);
+    prior_.trust(out.estimate.twist, out.estimate.covariance, sample.t);
     return out;
   }
   for (int i = 0; i < n_; ++i) {
     if (contains(candidates, i)) out.excluded[static_cast<std::size_t>(i)] = Exclusion::kFallback;
   }
   fallback_.apply(out, wheels, options_.wheels, options_.hold, sample.t);
+  if (out.source == Source::kWheels) {
+    prior_.trust(out.estimate.twist, out.estimate.covariance, sample.t);
+  }
   return out;
 }
 

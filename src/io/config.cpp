@@ -23,7 +23,8 @@ namespace {
 
 constexpr int kConfigVersion = 1;
 
-constexpr std::array<std::string_view, 2> kTopKeys{"version", "sensors"};
+constexpr std::array<std::string_view, 3> kTopKeys{"version", "sensors", "limits"};
+constexpr std::array<std::string_view, 2> kLimitKeys{"accel", "angular_accel"};
 constexpr std::array<std::string_view, 8> kSensorKeys{"name",  "position", "yaw",       "cpi",
                                                       "scale", "mirrored", "max_speed", "noise"};
 constexpr std::array<std::string_view, 4> kRequiredSensorKeys{"name", "position", "yaw", "cpi"};
@@ -228,6 +229,22 @@ std::string yaml_name(const std::string& name) {
   return quoted;
 }
 
+// `limits: {accel: m/s^2, angular_accel: rad/s^2}`, each optional.
+MotionLimits parse_limits(const Context& context, const YAML::Node& node) {
+  if (!node.IsMap()) {
+    context.fail_key("limits", fmt::format("expected a map, found {}", describe_kind(node)));
+  }
+  const Context inner(context.source(), "limits");
+  const auto keys = known_keys(inner, node, kLimitKeys);
+  MotionLimits limits;
+  if (auto it = keys.find("accel"); it != keys.end())
+    limits.accel = to_number(inner, "accel", it->second);
+  if (auto it = keys.find("angular_accel"); it != keys.end())
+    limits.angular_accel = to_number(inner, "angular_accel", it->second);
+  if (const char* e = limits.validate(); *e) context.fail(e);
+  return limits;
+}
+
 }  // namespace
 
 std::optional<int> RobotConfig::index_of(std::string_view name) const {
@@ -295,6 +312,9 @@ RobotConfig parse_config(std::string_view yaml, std::string_view source) {
     config.names.push_back(std::move(name));
   }
   config.array = SensorArray(std::move(mounts));
+  if (const auto limits = keys.find("limits"); limits != keys.end()) {
+    config.limits = parse_limits(context, limits->second);
+  }
   return config;
 }
 
@@ -339,6 +359,11 @@ std::string format_config(const RobotConfig& config) {
     out += fmt::format("    mirrored: {}\n", m.mirrored);
     if (m.max_speed) out += fmt::format("    max_speed: {}\n", *m.max_speed);
     if (m.noise) out += fmt::format("    noise: {}\n", *m.noise);
+  }
+  if (config.limits) {
+    if (const char* e = config.limits->validate(); *e) context.fail(e);
+    out += fmt::format("limits:\n  accel: {}\n  angular_accel: {}\n", config.limits->accel,
+                       config.limits->angular_accel);
   }
   return out;
 }

@@ -39,7 +39,10 @@ LogFiles resolve_log(const fs::path& log) {
 }
 
 std::unique_ptr<Odometry> make_odometry(const RobotConfig& config, const std::string& config_path,
-                                        double t0, const OdometryOptions& options) {
+                                        double t0, const OdometryOptions& given) {
+  // The robot's limits, when its config gives them, for the motion prior.
+  OdometryOptions options = given;
+  if (config.limits) options.consensus.limits = *config.limits;
   if (const char* e = options.validate(); *e) throw Error(fmt::format("invalid option: {}", e));
   const SensorMask beyond = options.sensors & ~all_sensors(config.array.size());
   if (beyond != 0 && options.sensors != ~SensorMask{0}) {

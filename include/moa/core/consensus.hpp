@@ -7,13 +7,24 @@
 //     predicted with the last twist. Sensors that report lift are out.
 //  2. For k = candidates down to 2, every subset of k sensors is fitted
 //     (SubsetSolver) and passes when chi2 <= q(1 - alpha, 2k - 3). When
-//     wheels are present, a subset of at most half the sensors must also
-//     agree with them: (x - x_w)^T (Cov + W)^-1 (x - x_w) <= q(1 - alpha, 3),
-//     since a minority could agree by chance while the majority is lost.
-//     Among the passing subsets of the largest k the smallest chi2 (plus the
-//     wheel distance, when present) wins.
+//     minority (a subset of at most half the sensors) could agree by chance
+//     while the majority is lost, so it needs corroboration by each
+//     reference there is, judged with the reference's covariance alone:
+//       wheels  (x - x_w)^T W^-1 (x - x_w) <= q(1 - alpha, 3),
+//       prior   (x - x_p)^T P^-1 (x - x_p) <= q(1 - alpha, 3),
+//     x_p, P the motion prior (motion_prior.hpp: the last trusted twist, its
+//     covariance grown by the robot's acceleration limits). Not with the
+//     subset's covariance Cov added: two sensors that under-read alike fit
+//     each other well, and their wide Cov would let them pass.
+//     Among the passing subsets of the largest k the smallest
+//     chi2 + sum over the references of (x - x_r)^T (Cov + R)^-1 (x - x_r)
+//     wins (the joint likelihood ranks subsets of one size).
 //  3. Nothing passes: the wheel twist (source wheels) or, without wheels,
 //     the last good twist with its covariance grown (source hold).
+// The prior is the twist of step 2, or of the wheels in step 3; a hold does
+// not renew it (its covariance keeps growing). With motion_prior off the
+// estimator is the one before the prior: no prior, and the wheel test of a
+// minority uses Cov + W.
 // Subsets of each size are enumerated in increasing bit order as they are
 // needed (N <= 10, so at most 1013 fits and no table to store); for larger
 // arrays the worst sensor is dropped greedily. Per-sample cost does not
@@ -24,6 +35,7 @@
 #include <optional>
 
 #include "moa/core/fallback.hpp"
+#include "moa/core/motion_prior.hpp"
 #include "moa/core/noise_model.hpp"
 
 namespace moa {
@@ -33,6 +45,10 @@ struct ConsensusOptions {
   NoiseModelOptions noise;
   WheelNoise wheels;
   HoldModel hold;
+  /// Test candidates against the motion prior and judge a minority with the
+  /// references' covariances alone (step 2 above).
+  bool motion_prior = true;
+  MotionLimits limits;
 };
 
 class ConsensusEstimator {
@@ -55,10 +71,18 @@ class ConsensusEstimator {
     SensorMask mask = 0;
     double cost = 0.0;
   };
-  std::optional<Candidate> search(SensorMask candidates, const std::optional<Twist2>& wheels,
-                                  const Eigen::Matrix3d& wheel_cov) const;
-  bool consider(SensorMask mask, const std::optional<Twist2>& wheels,
-                const Eigen::Matrix3d& wheel_cov, std::optional<Candidate>& best) const;
+  /// A twist a candidate is checked against: the wheels or the prior.
+  struct Reference {
+    Eigen::Vector3d x = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+    Eigen::Matrix3d information = Eigen::Matrix3d::Zero();  ///< covariance^-1
+  };
+  struct References {
+    std::array<Reference, 2> r;
+    int size = 0;
+  };
+  std::optional<Candidate> search(SensorMask candidates, const References& refs) const;
+  bool consider(SensorMask mask, const References& refs, std::optional<Candidate>& best) const;
 
   int n_;
   ConsensusOptions options_;
@@ -69,6 +93,7 @@ class ConsensusEstimator {
   // State carried between samples.
   PointMeasurements measurements_;
   Fallback fallback_;
+  MotionPrior prior_;
 };
 
 }  // namespace moa

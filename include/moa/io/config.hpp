@@ -10,6 +10,9 @@
 //       mirrored: false          # optional
 //       max_speed: 0.3556        # optional, m/s
 //       noise: 0.002             # optional (moa extension), m/s per axis
+//   limits:                      # optional (moa extension): the motion prior
+//     accel: 2.0                 # m/s^2, default 2
+//     angular_accel: 20.0        # rad/s^2, default 20
 //
 // Unknown keys and missing required keys are errors that name the key and
 // the sensor; so are wrong types, non-finite numbers, cpi or scale <= 0,
@@ -23,12 +26,16 @@
 #include <vector>
 
 #include "moa/core/array.hpp"
+#include "moa/core/motion_prior.hpp"
 
 namespace moa::io {
 
 struct RobotConfig {
   std::vector<std::string> names;  ///< one per sensor, in array order
   SensorArray array;
+  /// The robot's acceleration limits (key `limits`); unset: the defaults of
+  /// MotionLimits. make_odometry gives them to the consensus's motion prior.
+  std::optional<MotionLimits> limits;
 
   /// Index of the sensor called `name`, nullopt if there is none.
   std::optional<int> index_of(std::string_view name) const;
