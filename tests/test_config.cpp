@@ -189,7 +189,35 @@ TEST(Config, NoiseOfZeroIsAccepted) {
   EXPECT_EQ(parse_config(two_sensors("    noise: 0\n"), "robot.yaml").array[0].noise, 0.0);
 }
 
+TEST(Config, LimitsAreOptionalAndRead) {
+  EXPECT_FALSE(parse_config(two_sensors(), "robot.yaml").limits);
+  const RobotConfig c =
+      parse_config(two_sensors() + "limits:\n  accel: 1.5\n  angular_accel: 12\n", "robot.yaml");
+  ASSERT_TRUE(c.limits);
+  EXPECT_EQ(c.limits->accel, 1.5);
+  EXPECT_EQ(c.limits->angular_accel, 12.0);
+  // A key left out takes MotionLimits' default.
+  const RobotConfig half = parse_config(two_sensors() + "limits: {accel: 3}\n", "robot.yaml");
+  EXPECT_EQ(half.limits->angular_accel, MotionLimits{}.angular_accel);
+  // Written back exactly.
+  const RobotConfig back = parse_config(format_config(c), "robot.yaml");
+  ASSERT_TRUE(back.limits);
+  EXPECT_EQ(back.limits->accel, 1.5);
+  EXPECT_EQ(back.limits->angular_accel, 12.0);
+}
+
 // ---------------------------------------------------------------- rejections
+
+TEST(ConfigErrors, LimitsMustBePositiveAndFinite) {
+  EXPECT_EQ(parse_error(two_sensors() + "limits: {accel: .nan}\n"),
+            "robot.yaml: limits: key 'accel': '.nan' is not a finite number");
+  EXPECT_EQ(parse_error(two_sensors() + "limits: {angular_accel: 0}\n"),
+            "robot.yaml: limits.angular_accel: must be positive and finite (rad/s^2)");
+  EXPECT_EQ(parse_error(two_sensors() + "limits: {jerk: 1}\n"),
+            "robot.yaml: limits: unknown key 'jerk'");
+  EXPECT_EQ(parse_error(two_sensors() + "limits: 2\n"),
+            "robot.yaml: key 'limits': expected a map, found a value");
+}
 
 TEST(ConfigErrors, MissingRequiredKeyNamesKeyAndSensor) {
   EXPECT_EQ(parse_error(without_key("position")),

@@ -211,6 +211,177 @@ TEST(Consensus, MinorityPairMustAgreeWithWheels) {
   EXPECT_TRUE(e->estimate.twist.vector().isApprox(kTruth.vector(), 1e-6));
 }
 
+TEST(Consensus, PairThatUnderReadsAlikeNeedsThePriorsCorroboration) {
+  // Sensors 0 and 1 both read half their counts: they fit each other exactly
+  // (twist 0.5 x), and their relative-noise covariance is wide. Sensors 2
+  // and 3 are corrupted differently, so no three agree. The step from the
+  // trusted twist x is 0.5 |x| = 0.135 m/s in 10 ms, 13.5 m/s^2: beyond
+  // the default 2 m/s^2 by far, so the prior refuses the pair and the
+  // estimator holds. Without the prior the pair is taken.
+  const SensorArray a = sekimori_array();
+  ArraySample bad = clean_sample(a, kTruth);
+  bad.t += kDt;
+  for (int i = 0; i < 2; ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    bad.counts[u] = a[i].counts(Twist2{0.5 * kTruth.v, 0.5 * kTruth.omega}, kDt);
+  }
+  corrupt(a, bad, 2, {0.3, 0.1});
+  corrupt(a, bad, 3, {-0.2, 0.25});
+  for (const bool prior : {true, false}) {
+    ConsensusOptions o;
+    o.motion_prior = prior;
+    auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a, o));
+    ASSERT_EQ(est.estimate(clean_sample(a, kTruth))->estimate.used, 0b1111u);
+    const auto e = est.estimate(bad);
+    ASSERT_TRUE(e.has_value());
+    if (prior) {
+      EXPECT_EQ(e->source, Source::kHold);
+      EXPECT_EQ(e->excluded[0], Exclusion::kFallback);
+    } else {
+      EXPECT_EQ(e->source, Source::kMice);
+      EXPECT_EQ(e->estimate.used, 0b0011u);
+    }
+  }
+}
+
+TEST(Consensus, PairWithinTheRobotsLimitsPassesThePrior) {
+  // The same two faulty sensors, the good pair 2-3 after an acceleration at
+  // the limit (2 m/s^2 for 10 ms, well inside the gate of about 4 sd).
+  const SensorArray a = sekimori_array();
+  auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a));
+  ASSERT_EQ(est.estimate(clean_sample(a, kTruth))->estimate.used, 0b1111u);
+  const Twist2 faster{kTruth.v + Eigen::Vector2d(MotionLimits{}.accel * kDt, 0.0), kTruth.omega};
+  ArraySample s = clean_sample(a, faster);
+  s.t += kDt;
+  corrupt(a, s, 0, {0.3, 0.1});
+  corrupt(a, s, 1, {-0.2, 0.25});
+  const auto e = est.estimate(s);
+  ASSERT_TRUE(e.has_value());
+  EXPECT_EQ(e->source, Source::kMice);
+  EXPECT_EQ(e->estimate.used, 0b1100u);
+  EXPECT_TRUE(e->estimate.twist.vector().isApprox(faster.vector(), 1e-6));
+}
+
+TEST(Consensus, MinorityIsJudgedWithTheWheelCovarianceAlone) {
+  // Wheels 0.04 m/s off the truth (inside their sd of 0.047 m/s, 0.13
+  // rad/s), the faulty pair reads 0.5 x: (-0.165, 0.05, -0.4) from the
+  // wheels, a distance of about 23 with the wheel covariance alone (gate
+  // q(0.999, 3) = 16.3), about 10 with the pair's covariance added (sensor
+  // noise 0.05 m/s per axis: twist sd about 0.035 m/s, 0.35 rad/s).
+  SensorArray a = sekimori_array();
+  std::vector<SensorMount> m(a.mounts().begin(), a.mounts().end());
+  for (auto& s : m) s.noise = 0.05;  // m/s per axis: a wide pair covariance
+  a = SensorArray(m);
+  const Twist2 wheels{kTruth.v + Eigen::Vector2d(0.04, 0.0), kTruth.omega};
+  ArraySample bad = clean_sample(a, kTruth);
+  for (int i = 0; i < 2; ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    bad.counts[u] = a[i].counts(Twist2{0.5 * kTruth.v, 0.5 * kTruth.omega}, kDt);
+  }
+  corrupt(a, bad, 2, {0.9, 0.3});
+  corrupt(a, bad, 3, {-0.6, 0.75});
+  for (const bool prior : {true, false}) {
+    ConsensusOptions o;
+    o.motion_prior = prior;
+    auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a, o));
+    const auto e = est.estimate(bad, wheels);  // first sample: no prior yet
+    ASSERT_TRUE(e.has_value());
+    EXPECT_EQ(e->source, prior ? Source::kWheels : Source::kMice);
+  }
+}
+
+/// Epoch k of a motion whose twist varies from epoch to epoch (so that no
+/// good sensor repeats its counts exactly).
+ArraySample varying_sample(const SensorArray& a, int k, double amplitude = 0.05) {
+  const double f = 1.0 + amplitude * std::sin(0.3 * k);
+  ArraySample s = clean_sample(a, Twist2{f * kTruth.v, f * kTruth.omega});
+  s.t = 1.0 + k * kDt;
+  return s;
+}
+
+TEST(Health, FrozenSensorIsExcludedAndReturnsThroughProbation) {
+  // The twist varies by +-20 %: over the first frozen_run epochs of the
+  // freeze sensor 1's point velocity changes by about 0.08 m/s, beyond
+  // frozen_change.
+  const SensorArray a = sekimori_array();
+  const HealthOptions h;
+  auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a));
+  ArraySample frozen;
+  int first_frozen = -1, first_back = -1;
+  for (int k = 0; k < 200; ++k) {
+    ArraySample s = varying_sample(a, k, 0.2);
+    if (k == 20) frozen = s;
+    if (k >= 20 && k < 100) s.counts[1] = frozen.counts[1];
+    const auto e = est.estimate(s);
+    ASSERT_TRUE(e.has_value());
+    if (first_frozen < 0 && e->excluded[1] == Exclusion::kFrozen) first_frozen = k;
+    if (k >= 100 && first_back < 0 && contains(e->estimate.used, 1)) first_back = k;
+    if (k >= 100 && k < 100 + static_cast<int>(h.probation / kDt)) {
+      EXPECT_EQ(e->excluded[1], Exclusion::kProbation) << k;
+    }
+  }
+  // The frozen_run-th identical epoch is the first one excluded as frozen.
+  EXPECT_EQ(first_frozen, 20 + h.frozen_run - 1);
+  // Back after the probation (the counts move again at k = 100).
+  EXPECT_GE(first_back, 100 + static_cast<int>(h.probation / kDt));
+  EXPECT_LE(first_back, 100 + static_cast<int>(h.probation / kDt) + 2);
+}
+
+TEST(Health, ZeroWhileTheOthersMoveIsExcludedAsZero) {
+  const SensorArray a = sekimori_array();
+  auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a));
+  const HealthOptions h;
+  for (int k = 0; k < 50; ++k) {
+    ArraySample s = varying_sample(a, k);
+    if (k >= 10) s.counts[2].setZero();
+    const auto e = est.estimate(s);
+    ASSERT_TRUE(e.has_value());
+    if (k >= 10 && k < 10 + h.zero_run - 1) {
+      EXPECT_EQ(e->excluded[2], Exclusion::kInconsistent);
+    }
+    if (k >= 10 + h.zero_run) {
+      EXPECT_EQ(e->excluded[2], Exclusion::kZero) << k;
+    }
+  }
+}
+
+TEST(Health, DriftTooSmallForOneEpochIsExcludedOverTime) {
+  // Sensor 3 reads 5 % short: 2.5 sd of the 2 % relative noise model, which
+  // one epoch's chi-square over four sensors passes; its windowed residual
+  // against the other three crosses drift_exclude (3 %) once the window has
+  // drift_min_time of samples. Without the monitor it is used throughout.
+  const SensorArray a = sekimori_array();
+  for (const bool enabled : {true, false}) {
+    ConsensusOptions o;
+    o.health.enabled = enabled;
+    auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a, o));
+    int first_drift = -1;
+    for (int k = 0; k < 150; ++k) {
+      ArraySample s = varying_sample(a, k);
+      s.counts[3] *= 0.95;
+      const auto e = est.estimate(s);
+      ASSERT_TRUE(e.has_value());
+      // Consistent in one epoch (from the second: the first has no predicted
+      // speed for the relative noise).
+      if (k == 1) {
+        EXPECT_EQ(e->estimate.used, 0b1111u);
+      }
+      if (first_drift < 0 && e->excluded[3] == Exclusion::kDrift) first_drift = k;
+      if (k == 149 && enabled) {
+        EXPECT_EQ(e->estimate.used, 0b0111u);
+        const double f = 1.0 + 0.05 * std::sin(0.3 * k);
+        EXPECT_TRUE(e->estimate.twist.vector().isApprox(f * kTruth.vector(), 1e-9));
+      }
+    }
+    if (enabled) {
+      EXPECT_GE(first_drift, static_cast<int>(o.health.drift_min_time / kDt) - 1);
+      EXPECT_LT(first_drift, 149);
+    } else {
+      EXPECT_EQ(first_drift, -1);
+    }
+  }
+}
+
 TEST(Consensus, NoiseFlagsMarkOverSpeedLowSqualAndOverflow) {
   SensorArray a = sekimori_array();
   for (int i = 0; i < 4; ++i) a[i].max_speed = 0.3556;

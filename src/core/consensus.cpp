@@ -20,7 +20,8 @@ ConsensusEstimator::ConsensusEstimator(const SensorArray& array, ConsensusOption
       options_(options),
       solver_(array),
       noise_(array, options.noise),
-      prior_(options.limits) {
+      prior_(options.limits),
+      health_(array.size(), options.health, options.alpha) {
   for (int dof = 1; dof < 2 * kMaxSensors; ++dof) {
     threshold_[static_cast<std::size_t>(dof)] = chi2_quantile(1.0 - options_.alpha, dof);
   }
@@ -120,23 +121,27 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
   if (options_.motion_prior && prior_.valid()) {
     add(prior_.twist(), prior_.covariance(sample.t, sample.dt));
   }
-  const auto best = search(candidates, refs);
+  const SensorMask screened =
+      health_.screen(solver_, sample, fallback_.last_twist(), candidates, out.excluded);
+  const auto best = search(screened, refs);
   if (best) {
     out.source = Source::kMice;
     out.estimate.twist = best->fit.twist;
     out.estimate.covariance = best->fit.covariance;
     out.estimate.used = best->mask;
     for (int i = 0; i < n_; ++i) {
-      if (contains(candidates, i) && !contains(best->mask, i)) {
+      if (contains(screened, i) && !contains(best->mask, i)) {
         out.excluded[static_cast<std::size_t>(i)] = Exclusion::kInconsistent;
       }
     }
     fallback_.good(out.estimate.twist, out.estimate.covariance, sample.t);
     prior_.trust(out.estimate.twist, out.estimate.covariance, sample.t);
+    health_.observe(solver_, sample, measurements_, out.estimate.twist, best->mask, candidates,
+                    out.noise_flags);
     return out;
   }
   for (int i = 0; i < n_; ++i) {
-    if (contains(candidates, i)) out.excluded[static_cast<std::size_t>(i)] = Exclusion::kFallback;
+    if (contains(screened, i)) out.excluded[static_cast<std::size_t>(i)] = Exclusion::kFallback;
   }
   fallback_.apply(out, wheels, options_.wheels, options_.hold, sample.t);
   if (out.source == Source::kWheels) {

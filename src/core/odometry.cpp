@@ -70,6 +70,7 @@ const char* OdometryOptions::validate() const {
   if (sekimori.r_th != -1 && (sekimori.r_th < 1 || sekimori.r_th > kMaxSensors))
     return "sekimori.r_th: must be -1 (automatic) or 1 to 16";
   if (const char* e = consensus.limits.validate(); *e) return e;
+  if (const char* e = consensus.health.validate(); *e) return e;
   if (!(std::isfinite(consensus.alpha) && consensus.alpha > 0.0 && consensus.alpha < 0.5))
     return "consensus.alpha: must be in (0, 0.5)";
   const NoiseModelOptions& n = consensus.noise;

@@ -30,6 +30,14 @@ const char* describe(Exclusion exclusion) {
       return "unselected";
     case Exclusion::kFaulty:
       return "faulty";
+    case Exclusion::kFrozen:
+      return "frozen";
+    case Exclusion::kZero:
+      return "zero";
+    case Exclusion::kDrift:
+      return "drift";
+    case Exclusion::kProbation:
+      return "probation";
   }
   return "?";
 }

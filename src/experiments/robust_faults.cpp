@@ -1,8 +1,8 @@
 // `moa experiment robust-faults`: every fault the simulator makes, one kind
 // at a time (built-in scenarios faults-*: a 2 s window on each sensor in
 // turn along the Table 3 path at speed (a); tracking loss is speed (b)'s own
-// over-speed fault), against plain least squares, Sekimori & Miyazaki's
-// voting, the consensus and oracle selection.
+// over-speed fault; drift on one sensor for the rest of the run), against plain least squares,
+// Sekimori & Miyazaki's voting, the consensus and oracle selection.
 #include <fmt/core.h>
 
 #include <numbers>
@@ -29,6 +29,8 @@ const FaultCase kCases[] = {
     {"dirty floor", "faults-dirty", "30 % of the counts, SQUAL 15"},
     {"spikes", "faults-spikes", "20 jumps/s of 30 counts"},
     {"stuck", "faults-stuck", "counts frozen at the last frame's"},
+    {"zero reading", "faults-zero", "zero counts, SQUAL 80, no lift flag"},
+    {"drift", "faults-drift", "m2's scale 1 -> 0.9 over 6 s from t = 1 s, then held"},
 };
 
 struct MethodRow {

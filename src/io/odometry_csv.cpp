@@ -165,8 +165,10 @@ struct OdometryCsvReader::Impl {
       const std::string_view reason = rest.substr(0, slash);
       const auto u = static_cast<std::size_t>(i);
       bool known = false;
-      for (const auto x : {Exclusion::kLift, Exclusion::kInconsistent, Exclusion::kUnreliable,
-                           Exclusion::kFallback, Exclusion::kUnselected, Exclusion::kFaulty}) {
+      for (const auto x :
+           {Exclusion::kLift, Exclusion::kInconsistent, Exclusion::kUnreliable,
+            Exclusion::kFallback, Exclusion::kUnselected, Exclusion::kFaulty, Exclusion::kFrozen,
+            Exclusion::kZero, Exclusion::kDrift, Exclusion::kProbation}) {
         if (reason == describe(x)) {
           r.excluded[u] = x;
           known = true;

@@ -20,6 +20,8 @@ const char* fault_name(FaultBit bit) {
       return "spikes";
     case kFaultStuck:
       return "stuck";
+    case kFaultDrift:
+      return "drift";
   }
   return "unknown";
 }
@@ -131,6 +133,11 @@ std::optional<SensorRowOut> OpticalSensor::frame(const Twist2& twist, double t, 
       case kFaultStuck:
         stuck_now = true;
         bits |= kFaultStuck;
+        break;
+      case kFaultDrift:
+        bits |= kFaultDrift;
+        gain *=
+            1.0 + (f.scale - 1.0) * (f.ramp > 0.0 ? std::min(1.0, (mid - f.start) / f.ramp) : 1.0);
         break;
       case kFaultTrackingLoss:
         break;

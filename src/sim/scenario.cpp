@@ -631,10 +631,10 @@ void parse_faults(const Source& source, const YAML::Node& node, const io::RobotC
   for (std::size_t i = 0; i < events->size(); ++i) {
     const YAML::Node item = (*events)[i];
     const std::string path = fmt::format("faults.events[{}]", i);
-    const Fields probe(
-        source, item, path,
-        {"type", "sensor", "start", "end", "squal", "lift_flag", "retained", "rate", "magnitude"});
-    const std::string type = probe.choice("type", {"liftoff", "dirty", "spikes", "stuck"});
+    const Fields probe(source, item, path,
+                       {"type", "sensor", "start", "end", "squal", "lift_flag", "retained", "rate",
+                        "magnitude", "scale", "ramp"});
+    const std::string type = probe.choice("type", {"liftoff", "dirty", "spikes", "stuck", "drift"});
     const Fields e =
         type == "liftoff"
             ? Fields(source, item, path, {"type", "sensor", "start", "end", "squal", "lift_flag"})
@@ -642,6 +642,8 @@ void parse_faults(const Source& source, const YAML::Node& node, const io::RobotC
             ? Fields(source, item, path, {"type", "sensor", "start", "end", "squal", "retained"})
         : type == "spikes"
             ? Fields(source, item, path, {"type", "sensor", "start", "end", "rate", "magnitude"})
+        : type == "drift"
+            ? Fields(source, item, path, {"type", "sensor", "start", "end", "scale", "ramp"})
             : Fields(source, item, path, {"type", "sensor", "start", "end"});
     FaultWindow w;
     const int sensor = sensor_index(e, "sensor", e.required("sensor"), config);
@@ -670,6 +672,10 @@ void parse_faults(const Source& source, const YAML::Node& node, const io::RobotC
       w.kind = kFaultSpike;
       w.rate = e.positive("rate");
       w.magnitude = e.positive("magnitude");
+    } else if (type == "drift") {
+      w.kind = kFaultDrift;
+      w.scale = e.positive("scale");
+      w.ramp = e.non_negative("ramp", 0.0);
     } else {
       w.kind = kFaultStuck;
     }

@@ -146,11 +146,14 @@ class Fig6(unittest.TestCase):
 class RobustFaults(unittest.TestCase):
     def test_consensus_against_voting_and_oracle(self):
         result = experiment("robust-faults")
-        for fault in ("tracking loss", "liftoff, no flag", "dirty floor", "spikes", "stuck"):
+        for fault in ("tracking loss", "liftoff, no flag", "dirty floor", "spikes", "stuck",
+                      "zero reading", "drift"):
             consensus = row(result, fault=fault, method="consensus")
             not_worse(self, consensus, row(result, fault=fault, method="voting (Sekimori)"),
                       f"{fault}: consensus vs voting")
-            if fault != "stuck":  # a known limit of selection from counts (docs/experiments.md)
+            # Known limits (docs/experiments.md): a frozen register in a steady cruise is
+            # consistent until the motion changes; a drifting sensor pulls until excluded at 3 %.
+            if fault not in ("stuck", "drift"):
                 not_worse(self, consensus, row(result, fault=fault, method="oracle selection"),
                           f"{fault}: consensus vs oracle")
 

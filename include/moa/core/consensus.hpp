@@ -19,6 +19,9 @@
 //     Among the passing subsets of the largest k the smallest
 //     chi2 + sum over the references of (x - x_r)^T (Cov + R)^-1 (x - x_r)
 //     wins (the joint likelihood ranks subsets of one size).
+//  Before step 2 the health monitor (health.hpp) takes out the sensors it
+//  has excluded over time (frozen, zero, drift, probation); after it, the
+//  estimate feeds its drift test.
 //  3. Nothing passes: the wheel twist (source wheels) or, without wheels,
 //     the last good twist with its covariance grown (source hold).
 // The prior is the twist of step 2, or of the wheels in step 3; a hold does
@@ -35,6 +38,7 @@
 #include <optional>
 
 #include "moa/core/fallback.hpp"
+#include "moa/core/health.hpp"
 #include "moa/core/motion_prior.hpp"
 #include "moa/core/noise_model.hpp"
 
@@ -49,6 +53,9 @@ struct ConsensusOptions {
   /// references' covariances alone (step 2 above).
   bool motion_prior = true;
   MotionLimits limits;
+  /// Faults over time (health.hpp): frozen, zero and drifting sensors are
+  /// kept out of the search.
+  HealthOptions health;
 };
 
 class ConsensusEstimator {
@@ -94,6 +101,7 @@ class ConsensusEstimator {
   PointMeasurements measurements_;
   Fallback fallback_;
   MotionPrior prior_;
+  HealthMonitor health_;
 };
 
 }  // namespace moa

@@ -28,6 +28,10 @@ enum class Exclusion : std::uint8_t {
   kFallback,      ///< no set of two or more sensors could be trusted
   kUnselected,    ///< not among the sensors the estimator was given (--sensors, wheels)
   kFaulty,        ///< oracle: the simulator reports a fault in the epoch
+  kFrozen,        ///< health: the same non-zero counts epoch after epoch (health.hpp)
+  kZero,          ///< health: zero counts while the array moves
+  kDrift,         ///< health: its residual against the others drifts (scale or yaw)
+  kProbation,     ///< health: was excluded; kept out until it behaves for a while
 };
 const char* describe(Exclusion exclusion);
 

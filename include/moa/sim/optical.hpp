@@ -28,6 +28,8 @@
 //   spikes         (8)  Poisson (`rate` per second) jumps of `magnitude` counts in a
 //                       uniformly random direction, added to one frame.
 //   stuck         (16)  the frame's counts frozen at the last frame's before the window.
+//   drift         (32)  counts times g(t) = 1 + (scale - 1) min(1, (t - start) / ramp):
+//                       a resolution that drifts (dust) or steps (floor change).
 // Window faults hold for the frames whose midpoint lies in [start, end).
 #pragma once
 
@@ -67,8 +69,9 @@ enum FaultBit : std::uint8_t {
   kFaultDirty = 1u << 2,
   kFaultSpike = 1u << 3,
   kFaultStuck = 1u << 4,
+  kFaultDrift = 1u << 5,
 };
-/// "tracking_loss", "liftoff", "dirty", "spikes", "stuck".
+/// "tracking_loss", "liftoff", "dirty", "spikes", "stuck", "drift".
 const char* fault_name(FaultBit bit);
 
 struct TrackingLoss {
@@ -88,6 +91,10 @@ struct FaultWindow {
   double rate = 0.0;              ///< spikes: per second
   double magnitude = 0.0;         ///< spikes: counts
   bool lift_flag = true;          ///< liftoff: set flag bit 1
+  /// drift: the counts' gain goes from 1 to `scale` linearly over `ramp`
+  /// seconds from start (0: a step, a change of floor), then stays.
+  double scale = 1.0;
+  double ramp = 0.0;  ///< s
 };
 
 struct SensorFaults {

@@ -1,0 +1,106 @@
+// Faults over time: a per-sensor health state with hysteresis, for faults
+// one epoch's chi-square test cannot see.
+//
+// Per sensor i and epoch (counts c_i, point velocity u_i, robot frame m/s):
+//  - frozen: c_i exactly equal to the previous epoch's, not zero and at
+//    least frozen_min_counts on an axis, for frozen_run epochs in a row,
+//    while the predicted point velocity changed by frozen_change since the
+//    run began (a constant rate while the others vary), or for
+//    frozen_long_run epochs whatever the motion. A good sensor in a steady
+//    cruise repeats too: at 0.3 m/s an HDNS-2051 row of 23 frames carries
+//    about 0.3 counts of noise, so both axes repeat often (seen on the
+//    faults-liftoff runs with the first rule alone, at 10 epochs); while its
+//    point velocity changes by 0.02 m/s (6 counts per 10 ms epoch at
+//    800 cpi) it cannot.
+//  - zero: c_i = 0 while the predicted point speed |A_i x| is at least
+//    zero_speed, for zero_run epochs in a row (the others move).
+//  - drift: the relative residual against the twist x_(i) of the other
+//    sensors used (leave-one-out; the estimate itself when i was not used),
+//      rho_par  = p^T (u_i - p) / |p|^2      (scale error along the motion)
+//      rho_perp = p x (u_i - p) / |p|^2      (yaw offset, rad)
+//    with p = A_i x_(i), averaged by an exponential window of drift_tau
+//    seconds (weights normalised, so the mean is unbiased from the start).
+//    Fed only on epochs where |p| >= drift_min_speed, the sensor's noise was
+//    not inflated (over speed, low SQUAL, overflow) and its whitened
+//    residual passes q(1 - alpha, 2): gross errors are the consistency
+//    test's, drift is the slow part.
+// States: trusted -> suspect (a test half-way: a repeat, a zero, the drift
+// mean over drift_suspect) -> excluded (a test fires; the reason is kept)
+// -> probation (the test no longer fires; the sensor stays out for
+// probation seconds) -> trusted. Suspect sensors are used; excluded and
+// probation ones are not. A drift exclusion is released when the mean falls
+// under drift_release.
+// Thresholds tuned on simulator seeds 1-100 (tests use 101+, docs 201+).
+// Fixed-size state, no allocation.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+
+#include "moa/core/array.hpp"
+#include "moa/core/robust_estimate.hpp"
+#include "moa/core/subset.hpp"
+
+namespace moa {
+
+struct HealthOptions {
+  bool enabled = true;
+  int frozen_run = 10;             ///< epochs of identical counts
+  double frozen_min_counts = 4.0;  ///< counts on the larger axis
+  double frozen_change = 0.02;     ///< m/s, change of the predicted point velocity
+  int frozen_long_run = 100;       ///< epochs of identical counts, whatever the motion
+  int zero_run = 5;                ///< epochs of zero counts while moving
+  double zero_speed = 0.02;        ///< m/s, predicted point speed
+  double drift_tau = 2.0;          ///< s, averaging window of the residual
+  double drift_min_speed = 0.05;   ///< m/s, predicted point speed for a drift sample
+  double drift_min_time = 0.5;     ///< s of drift samples before the test acts
+  double drift_suspect = 0.015;    ///< relative scale or yaw (rad)
+  double drift_exclude = 0.03;
+  double drift_release = 0.01;
+  double probation = 0.5;  ///< s
+  /// Empty when usable, else what is wrong, naming the field.
+  const char* validate() const;
+};
+
+enum class Health : std::uint8_t { kTrusted, kSuspect, kExcluded, kProbation };
+const char* describe(Health health);
+
+class HealthMonitor {
+ public:
+  HealthMonitor(int sensors, HealthOptions options, double alpha);
+
+  /// Frozen and zero tests on the epoch's counts, then the state machine.
+  /// Returns the sensors that may be used; sets `excluded` for the others
+  /// among `candidates` (kFrozen, kZero, kDrift or kProbation).
+  SensorMask screen(const SubsetSolver& solver, const ArraySample& sample, const Twist2& predicted,
+                    SensorMask candidates, std::array<Exclusion, kMaxSensors>& excluded);
+  /// The drift test's update after an estimate x from the sensors `used`.
+  void observe(const SubsetSolver& solver, const ArraySample& sample, const PointMeasurements& m,
+               const Twist2& x, SensorMask used, SensorMask candidates,
+               const std::array<std::uint8_t, kMaxSensors>& noise_flags);
+
+  Health health(int i) const { return state_[static_cast<std::size_t>(i)].health; }
+  /// Window means of the relative residual (scale, yaw); 0 before any sample.
+  double drift_scale(int i) const;
+  double drift_yaw(int i) const;
+
+ private:
+  struct SensorState {
+    Health health = Health::kTrusted;
+    Exclusion reason = Exclusion::kNone;
+    double since = 0.0;  ///< s, when probation began
+    Eigen::Vector2d last_counts{0.0, 0.0};
+    Eigen::Vector2d run_start{0.0, 0.0};  ///< m/s, predicted point velocity when the run began
+    int repeats = 0, zeros = 0;
+    double sum_par = 0.0, sum_perp = 0.0, weight = 0.0, time = 0.0;
+  };
+  double drift(const SensorState& s) const;
+
+  HealthOptions options_;
+  double residual_gate_;
+  int n_;
+  std::array<SensorState, kMaxSensors> state_{};
+};
+
+}  // namespace moa

@@ -1,0 +1,169 @@
+#include "moa/core/health.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "moa/core/chi2.hpp"
+
+namespace moa {
+
+const char* HealthOptions::validate() const {
+  if (frozen_run < 2) return "health.frozen_run: must be at least 2 epochs";
+  if (frozen_long_run < frozen_run) return "health.frozen_long_run: must be at least frozen_run";
+  if (zero_run < 1) return "health.zero_run: must be at least 1 epoch";
+  for (const double x : {frozen_min_counts, frozen_change, zero_speed, drift_tau, drift_min_speed,
+                         drift_min_time, drift_suspect, drift_exclude, drift_release, probation}) {
+    if (!(std::isfinite(x) && x >= 0.0))
+      return "health: thresholds and times must be finite and not negative";
+  }
+  if (!(drift_tau > 0.0)) return "health.drift_tau: must be positive (s)";
+  if (!(drift_release <= drift_suspect && drift_suspect <= drift_exclude))
+    return "health: drift_release <= drift_suspect <= drift_exclude";
+  return "";
+}
+
+const char* describe(Health health) {
+  switch (health) {
+    case Health::kTrusted:
+      return "trusted";
+    case Health::kSuspect:
+      return "suspect";
+    case Health::kExcluded:
+      return "excluded";
+    case Health::kProbation:
+      return "probation";
+  }
+  return "?";
+}
+
+HealthMonitor::HealthMonitor(int sensors, HealthOptions options, double alpha)
+    : options_(options), residual_gate_(chi2_quantile(1.0 - alpha, 2)), n_(sensors) {}
+
+double HealthMonitor::drift(const SensorState& s) const {
+  if (s.weight <= 0.0 || s.time < options_.drift_min_time) return 0.0;
+  return std::max(std::abs(s.sum_par), std::abs(s.sum_perp)) / s.weight;
+}
+
+double HealthMonitor::drift_scale(int i) const {
+  const SensorState& s = state_[static_cast<std::size_t>(i)];
+  return s.weight > 0.0 ? s.sum_par / s.weight : 0.0;
+}
+
+double HealthMonitor::drift_yaw(int i) const {
+  const SensorState& s = state_[static_cast<std::size_t>(i)];
+  return s.weight > 0.0 ? s.sum_perp / s.weight : 0.0;
+}
+
+SensorMask HealthMonitor::screen(const SubsetSolver& solver, const ArraySample& sample,
+                                 const Twist2& predicted, SensorMask candidates,
+                                 std::array<Exclusion, kMaxSensors>& excluded) {
+  SensorMask allowed = candidates;
+  if (!options_.enabled) return allowed;
+  const Eigen::Vector3d x = predicted.vector();
+  for (int i = 0; i < n_; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    SensorState& s = state_[k];
+    const Eigen::Vector2d c = sample.counts[k];
+    const Eigen::Vector2d p = solver.jacobian(i) * x;  // predicted point velocity, m/s
+    // Frozen: exact repeats of a count large enough to carry noise.
+    if (c == s.last_counts && c.cwiseAbs().maxCoeff() >= options_.frozen_min_counts) {
+      ++s.repeats;
+    } else {
+      s.repeats = 0;
+      s.run_start = p;
+    }
+    s.last_counts = c;
+    const int run = s.repeats + 1;  // epochs with these counts
+    // Once found frozen it stays so while the counts keep repeating.
+    const bool was_frozen = s.health == Health::kExcluded && s.reason == Exclusion::kFrozen;
+    const bool frozen = run >= options_.frozen_long_run ||
+                        (run >= options_.frozen_run &&
+                         (was_frozen || (p - s.run_start).norm() >= options_.frozen_change));
+    // Zero while the point should move.
+    const double speed = p.norm();
+    if (c.isZero() && speed >= options_.zero_speed) {
+      ++s.zeros;
+    } else {
+      s.zeros = 0;
+    }
+    if (!contains(candidates, i)) continue;  // lifted: nothing to judge
+    const double d = drift(s);
+    Exclusion bad = Exclusion::kNone;
+    if (frozen) {
+      bad = Exclusion::kFrozen;
+    } else if (s.zeros >= options_.zero_run) {
+      bad = Exclusion::kZero;
+    } else if (d > options_.drift_exclude) {
+      bad = Exclusion::kDrift;
+    }
+    const bool half = s.repeats >= 1 || s.zeros >= 1 || d > options_.drift_suspect;
+    switch (s.health) {
+      case Health::kTrusted:
+      case Health::kSuspect:
+        if (bad != Exclusion::kNone) {
+          s.health = Health::kExcluded;
+          s.reason = bad;
+        } else {
+          s.health = half ? Health::kSuspect : Health::kTrusted;
+        }
+        break;
+      case Health::kExcluded:
+        if (bad == Exclusion::kNone &&
+            (s.reason != Exclusion::kDrift || d < options_.drift_release)) {
+          s.health = Health::kProbation;
+          s.since = sample.t;
+        } else if (bad != Exclusion::kNone) {
+          s.reason = bad;
+        }
+        break;
+      case Health::kProbation:
+        if (bad != Exclusion::kNone) {
+          s.health = Health::kExcluded;
+          s.reason = bad;
+        } else if (sample.t - s.since >= options_.probation && !half) {
+          s.health = Health::kTrusted;
+        }
+        break;
+    }
+    if (s.health == Health::kExcluded || s.health == Health::kProbation) {
+      allowed &= ~(SensorMask{1} << i);
+      excluded[k] = s.health == Health::kExcluded ? s.reason : Exclusion::kProbation;
+    }
+  }
+  return allowed;
+}
+
+void HealthMonitor::observe(const SubsetSolver& solver, const ArraySample& sample,
+                            const PointMeasurements& m, const Twist2& x, SensorMask used,
+                            SensorMask candidates,
+                            const std::array<std::uint8_t, kMaxSensors>& noise_flags) {
+  if (!options_.enabled) return;
+  const double a = std::min(1.0, sample.dt / options_.drift_tau);  // window weight of this epoch
+  for (int i = 0; i < n_; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    if (!contains(candidates, i) || noise_flags[k] != 0) continue;
+    // Out for another reason (frozen, zero): its residual says nothing of drift.
+    if (state_[k].health == Health::kExcluded && state_[k].reason != Exclusion::kDrift) continue;
+    // The twist of the others: leave-one-out when i was used and enough remain.
+    Eigen::Vector3d xi = x.vector();
+    const SensorMask others = used & ~(SensorMask{1} << i);
+    if (contains(used, i)) {
+      if (count_sensors(others) < 2) continue;
+      const auto fit = solver.fit(others, m);
+      if (!fit) continue;
+      xi = fit->twist.vector();
+    }
+    const Eigen::Vector2d p = solver.jacobian(i) * xi;
+    const double p2 = p.squaredNorm();
+    if (p2 < options_.drift_min_speed * options_.drift_min_speed) continue;
+    const Eigen::Vector2d r = m.u[k] - p;
+    if (r.dot(m.info[k] * r) > residual_gate_) continue;  // a gross error, not drift
+    SensorState& s = state_[k];
+    s.sum_par = (1.0 - a) * s.sum_par + a * p.dot(r) / p2;
+    s.sum_perp = (1.0 - a) * s.sum_perp + a * (p.x() * r.y() - p.y() * r.x()) / p2;
+    s.weight = (1.0 - a) * s.weight + a;
+    s.time += sample.dt;
+  }
+}
+
+}  // namespace moa
