@@ -1,4 +1,4 @@
-// moa calibrate: where the sensors really sit (spec/cli.md, docs/calibration.md).
+// moa calibrate: where the sensors really sit (docs/formats/cli.md, docs/calibration.md).
 //
 //   --method kimlee|exact   mice.csv against the reference twist of wheels.csv
 //   --method guided         count totals of a push along x (and y) and a spin
