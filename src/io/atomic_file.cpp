@@ -48,7 +48,7 @@ AtomicFile::AtomicFile(std::filesystem::path target)
   out_.open(temp_, std::ios::binary | std::ios::trunc);
   if (!out_) {
     const int error = errno;
-    throw Error(fmt::format("{}: cannot open for writing ({})", target_.string(),
+    throw IoError(fmt::format("{}: cannot open for writing ({})", target_.string(),
                             error != 0 ? std::strerror(error) : "unknown error"));
   }
 }
@@ -65,13 +65,13 @@ void AtomicFile::commit() {
   out_.flush();
   const bool written = static_cast<bool>(out_);
   out_.close();
-  if (!written || !out_) throw Error(fmt::format("{}: cannot write", target_.string()));
+  if (!written || !out_) throw IoError(fmt::format("{}: cannot write", target_.string()));
   if (!sync_to_disk(temp_)) {
-    throw Error(fmt::format("{}: cannot write ({})", target_.string(), std::strerror(errno)));
+    throw IoError(fmt::format("{}: cannot write ({})", target_.string(), std::strerror(errno)));
   }
   std::error_code ec;
   std::filesystem::rename(temp_, target_, ec);
-  if (ec) throw Error(fmt::format("{}: cannot write ({})", target_.string(), ec.message()));
+  if (ec) throw IoError(fmt::format("{}: cannot write ({})", target_.string(), ec.message()));
   committed_ = true;
 }
 

@@ -56,10 +56,10 @@ std::string printable(std::string_view text) {
 CsvReader::CsvReader(const std::filesystem::path& file) : file_(file.string()) {
   std::error_code ec;
   if (std::filesystem::is_directory(file, ec)) {
-    throw Error(fmt::format("{}: cannot open (is a directory)", file_));
+    throw IoError(fmt::format("{}: cannot open (is a directory)", file_));
   }
   in_.open(file, std::ios::binary);
-  if (!in_) throw Error(fmt::format("{}: cannot open", file_));
+  if (!in_) throw IoError(fmt::format("{}: cannot open", file_));
   if (!read_record()) fail_at(line_ + 1, "no header row (the file is empty)");
   header_line_ = line_;
   header_.reserve(fields_.size());

@@ -133,7 +133,9 @@ struct MiceReader::Impl {
         dx(csv.required_column("dx")),
         dy(csv.required_column("dy")),
         squal(csv.column("squal")),
-        flags(csv.column("flags")) {}
+        flags(csv.column("flags")),
+        rows(names.size(), 0),
+        last(names.size()) {}
 
   std::optional<SensorRow> read() {
     if (!csv.next()) return std::nullopt;
@@ -145,6 +147,17 @@ struct MiceReader::Impl {
     row.sensor = static_cast<int>(it - names.begin());
     row.counts = {static_cast<double>(csv.integer(dx, -kMaxExactCount, kMaxExactCount)),
                   static_cast<double>(csv.integer(dy, -kMaxExactCount, kMaxExactCount))};
+    // A second row of a sensor at the same time, both with counts, is a
+    // duplicated line (its counts would be counted twice), never a real
+    // report; a zero row at the same time adds nothing and is accepted.
+    const auto i = static_cast<std::size_t>(row.sensor);
+    const bool moved = row.counts.x() != 0.0 || row.counts.y() != 0.0;
+    if (moved && rows[i] > 0 && last[i].t == row.t && last[i].moved) {
+      csv.fail(fmt::format("duplicate row: sensor '{}' already has a row at t = {} (line {})",
+                           name, row.t, last[i].line));
+    }
+    ++rows[i];
+    if (!(rows[i] > 1 && last[i].t == row.t && !moved)) last[i] = {row.t, csv.line(), moved};
     // In optional columns an empty field means "not reported in this row".
     if (squal && !csv.is_empty(*squal)) {
       row.squal = static_cast<std::uint8_t>(csv.integer(*squal, 0, 255));
@@ -161,6 +174,13 @@ struct MiceReader::Impl {
   std::optional<std::size_t> squal, flags;
   std::optional<SensorRow> peeked;
   std::optional<double> start;
+  std::vector<std::size_t> rows;                     // per sensor, read so far
+  struct Last {
+    double t = 0.0;
+    std::size_t line = 0;
+    bool moved = false;
+  };
+  std::vector<Last> last;  // per sensor: its last row with counts, or its last row
 };
 
 MiceReader::MiceReader(const std::filesystem::path& path, const RobotConfig& config)
@@ -176,6 +196,10 @@ double MiceReader::start_time() {
   }
   return *impl_->start;
 }
+
+const std::string& MiceReader::file() const { return impl_->csv.file(); }
+std::size_t MiceReader::line() const { return impl_->csv.line(); }
+const std::vector<std::size_t>& MiceReader::rows_per_sensor() const { return impl_->rows; }
 
 std::optional<SensorRow> MiceReader::next() {
   if (impl_->peeked) {

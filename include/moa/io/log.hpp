@@ -44,6 +44,12 @@ class MiceReader : public FrameSource {
   ~MiceReader() override;
   double start_time() override;
   std::optional<SensorRow> next() override;
+  /// mice.csv as named in errors, and the line of the last row read.
+  const std::string& file() const;
+  std::size_t line() const;
+  /// Rows read so far per sensor, in config order (a sensor with none by the
+  /// end never reported).
+  const std::vector<std::size_t>& rows_per_sensor() const;
 
  private:
   struct Impl;

@@ -9,6 +9,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "moa/core/odometry.hpp"
 #include "moa/io/config.hpp"
@@ -30,6 +31,9 @@ struct OdometryRun {
   std::size_t steps = 0;         ///< epochs written
   double t0 = 0.0, t_end = 0.0;  ///< s, first epoch's start, last row's time
   FixCounts fixes;
+  /// What the caller should tell the user (a configured sensor that never
+  /// reported, used as still by a robust estimator).
+  std::vector<std::string> warnings;
 };
 
 using StepCallback = std::function<void(const OdometryStep&)>;
@@ -39,7 +43,9 @@ using ProgressCallback = std::function<void(std::size_t rows, double t)>;
 /// Runs the pipeline: wheels.csv is fed when options.use_wheels and it
 /// exists, camera.csv when options.fuse_camera (required then), faults.csv
 /// (or `faults`) when the estimator is the oracle (required then). Throws
-/// io::Error naming the file, line or option on anything wrong.
+/// io::Error naming the file, line or option on anything wrong. A selected
+/// sensor that never reports is refused for least squares and the oracle
+/// (they would take it as still) and a warning for the robust estimators.
 OdometryRun run_odometry(const RobotConfig& config, const std::string& config_path,
                          const LogFiles& log, const OdometryOptions& options,
                          const StepCallback& on_step, const ProgressCallback& progress = {});
