@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   moa::cli::add_report(app, action);
   moa::cli::add_calibrate(app, action);
   moa::cli::add_experiment(app, action);
+  moa::cli::add_config(app, action);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
