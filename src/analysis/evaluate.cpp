@@ -106,21 +106,27 @@ std::optional<TrajectoryError> quantisation_floor(const SensorArray& array,
 std::string verdict(const TrajectoryError& error, const ErrorReference& reference) {
   const double err_mm = error.max_translation * 1e3;
   const double ref_mm = reference.max_translation * 1e3;
+  if (!(reference.max_translation > 0.0)) {  // every row held whole counts
+    return fmt::format("max {:.3g} mm against {} of 0 mm", err_mm, reference.label);
+  }
   const double ratio = error.max_translation / reference.max_translation;
+  // Two significant digits, whole numbers from 100 on: "0.75x", "15x", "273x".
+  const std::string times = ratio < 100.0 ? fmt::format("{:.2g}x", ratio)
+                                          : fmt::format("{:.0f}x", ratio);
   if (reference.is_floor) {
     if (ratio <= kFloorTolerance) {
       return fmt::format(
-          "at the quantisation floor (max {:.3g} mm, {:.2g}x the {:.3g} mm that rounding to whole "
+          "at the quantisation floor (max {:.3g} mm, {} the {:.3g} mm that rounding to whole "
           "counts alone gives on this path): exact up to the sensors' resolution",
-          err_mm, ratio, ref_mm);
+          err_mm, times, ref_mm);
     }
     return fmt::format(
-        "{:.3g}x the quantisation floor ({:.3g} mm against {:.3g} mm from rounding to whole counts "
+        "{} the quantisation floor ({:.3g} mm against {:.3g} mm from rounding to whole counts "
         "alone): the rest comes from noise, faults or mounting errors, not from resolution",
-        ratio, err_mm, ref_mm);
+        times, err_mm, ref_mm);
   }
-  return fmt::format("{} {}'s {:.3g} mm (max {:.3g} mm, {:.2g}x)",
-                     ratio <= 1.0 ? "within" : "above", reference.label, ref_mm, err_mm, ratio);
+  return fmt::format("{} {}'s {:.3g} mm (max {:.3g} mm, {})", ratio <= 1.0 ? "within" : "above",
+                     reference.label, ref_mm, err_mm, times);
 }
 
 }  // namespace moa
