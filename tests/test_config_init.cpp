@@ -33,8 +33,10 @@ std::string contents(const fs::path& file) {
 TEST(ConfigInit, PolygonIsAcceptedByOdometryWhichTracksALogOfThatRobot) {
   const auto dir = test::scratch_dir("config_init");
   const fs::path config = dir / "init.yaml";
-  const auto r = test::run_moa("config init --layout polygon --sensors 4 --radius 0.1 --cpi 1600 "
-                               "--preset ADNS-3080 --out " + config.string());
+  const auto r = test::run_moa(
+      "config init --layout polygon --sensors 4 --radius 0.1 --cpi 1600 "
+      "--preset ADNS-3080 --out " +
+      config.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(contents(config), HasSubstr("# Frames: the robot frame has x forward"));
 
@@ -57,8 +59,8 @@ TEST(ConfigInit, PolygonIsAcceptedByOdometryWhichTracksALogOfThatRobot) {
   const SensorArray robot = regular_polygon(4, 0.1, 0.0, read.array[0]);
   const auto log = test::synthesise(robot, test::mixed_motion, 10.0, 0.01);
   test::write_log(log, robot, {"m1", "m2", "m3", "m4"}, dir);
-  const auto odo = test::run_moa("odometry --config " + config.string() + " --log " +
-                                 dir.string() + " --out " + (dir / "odom.csv").string());
+  const auto odo = test::run_moa("odometry --config " + config.string() + " --log " + dir.string() +
+                                 " --out " + (dir / "odom.csv").string());
   ASSERT_EQ(odo.exit_code, 0) << odo.err;
   TrajectoryErrorAccumulator acc(log.truth);
   io::TruthReader odometry(dir / "odom.csv");
@@ -89,9 +91,7 @@ TEST(ConfigInit, SensorsOneByOneInDegreesWithMirroring) {
 TEST(ConfigInit, RefusesToOverwriteWithoutForce) {
   const auto dir = test::scratch_dir("config_init_force");
   const fs::path config = dir / "robot.yaml";
-  {
-    std::ofstream(config) << "mine\n";
-  }
+  { std::ofstream(config) << "mine\n"; }
   const std::string args =
       "config init --layout polygon --sensors 3 --radius 0.1 --cpi 800 --out " + config.string();
   const auto r = test::run_moa(args);

@@ -49,8 +49,8 @@ TEST(EvaluateCli, PrintsMillimetresOverTheDistanceTravelledAndAVerdict) {
   for (std::size_t k = 1; k < truth.size(); ++k)
     distance += (truth[k].pose.t - truth[k - 1].pose.t).norm();
 
-  const auto json = test::run_moa("evaluate --json --config " + (kLog / "robot.yaml").string() +
-                                  files);
+  const auto json =
+      test::run_moa("evaluate --json --config " + (kLog / "robot.yaml").string() + files);
   ASSERT_EQ(json.exit_code, 0) << json.err;
   EXPECT_NEAR(json_number(json.out, "distance_m"), distance, 1e-6 * distance);
   const double max_m = json_number(json.out, "max_translation_m");

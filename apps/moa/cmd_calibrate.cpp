@@ -152,8 +152,8 @@ void print_json(const Report& r, const std::string& out) {
   std::vector<std::string> warnings;
   for (const auto& w : r.warnings) warnings.push_back(io::json_string(w));
   fmt::print("{{\"method\": {}, \"out\": {}{}, \"sensors\": [{}], \"warnings\": [{}]}}\n",
-             io::json_string(r.method), io::json_string(out), r.json_extra, fmt::join(sensors, ", "),
-             fmt::join(warnings, ", "));
+             io::json_string(r.method), io::json_string(out), r.json_extra,
+             fmt::join(sensors, ", "), fmt::join(warnings, ", "));
 }
 
 std::string list_kept(const std::array<bool, kMountParameters>& estimated) {

@@ -76,8 +76,8 @@ int run_config_init(const ConfigInitArgs& a) {
   if (!a.preset.empty()) {
     const auto preset = io::find_sensor_preset(a.preset);
     if (!preset) {
-      throw io::Error(fmt::format("--preset {}: unknown (known: {})", a.preset,
-                                  io::sensor_preset_names()));
+      throw io::Error(
+          fmt::format("--preset {}: unknown (known: {})", a.preset, io::sensor_preset_names()));
     }
     prototype.cpi = preset->cpi;
     prototype.max_speed = preset->max_speed;
@@ -85,7 +85,8 @@ int run_config_init(const ConfigInitArgs& a) {
   }
   if (a.cpi) {
     if (!(std::isfinite(*a.cpi) && *a.cpi > 0.0)) {
-      throw io::Error(fmt::format("--cpi {}: must be a positive number of counts per inch", *a.cpi));
+      throw io::Error(
+          fmt::format("--cpi {}: must be a positive number of counts per inch", *a.cpi));
     }
     prototype.cpi = *a.cpi;
   } else if (a.preset.empty()) {
@@ -96,7 +97,8 @@ int run_config_init(const ConfigInitArgs& a) {
   std::string title;
   if (!a.sensor_specs.empty()) {
     if (!a.layout.empty() || a.sensors || a.radius) {
-      throw io::Error("--sensor lists the sensors one by one: leave out --layout, --sensors, --radius");
+      throw io::Error(
+          "--sensor lists the sensors one by one: leave out --layout, --sensors, --radius");
     }
     for (const std::string& spec : a.sensor_specs) add_sensor(spec, prototype, config);
     if (config.names.size() < 2) throw io::Error("--sensor: give at least 2 sensors");
@@ -113,7 +115,8 @@ int run_config_init(const ConfigInitArgs& a) {
       throw io::Error(fmt::format("--radius {}: must be a positive number of metres", *a.radius));
     }
     if (!std::isfinite(a.theta_deg)) {
-      throw io::Error(fmt::format("--theta-deg {}: must be a finite number of degrees", a.theta_deg));
+      throw io::Error(
+          fmt::format("--theta-deg {}: must be a finite number of degrees", a.theta_deg));
     }
     config = io::polygon_config(*a.sensors, *a.radius, a.theta_deg * kRadPerDeg, prototype);
     title = fmt::format(
@@ -127,11 +130,13 @@ int run_config_init(const ConfigInitArgs& a) {
   if (!a.force && std::filesystem::exists(out, ec)) {
     throw io::Error(fmt::format("{}: exists; pass --force to replace it", a.out));
   }
-  if (std::filesystem::is_directory(out, ec)) throw io::Error(fmt::format("{}: is a directory", a.out));
+  if (std::filesystem::is_directory(out, ec))
+    throw io::Error(fmt::format("{}: is a directory", a.out));
   io::write_commented_config(config, "robot.yaml written by moa config init:\n" + title, out);
-  fmt::print("moa config init: {} sensors written to {}; edit it, then calibrate "
-             "(docs/calibration.md)\n",
-             config.names.size(), a.out);
+  fmt::print(
+      "moa config init: {} sensors written to {}; edit it, then calibrate "
+      "(docs/calibration.md)\n",
+      config.names.size(), a.out);
   return 0;
 }
 

@@ -88,7 +88,8 @@ int run_evaluate(const EvaluateArgs& args) {
              e.max_translation * 1e3, e.distance, share, e.rms_translation * 1e3);
   fmt::print("heading error (deg)     max {:.3g}, rms {:.3g}\n", e.max_heading * kDegPerRad,
              e.rms_heading * kDegPerRad);
-  for (const ErrorReference& r : references) fmt::print("verdict                 {}\n", verdict(e, r));
+  for (const ErrorReference& r : references)
+    fmt::print("verdict                 {}\n", verdict(e, r));
   return 0;
 }
 

@@ -69,8 +69,8 @@ TrajectoryError TrajectoryErrorAccumulator::result() const {
 std::optional<TrajectoryError> quantisation_floor(const SensorArray& array,
                                                   std::span<const StampedPose> truth) {
   if (truth.size() < 2) return std::nullopt;
-  const double reference_dt = (truth.back().t - truth.front().t) /
-                              static_cast<double>(truth.size() - 1);
+  const double reference_dt =
+      (truth.back().t - truth.front().t) / static_cast<double>(truth.size() - 1);
   if (!(reference_dt > 0.0)) return std::nullopt;
   const auto created = LsEstimator::create(array, all_sensors(array.size()), reference_dt);
   const auto* ls = std::get_if<LsEstimator>(&created);
@@ -111,8 +111,8 @@ std::string verdict(const TrajectoryError& error, const ErrorReference& referenc
   }
   const double ratio = error.max_translation / reference.max_translation;
   // Two significant digits, whole numbers from 100 on: "0.75x", "15x", "273x".
-  const std::string times = ratio < 100.0 ? fmt::format("{:.2g}x", ratio)
-                                          : fmt::format("{:.0f}x", ratio);
+  const std::string times =
+      ratio < 100.0 ? fmt::format("{:.2g}x", ratio) : fmt::format("{:.0f}x", ratio);
   if (reference.is_floor) {
     if (ratio <= kFloorTolerance) {
       return fmt::format(

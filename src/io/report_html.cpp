@@ -274,12 +274,12 @@ std::string summary_table(const ReportModel& m) {
     row("translation error",
         fmt::format("max {:.3g} mm over {:.3g} m travelled{}, rms {:.3g} mm",
                     e.max_translation * 1e3, e.distance, share, e.rms_translation * 1e3));
-    row("heading error", fmt::format("max {:.3g} deg, rms {:.3g} deg",
-                                     e.max_heading * kDegPerRad, e.rms_heading * kDegPerRad));
+    row("heading error", fmt::format("max {:.3g} deg, rms {:.3g} deg", e.max_heading * kDegPerRad,
+                                     e.rms_heading * kDegPerRad));
     if (m.floor) {
-      t += fmt::format(
-          "<tr class=\"verdict\"><th>verdict</th><td>{}</td></tr>\n",
-          html(verdict(e, {m.floor->max_translation, "the quantisation floor", true})));
+      t +=
+          fmt::format("<tr class=\"verdict\"><th>verdict</th><td>{}</td></tr>\n",
+                      html(verdict(e, {m.floor->max_translation, "the quantisation floor", true})));
     }
     row("compared with truth",
         fmt::format("{} epochs{}", e.samples,

@@ -27,8 +27,8 @@
 #include <string>
 #include <vector>
 
-#include "moa/core/array.hpp"
 #include "moa/analysis/evaluate.hpp"
+#include "moa/core/array.hpp"
 #include "moa/io/config.hpp"
 
 namespace moa::io {
