@@ -58,8 +58,7 @@ demo: deps
 	@mkdir -p $(BUILD_DIR)
 	@echo "moa demo: building the moa program (full log: $(DEMO_LOG))"
 	@start=$$(date +%s); \
-	{ { [ -f $(BUILD_DIR)/CMakeCache.txt ] || \
-	    cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) $(CMAKE_FLAGS); } && \
+	{ $(MAKE) --no-print-directory $(BUILD_DIR)/CMakeCache.txt && \
 	  cmake --build $(BUILD_DIR) -j $(JOBS) --target moa_cli; } > $(DEMO_LOG) 2>&1 || \
 	{ tail -n 40 $(DEMO_LOG); echo "moa demo: the build failed; full log: $(DEMO_LOG)"; exit 1; }; \
 	echo "moa demo: built in $$(( $$(date +%s) - start )) s"
