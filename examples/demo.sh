@@ -28,7 +28,7 @@ echo "      mounts 0.2 mm off, the consensus estimator"
   --out "$sim/report.html"
 
 # The figures of each run, from what moa evaluate printed above.
-max_error() { sed -n 's/^translation error (mm) *max \([^ ]*\) over \(.*\), rms.*/\1 mm over \2/p' "$1"; }
+max_error() { sed -n 's/^translation error *max \(.*\), rms.*/\1/p' "$1"; }
 verdict() { sed -n 's/^verdict *//p' "$1"; }
 faulty=$(awk -F, 'NR > 2 && $3 != 0 { n++ } END { print n + 0 }' "$sim/faults.csv")
 rows=$(awk 'NR > 2 { n++ } END { print n + 0 }' "$sim/faults.csv")

@@ -119,6 +119,16 @@ TEST(Evaluate, QuantisationFloorNeedsAGeometryAndIncreasingTimes) {
   EXPECT_FALSE(quantisation_floor(array, repeated).has_value());
 }
 
+TEST(Evaluate, DescribesTheTranslationErrorInMillimetresOverTheDistance) {
+  TrajectoryError e;
+  e.max_translation = 0.0154;
+  e.rms_translation = 0.00676;
+  e.distance = 2.5;
+  EXPECT_EQ(describe_translation(e), "max 15.4 mm over 2.5 m travelled (0.62 %), rms 6.76 mm");
+  e.distance = 0.0;
+  EXPECT_EQ(describe_translation(e), "max 15.4 mm over 0 m travelled, rms 6.76 mm");
+}
+
 TEST(Evaluate, VerdictFollowsTheRatioToTheReference) {
   TrajectoryError e;
   e.max_translation = 0.015;

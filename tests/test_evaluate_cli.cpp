@@ -61,7 +61,7 @@ TEST(EvaluateCli, PrintsMillimetresOverTheDistanceTravelledAndAVerdict) {
                                   " --reference-mm 0.001 --reference-label \"a tight bound\"");
   ASSERT_EQ(text.exit_code, 0) << text.err;
   char max_mm[64];
-  std::snprintf(max_mm, sizeof max_mm, "max %.3g over", max_m * 1e3);
+  std::snprintf(max_mm, sizeof max_mm, "max %.3g mm over", max_m * 1e3);
   EXPECT_THAT(text.out, HasSubstr(max_mm));
   EXPECT_THAT(text.out, HasSubstr("m travelled"));
   // Noise-free counts: the only error is rounding, so the run is at the floor.

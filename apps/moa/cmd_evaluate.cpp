@@ -82,11 +82,8 @@ int run_evaluate(const EvaluateArgs& args) {
   }
   fmt::print("samples compared        {}\n", e.samples);
   if (e.outside > 0) fmt::print("outside the truth's span {} (not compared)\n", e.outside);
-  const std::string share =
-      e.distance > 0.0 ? fmt::format(" ({:.2g} %)", 100.0 * e.max_translation / e.distance) : "";
-  fmt::print("translation error (mm)  max {:.3g} over {:.3g} m travelled{}, rms {:.3g}\n",
-             e.max_translation * 1e3, e.distance, share, e.rms_translation * 1e3);
-  fmt::print("heading error (deg)     max {:.3g}, rms {:.3g}\n", e.max_heading * kDegPerRad,
+  fmt::print("translation error       {}\n", describe_translation(e));
+  fmt::print("heading error           max {:.3g} deg, rms {:.3g} deg\n", e.max_heading * kDegPerRad,
              e.rms_heading * kDegPerRad);
   for (const ErrorReference& r : references)
     fmt::print("verdict                 {}\n", verdict(e, r));

@@ -103,6 +103,16 @@ std::optional<TrajectoryError> quantisation_floor(const SensorArray& array,
   return acc.result();
 }
 
+std::string describe_translation(const TrajectoryError& error) {
+  const std::string share =
+      error.distance > 0.0
+          ? fmt::format(" ({:.2g} %)", 100.0 * error.max_translation / error.distance)
+          : "";
+  return fmt::format("max {:.3g} mm over {:.3g} m travelled{}, rms {:.3g} mm",
+                     error.max_translation * 1e3, error.distance, share,
+                     error.rms_translation * 1e3);
+}
+
 std::string verdict(const TrajectoryError& error, const ErrorReference& reference) {
   const double err_mm = error.max_translation * 1e3;
   const double ref_mm = reference.max_translation * 1e3;

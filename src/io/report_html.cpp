@@ -269,11 +269,7 @@ std::string summary_table(const ReportModel& m) {
   if (m.camera_rows > 0) row("camera fixes", fmt::format("{}", m.camera_rows));
   if (m.errors) {
     const TrajectoryError& e = *m.errors;
-    const std::string share =
-        e.distance > 0.0 ? fmt::format(" ({:.2g} %)", 100.0 * e.max_translation / e.distance) : "";
-    row("translation error",
-        fmt::format("max {:.3g} mm over {:.3g} m travelled{}, rms {:.3g} mm",
-                    e.max_translation * 1e3, e.distance, share, e.rms_translation * 1e3));
+    row("translation error", describe_translation(e));
     row("heading error", fmt::format("max {:.3g} deg, rms {:.3g} deg", e.max_heading * kDegPerRad,
                                      e.rms_heading * kDegPerRad));
     if (m.floor) {

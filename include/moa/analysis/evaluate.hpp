@@ -81,6 +81,10 @@ struct ErrorReference {
 };
 inline constexpr double kFloorTolerance = 2.0;
 
+/// The translation error for a person: "max 15.4 mm over 2.5 m travelled
+/// (0.62 %), rms 6.76 mm" (the share left out when the distance is 0).
+std::string describe_translation(const TrajectoryError& error);
+
 /// One line judging `error` against `reference`, with both figures in mm
 /// and their ratio, e.g. "at the quantisation floor (0.015 mm, 1.0x its
 /// 0.015 mm): exact up to the sensors' resolution".
