@@ -18,6 +18,7 @@
 #include "moa/core/consensus.hpp"
 #include "moa/core/estimate.hpp"
 #include "moa/core/sekimori.hpp"
+#include "moa/io/json.hpp"
 
 namespace moa::cli {
 namespace {
@@ -128,15 +129,6 @@ std::string cpu_model() {
   return "unknown";
 }
 
-std::string json_escape(const std::string& s) {
-  std::string out;
-  for (const char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
-  }
-  return out;
-}
-
 int run_bench(const BenchArgs& args) {
   std::vector<Row> rows;
   for (int n : args.sizes) {
@@ -166,13 +158,13 @@ int run_bench(const BenchArgs& args) {
         "\"sekimori_ns_per_update\": {:.1f}, \"naive_sekimori_ns_per_update\": {:.1f}, "
         "\"consensus_ns_per_update\": {:.1f}, \"ls_speedup\": {:.1f}, \"sekimori_speedup\": "
         "{:.1f}, "
-        "\"consensus_vs_naive_ls\": {:.2f}, \"per_n\": [{}], \"machine\": {{\"cpu\": \"{}\", "
-        "\"hardware_threads\": {}}}, \"compiler\": \"{}\", \"build\": \"{}\", \"batches\": {}, "
+        "\"consensus_vs_naive_ls\": {:.2f}, \"per_n\": [{}], \"machine\": {{\"cpu\": {}, "
+        "\"hardware_threads\": {}}}, \"compiler\": {}, \"build\": \"{}\", \"batches\": {}, "
         "\"updates_per_batch\": {}}}\n",
         four.n, four.ls, four.naive_ls, four.sekimori, four.naive_sekimori, four.consensus,
         four.naive_ls / four.ls, four.naive_sekimori / four.sekimori,
-        four.naive_ls / four.consensus, per_n, json_escape(cpu_model()),
-        std::thread::hardware_concurrency(), json_escape(__VERSION__), build, args.batches,
+        four.naive_ls / four.consensus, per_n, io::json_string(cpu_model()),
+        std::thread::hardware_concurrency(), io::json_string(__VERSION__), build, args.batches,
         args.updates);
     return 0;
   }

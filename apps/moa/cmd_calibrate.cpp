@@ -29,6 +29,7 @@
 #include "moa/calibration/kimlee.hpp"
 #include "moa/io/config.hpp"
 #include "moa/io/error.hpp"
+#include "moa/io/json.hpp"
 #include "moa/io/log.hpp"
 
 namespace moa::cli {
@@ -123,21 +124,6 @@ void print_report(const Report& r, const std::string& out) {
   fmt::print("calibrated config written to {}\n", out);
 }
 
-std::string json_string(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      out += fmt::format("\\u{:04x}", static_cast<int>(c));
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
-}
-
 std::string json_mount(const SensorMount& m) {
   return fmt::format(
       "{{\"position\": [{:.9g}, {:.9g}], \"yaw\": {:.9g}, \"scale\": [{:.9g}, {:.9g}], "
@@ -153,7 +139,7 @@ void print_json(const Report& r, const std::string& out) {
         "{:.9g}], \"yaw\": {:.9g}, \"scale\": [{:.9g}, {:.9g}]}}, \"estimated\": {{\"position_x\": "
         "{}, \"position_y\": {}, \"yaw\": {}, \"scale_x\": {}, \"scale_y\": {}}}, "
         "\"mirror_from_data\": {}",
-        json_string(s.name), json_mount(s.nominal), json_mount(s.calibrated), s.sigma(0),
+        io::json_string(s.name), json_mount(s.nominal), json_mount(s.calibrated), s.sigma(0),
         s.sigma(1), s.sigma(2), s.sigma(3), s.sigma(4), s.estimated[0], s.estimated[1],
         s.estimated[2], s.estimated[3], s.estimated[4], s.mirror_from_data);
     if (s.residual_rms) e += fmt::format(", \"residual_rms_m_s\": {:.9g}", *s.residual_rms);
@@ -164,10 +150,10 @@ void print_json(const Report& r, const std::string& out) {
     sensors.push_back(e + "}");
   }
   std::vector<std::string> warnings;
-  for (const auto& w : r.warnings) warnings.push_back(json_string(w));
+  for (const auto& w : r.warnings) warnings.push_back(io::json_string(w));
   fmt::print("{{\"method\": {}, \"out\": {}{}, \"sensors\": [{}], \"warnings\": [{}]}}\n",
-             json_string(r.method), json_string(out), r.json_extra, fmt::join(sensors, ", "),
-             fmt::join(warnings, ", "));
+             io::json_string(r.method), io::json_string(out), r.json_extra,
+             fmt::join(sensors, ", "), fmt::join(warnings, ", "));
 }
 
 std::string list_kept(const std::array<bool, kMountParameters>& estimated) {

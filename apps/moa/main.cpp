@@ -59,6 +59,7 @@ int main(int argc, char** argv) {
   moa::cli::add_report(app, action);
   moa::cli::add_calibrate(app, action);
   moa::cli::add_experiment(app, action);
+  moa::cli::add_config(app, action);
   refuse_non_finite_numbers(app);
 
   // An unknown word where the command goes is named as such (CLI11 would
@@ -99,8 +100,12 @@ int main(int argc, char** argv) {
     app.exit(e);
     return moa::io::kExitUsage;
   }
-  const auto* sub = app.get_subcommands().empty() ? nullptr : app.get_subcommands().front();
-  const std::string name = sub ? sub->get_name() : "";
+  // "config init": the chain of subcommands given, for the error line.
+  std::string name;
+  for (const CLI::App* sub = &app; !sub->get_subcommands().empty();) {
+    sub = sub->get_subcommands().front();
+    name += (name.empty() ? "" : " ") + sub->get_name();
+  }
   try {
     return action();
   } catch (const moa::io::IoError& e) {

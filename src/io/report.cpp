@@ -387,6 +387,7 @@ ReportModel build_report(const ReportInputs& inputs, const ReportOptions& option
       throw Error(fmt::format("{}: no row lies within the time span of {}",
                               inputs.odometry.string(), inputs.truth->string()));
     }
+    m.floor = quantisation_floor(m.config.array, truth);
     m.truth = decimated(truth, options.max_points);
   }
   return m;

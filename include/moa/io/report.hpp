@@ -94,6 +94,8 @@ struct ReportModel {
 
   std::vector<StampedPose> truth;  ///< decimated to at most max_points
   std::optional<TrajectoryError> errors;
+  /// quantisation_floor() of the config on the truth's path: the summary's verdict.
+  std::optional<TrajectoryError> floor;
   std::vector<Eigen::Vector2d> camera;  ///< fixes (decimated)
   std::size_t camera_rows = 0;
 
