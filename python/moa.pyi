@@ -121,7 +121,7 @@ class Odometry:
         squal: Optional[int] = None,
         flags: int = 0,
     ) -> Steps:
-        """A mice row: time (s), sensor (name or index), counts (sensor frame)."""
+        """A mice row: time (s), sensor (name or index), counts (sensor frame), squal (None or -1: absent), flags."""
     def push_rows(
         self,
         t: npt.ArrayLike,
@@ -131,7 +131,7 @@ class Odometry:
         squal: Optional[npt.ArrayLike] = None,
         flags: Optional[npt.ArrayLike] = None,
     ) -> Steps:
-        """Mice rows in bulk: arrays of one length (sensor: indices or names)."""
+        """Mice rows in bulk: arrays of one length (sensor: indices or names; squal: -1 where absent)."""
     def push_wheels(self, t: float, vx: float, vy: float, omega: float) -> Steps:
         """A wheel-odometry row: the twist (robot frame) averaged since the previous one."""
     def push_fix(

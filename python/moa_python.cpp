@@ -65,6 +65,12 @@ std::vector<double> doubles(const py::handle& x) {
   return {a.data(), a.data() + a.size()};
 }
 
+/// A SQUAL value, 0..255 (negative means absent, as read_log gives it).
+std::uint8_t squal_value(double squal) {
+  if (!(squal <= 255.0)) throw py::value_error(fmt::format("squal {}: must be 0..255", squal));
+  return static_cast<std::uint8_t>(squal);
+}
+
 // ------------------------------------------------------------ config
 
 /// A robot config: a path (str or os.PathLike) or a Config.
@@ -295,7 +301,7 @@ class PyOdometry {
                 int flags) {
     SensorRow row{
         t, sensor_index(sensor), {dx, dy}, std::nullopt, static_cast<std::uint8_t>(flags)};
-    if (squal) row.squal = static_cast<std::uint8_t>(*squal);
+    if (squal && *squal >= 0) row.squal = squal_value(*squal);
     check(odometry_->push(row, sink()), t);
     return steps_.take(config_.config.names);
   }
@@ -313,7 +319,7 @@ class PyOdometry {
     }
     for (std::size_t k = 0; k < n; ++k) {
       SensorRow row{tt[k], ss[k], {xx[k], yy[k]}, std::nullopt, 0};
-      if (!qq.empty()) row.squal = static_cast<std::uint8_t>(qq[k]);
+      if (!qq.empty() && qq[k] >= 0.0) row.squal = squal_value(qq[k]);
       if (!ff.empty()) row.flags = static_cast<std::uint8_t>(ff[k]);
       check(odometry_->push(row, sink()), tt[k]);
     }
@@ -690,10 +696,12 @@ a dict of arrays like moa.odometry's (possibly empty).)")
            py::arg("config"), py::arg("t0") = 0.0, py::arg("estimator") = "consensus")
       .def("push", &PyOdometry::push, py::arg("t"), py::arg("sensor"), py::arg("dx"), py::arg("dy"),
            py::arg("squal") = py::none(), py::arg("flags") = 0,
-           "A mice row: time (s), sensor (name or index), counts (sensor frame).")
+           "A mice row: time (s), sensor (name or index), counts (sensor frame), squal (None or "
+           "-1: absent), flags.")
       .def("push_rows", &PyOdometry::push_rows, py::arg("t"), py::arg("sensor"), py::arg("dx"),
            py::arg("dy"), py::arg("squal") = py::none(), py::arg("flags") = py::none(),
-           "Mice rows in bulk: arrays of one length (sensor: indices or names).")
+           "Mice rows in bulk: arrays of one length (sensor: indices or names; squal: -1 where "
+           "absent).")
       .def("push_wheels", &PyOdometry::push_wheels, py::arg("t"), py::arg("vx"), py::arg("vy"),
            py::arg("omega"),
            "A wheel-odometry row: the twist (robot frame) averaged since the previous one, ending "

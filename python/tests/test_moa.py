@@ -104,7 +104,8 @@ def test_odometry_object_in_bulk_and_row_by_row_equals_the_file_pipeline(logs):
     expected = moa.odometry(d / "robot.yaml", d, "ls", no_wheels=True)
     rows = moa.read_log(d / "robot.yaml", d)["mice"]
     bulk = moa.Odometry(d / "robot.yaml", t0=rows["t"][0], estimator="ls", no_wheels=True)
-    steps = [bulk.push_rows(rows["t"], rows["sensor"], rows["dx"], rows["dy"])]
+    steps = [bulk.push_rows(rows["t"], rows["sensor"], rows["dx"], rows["dy"], rows["squal"],
+                            rows["flags"])]
     steps.append(bulk.finish(rows["t"][-1]))
     for c in NUMERIC:
         np.testing.assert_array_equal(np.concatenate([s[c] for s in steps]), expected[c])
@@ -120,6 +121,43 @@ def test_odometry_object_in_bulk_and_row_by_row_equals_the_file_pipeline(logs):
     n = len(got)
     assert n > 100
     np.testing.assert_array_equal(got, expected["x"][:n])
+
+
+def test_odometry_object_fed_mice_wheels_and_fixes_in_time_order_equals_the_file_pipeline(logs):
+    d = logs["faults-liftoff"]
+    expected = moa.odometry(d / "robot.yaml", d, fuse_camera=True)
+    log = moa.read_log(d / "robot.yaml", d)
+    mice, wheels, camera = log["mice"], log["wheels"], log["camera"]
+    odo = moa.Odometry(d / "robot.yaml", t0=mice["t"][0], fuse_camera=True)
+    steps = []
+    w = c = 0
+
+    def feed_until(t):
+        nonlocal w, c
+        while c < len(camera["t"]) and camera["t"][c] <= t:
+            theta, sx, sy = (None if np.isnan(v) else v
+                             for v in (camera["theta"][c], camera["sx"][c], camera["sy"][c]))
+            odo.push_fix(camera["t"][c], camera["x"][c], camera["y"][c], theta, sx, sy)
+            c += 1
+        while w < len(wheels["t"]) and wheels["t"][w] <= t:
+            steps.append(odo.push_wheels(wheels["t"][w], wheels["vx"][w], wheels["vy"][w],
+                                         wheels["omega"][w]))
+            w += 1
+
+    for k in range(len(mice["t"])):
+        feed_until(mice["t"][k])
+        squal = int(mice["squal"][k])
+        steps.append(odo.push(mice["t"][k], int(mice["sensor"][k]), mice["dx"][k],
+                              mice["dy"][k], squal if squal >= 0 else None,
+                              int(mice["flags"][k])))
+    feed_until(mice["t"][-1])
+    steps.append(odo.finish(mice["t"][-1]))
+    steps = [s for s in steps if len(s["t"])]
+    for col in NUMERIC + ["pxx", "pxy", "pyy", "ptt"]:
+        np.testing.assert_array_equal(np.concatenate([s[col] for s in steps]), expected[col],
+                                      err_msg=col)
+    np.testing.assert_array_equal(np.concatenate([s["excluded"] for s in steps]),
+                                  expected["excluded"])
 
 
 def test_odometry_object_reports_a_bad_row():
