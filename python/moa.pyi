@@ -167,6 +167,10 @@ class Calibration:
         observability report: which parameters were estimated); mirror_from_data;
         nominal; residual_rms (m/s); push_misfit (m); information_eigenvalues."""
     @property
+    def observability(self) -> list[dict[str, Any]]:
+        """Per sensor: name, estimated (which parameters the data determined) and
+        information_eigenvalues (exact; below 1 means not excited)."""
+    @property
     def facts(self) -> list[str]: ...
     @property
     def warnings(self) -> list[str]: ...

@@ -730,6 +730,23 @@ calibrated); sd_position, sd_yaw, sd_scale (1-sigma, 0 where kept);
 estimated (which parameters were estimated, the observability report),
 mirror_from_data, nominal (the config's mount), residual_rms (m/s, kimlee
 and exact), push_misfit (m, guided), information_eigenvalues (exact).)")
+      .def_property_readonly(
+          "observability",
+          [](const io::CalibrationSummary& s) {
+            py::list l;
+            for (const auto& r : s.sensors) {
+              const py::dict d = sensor_dict(r);
+              py::dict o;
+              for (const char* key : {"name", "estimated", "information_eigenvalues"})
+                o[key] = d[key];
+              l.append(o);
+            }
+            return l;
+          },
+          R"(Per sensor: name, estimated (which parameters the data determined; the
+others were kept at nominal) and information_eigenvalues (exact: of the
+Fisher information in units of a generous mounting error, ascending; below 1
+means not excited).)")
       .def_property_readonly("facts", [](const io::CalibrationSummary& s) { return s.facts; })
       .def_property_readonly("warnings", [](const io::CalibrationSummary& s) { return s.warnings; })
       .def_property_readonly(

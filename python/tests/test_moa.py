@@ -199,6 +199,8 @@ def test_calibrate_reports_observability_and_sigma(logs):
         assert all(s["estimated"].values())
         assert (s["sd_position"] > 0).all() and s["sd_yaw"] > 0
         assert s["information_eigenvalues"].shape == (5,)
+    assert [o["name"] for o in cal.observability] == [s["name"] for s in cal.sensors]
+    assert all((o["information_eigenvalues"] >= 1).all() for o in cal.observability)
     kimlee = moa.calibrate(d / "robot.yaml", d, method="kimlee")
     assert not kimlee.sensors[0]["estimated"]["yaw"]
     assert kimlee.sensors[0]["sd_yaw"] == 0
