@@ -1,4 +1,4 @@
-// The moa command end to end: what users and scripts rely on (spec/cli.md).
+// The moa command end to end: what users and scripts rely on (docs/formats/cli.md).
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// Robot config v1 (spec/config.md): parsing, every rejection with its exact
+// Robot config v1 (docs/formats/config.md): parsing, every rejection with its exact
 // message, and exact round-trip through format_config.
 #include <gtest/gtest.h>
 

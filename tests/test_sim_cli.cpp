@@ -78,7 +78,7 @@ TEST(SimCli, SameSeedSameBytesOtherSeedOtherData) {
   EXPECT_EQ(slurp(root / "one" / "robot.true.yaml"), slurp(root / "three" / "robot.true.yaml"));
 }
 
-// spec/config.md applied to the truth: for each pair of consecutive truth
+// docs/formats/config.md applied to the truth: for each pair of consecutive truth
 // poses the body-frame motion (v dt, omega dt) from the SE(2) logarithm,
 // then counts = k diag(scale) F R(yaw)^T (v dt + omega dt J p).
 std::map<std::string, Eigen::Vector2d> model_totals(const fs::path& dir) {

@@ -1,6 +1,7 @@
-// moa calibrate: where the sensors really sit (docs/calibration.md). Parses
-// the flags, runs io::calibrate_log (moa/io/calibration_run.hpp: pairing,
-// checks and report), writes the calibrated config and prints the report.
+// moa calibrate: where the sensors really sit (docs/formats/cli.md,
+// docs/calibration.md). Parses the flags, runs io::calibrate_log
+// (moa/io/calibration_run.hpp: pairing, checks and report), writes the
+// calibrated config and prints the report.
 #include <fmt/core.h>
 
 #include <memory>

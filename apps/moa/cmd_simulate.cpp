@@ -1,5 +1,5 @@
 // moa simulate: a scenario run through the simulator, written as a log
-// (spec/cli.md): log format v1 + robot.yaml (nominal) + robot.true.yaml.
+// (docs/formats/cli.md): log format v1 + robot.yaml (nominal) + robot.true.yaml.
 #include <fmt/core.h>
 #include <unistd.h>
 

@@ -6,8 +6,8 @@
 // array is 1.05 x larger (eq. (52)); the robot turns on the spot at 1/3
 // rad/s; M = 10 measurements, each the counts of one downsampled packet of
 // K = 12 frames at 6400 fps (1.875 ms, eq. (50)). Simulated here in two ways:
-// noise-free (real-valued counts: what the note in reference/papers.md says
-// reproduces eq. (53)), and with integer counts (quantisation with the
+// noise-free (real-valued counts: the paper's eq. (53) is reproduced by
+// unquantised counts), and with integer counts (quantisation with the
 // remainder carried, a random start fraction per sensor and axis), repeated
 // --runs times. Fig. 3 is re-run on 500 such quantised samples.
 #include <fmt/core.h>

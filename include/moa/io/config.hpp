@@ -1,4 +1,4 @@
-// Robot configuration v1 (spec/config.md): YAML in, YAML out, same schema.
+// Robot configuration v1 (docs/formats/config.md): YAML in, YAML out, same schema.
 //
 //   version: 1
 //   sensors:

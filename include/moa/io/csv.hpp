@@ -1,5 +1,5 @@
 // Internal to moa's I/O: the line reader under every log-format CSV reader
-// (spec/log-format.md), so that all of them apply the same rules and word
+// (docs/formats/log.md), so that all of them apply the same rules and word
 // their errors the same way ("FILE:LINE: what is wrong").
 //
 // Rules it enforces: a header row first (comment lines before it are fine),

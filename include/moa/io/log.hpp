@@ -1,4 +1,4 @@
-// Log format v1 (spec/log-format.md): a directory of CSV files.
+// Log format v1 (docs/formats/log.md): a directory of CSV files.
 //
 // Every reader finds columns by header name, skips '#' comment lines
 // anywhere, ignores unknown extra columns, and throws io::Error as

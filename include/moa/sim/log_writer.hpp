@@ -1,4 +1,4 @@
-// Writes a simulated run as a log directory (spec/log-format.md, version 1)
+// Writes a simulated run as a log directory (docs/formats/log.md, version 1)
 // with its configs:
 //   mice.csv         t,sensor,dx,dy,squal,flags
 //   wheels.csv       t,vx,vy,omega                      (when the scenario has a drive)

@@ -1,5 +1,5 @@
 // The simulated optical mouse sensor: the measurement model of
-// spec/config.md (SensorMount::counts, the same code the estimators invert),
+// docs/formats/config.md (SensorMount::counts, the same code the estimators invert),
 // frame by frame, with noise, integer counts that carry their remainder, the
 // microcontroller's downsampler of K frames, SQUAL, flags, and faults.
 //
