@@ -18,9 +18,9 @@ constexpr std::array<std::pair<std::uint8_t, std::string_view>, 3> kNoiseFlagNam
     {kNoiseOverflow, "overflow"},
 }};
 
-std::string sd(double variance) {
-  return fmt::format("{:.6g}", std::sqrt(std::max(variance, 0.0)));
-}
+// "{}": the shortest text that reads back as the same double, as the other
+// columns, so that a reader (or the Python bindings) gets the exact value.
+std::string sd(double variance) { return fmt::format("{}", std::sqrt(std::max(variance, 0.0))); }
 
 std::vector<std::string> extra_columns(bool fused) {
   std::vector<std::string> columns{"sd_vx", "sd_vy", "sd_omega", "source", "used", "excluded"};
@@ -78,10 +78,10 @@ void OdometryCsvWriter::write(const OdometryStep& step) {
   const RobustEstimate& e = step.estimate;
   if (s.fused) {
     const Eigen::Matrix3d& p = step.pose_covariance;
-    out[6] = fmt::format("{:.6g}", p(0, 0));
-    out[7] = fmt::format("{:.6g}", p(0, 1));
-    out[8] = fmt::format("{:.6g}", p(1, 1));
-    out[9] = fmt::format("{:.6g}", p(2, 2));
+    out[6] = fmt::format("{}", p(0, 0));
+    out[7] = fmt::format("{}", p(0, 1));
+    out[8] = fmt::format("{}", p(1, 1));
+    out[9] = fmt::format("{}", p(2, 2));
   }
   out[0] = sd(e.estimate.covariance(0, 0));
   out[1] = sd(e.estimate.covariance(1, 1));

@@ -12,6 +12,37 @@
 namespace moa::io {
 namespace fs = std::filesystem;
 
+OdometryOptions resolve_odometry_options(OdometryOptions o, std::string_view estimator,
+                                         const std::vector<std::string>& sensors, bool no_wheels,
+                                         const RobotConfig& config,
+                                         const std::string& config_path) {
+  const auto kind = estimator_from_name(estimator);
+  if (!kind) throw Error(fmt::format("--estimator: unknown estimator '{}'", estimator));
+  o.estimator = *kind;
+  o.use_wheels = !no_wheels;
+  if (o.estimator == EstimatorKind::kWheels && no_wheels) {
+    throw Error("--estimator wheels and --no-wheels exclude each other");
+  }
+  if (!sensors.empty()) {
+    o.sensors = 0;
+    for (const auto& name : sensors) {
+      const auto i = config.index_of(name);
+      if (!i) {
+        std::string names;
+        for (const auto& n : config.names) names += (names.empty() ? "" : ", ") + n;
+        throw Error(
+            fmt::format("--sensors: unknown sensor '{}' ({} has {})", name, config_path, names));
+      }
+      if (contains(o.sensors, *i)) {
+        throw Error(fmt::format("--sensors: sensor '{}' named twice", name));
+      }
+      o.sensors |= SensorMask{1} << *i;
+    }
+  }
+  if (const char* e = o.validate(); *e) throw Error(fmt::format("invalid option: {}", e));
+  return o;
+}
+
 LogFiles resolve_log(const fs::path& log) {
   std::error_code ec;
   LogFiles files;

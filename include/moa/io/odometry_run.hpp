@@ -9,6 +9,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "moa/core/odometry.hpp"
@@ -25,6 +26,16 @@ struct LogFiles {
 };
 /// Throws io::Error when `log` is neither a directory with mice.csv nor a file.
 LogFiles resolve_log(const std::filesystem::path& log);
+
+/// The pipeline's options as a front end names them: `estimator` by name,
+/// `sensors` by config name (empty: all), wheels off with `no_wheels`;
+/// then validated (OdometryOptions::validate). `moa odometry`, `moa live`
+/// and the Python bindings resolve their options with this. Throws io::Error
+/// in the command line's words ("--sensors: unknown sensor 'x' (robot.yaml
+/// has m1, m2)", "invalid option: rate: must be positive and finite (Hz)").
+OdometryOptions resolve_odometry_options(OdometryOptions options, std::string_view estimator,
+                                         const std::vector<std::string>& sensors, bool no_wheels,
+                                         const RobotConfig& config, const std::string& config_path);
 
 struct OdometryRun {
   std::size_t rows = 0;          ///< mice rows read
