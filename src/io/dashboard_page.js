@@ -181,10 +181,12 @@
     const now = performance.now();
     arrivals.push(now);
     while (arrivals.length > 0 && arrivals[0] < now - 3000) arrivals.shift();
-    const rate = arrivals.length > 1 ? (1000 * (arrivals.length - 1)) / (now - arrivals[0]) : 0;
+    const span = now - arrivals[0];
+    const rate = span >= 500 ? (1000 * (arrivals.length - 1)) / span : null;
     status.textContent = 't ' + e.t.toFixed(2) + ' s   x ' + e.x.toFixed(3) + ' m   y ' +
       e.y.toFixed(3) + ' m   theta ' + ((e.theta * 180) / Math.PI).toFixed(1) + ' deg   ' +
-      'twist from ' + e.source + '   ' + rate.toFixed(1) + ' events/s   ' + state;
+      'twist from ' + e.source + '   ' + (rate === null ? '-' : rate.toFixed(1)) + ' events/s   ' +
+      state;
   }
 
   function on_event(e) {
@@ -214,7 +216,7 @@
   source.addEventListener('end', () => {
     source.close();
     body.dataset.moaStatus = 'ended';
-    status.textContent += '  (run ended)';
+    status.textContent = status.textContent.replace(/ live$/, '') + ' (run ended)';
   });
   source.onerror = () => {
     if (body.dataset.moaStatus !== 'ended') status.textContent = 'connection lost, retrying';
