@@ -234,6 +234,35 @@ TEST(LiveDashboard, BoundsClientsAndASlowClientNeverSlowsThePublisher) {
   for (const int fd : sockets) close(fd);
 }
 
+TEST(LiveDashboard, ListenAddressIsHostColonPortOrAPort) {
+  io::DashboardOptions o;
+  io::parse_listen_address("8081", "--serve", o);
+  EXPECT_EQ(o.host, "127.0.0.1");
+  EXPECT_EQ(o.port, 8081);
+  io::parse_listen_address("0.0.0.0:9000", "--serve", o);
+  EXPECT_EQ(o.host, "0.0.0.0");
+  EXPECT_EQ(o.port, 9000);
+  io::parse_listen_address("[::1]:9001", "--serve", o);
+  EXPECT_EQ(o.host, "::1");
+  EXPECT_EQ(o.port, 9001);
+  for (const char* bad : {"", "http", "70000", "-1", ":80", "host:", "1.2.3.4:8o"}) {
+    try {
+      io::parse_listen_address(bad, "--serve", o);
+      ADD_FAILURE() << bad;
+    } catch (const io::Error& e) {
+      EXPECT_THAT(e.what(), HasSubstr("--serve " + std::string(bad) + ":")) << bad;
+    }
+  }
+  const fs::path& log = simulated_log();
+  const auto r = test::run_moa("live --config " + (log / "robot.yaml").string() + " --replay " +
+                               log.string() + " --serve nowhere --duration 1");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("--serve nowhere: the port must be a number"));
+  io::DashboardOptions invalid;
+  invalid.max_rate = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_STREQ(invalid.validate(), "max_rate: must be in (0, 100] events/s");
+}
+
 std::optional<std::string> find_chromium() {
   for (const char* name : {"chromium", "chromium-browser", "google-chrome"}) {
     const std::string probe = std::string("command -v ") + name + " >/dev/null 2>&1";
