@@ -41,15 +41,20 @@ std::string slurp(const fs::path& file) {
   return s.str();
 }
 
-/// A 40 s simulated log (the calibration scenario: four sensors, mixed motion).
+/// A 40 s simulated log (the calibration scenario: four sensors, mixed
+/// motion), made once and removed at exit.
 const fs::path& simulated_log() {
-  static const fs::path dir = [] {
-    const fs::path d = test::scratch_dir("live-dashboard-log");
-    const auto r = test::run_moa("simulate --scenario calibration --seed 1 --out " + d.string());
-    EXPECT_EQ(r.exit_code, 0) << r.err;
-    return d;
-  }();
-  return dir;
+  struct Log {
+    fs::path dir = test::scratch_dir("live-dashboard-log");
+    Log() {
+      const auto r =
+          test::run_moa("simulate --scenario calibration --seed 1 --out " + dir.string());
+      EXPECT_EQ(r.exit_code, 0) << r.err;
+    }
+    ~Log() { fs::remove_all(dir); }
+  };
+  static const Log log;
+  return log.dir;
 }
 
 /// The data lines of an event stream's default ("message") events.
@@ -292,7 +297,7 @@ TEST(LiveDashboard, ChromiumDrawsTheChartsUpdatingWhileAReplayRuns) {
   const int port = test::free_port();
   test::BackgroundMoa moa("live --config " + (log / "robot.yaml").string() + " --replay " +
                           log.string() + " --serve 127.0.0.1:" + std::to_string(port) +
-                          " --duration 6 --quiet");
+                          " --duration 10 --quiet");
   ASSERT_TRUE(test::wait_for_server(port, 10.0)) << moa.err();
   // The page's stream stays open until the run ends (its "end" event closes
   // it); Chromium dumps the DOM once the network is idle and the budget spent.
@@ -308,12 +313,13 @@ TEST(LiveDashboard, ChromiumDrawsTheChartsUpdatingWhileAReplayRuns) {
   ASSERT_EQ(std::system(command.c_str()), 0) << slurp(dir / "chromium.log");
   const std::string dom = slurp(dir / "dom.html");
   const std::string console = slurp(dir / "chromium.log");
-  EXPECT_EQ(moa.wait(10.0), 0) << moa.err();
+  EXPECT_EQ(moa.wait(15.0), 0) << moa.err();
 
   EXPECT_THAT(dom, HasSubstr("data-moa-status=\"ended\""));
   EXPECT_THAT(tag_of(dom, "moa-errors"), HasSubstr("hidden"));
   EXPECT_EQ(console.find("CONSOLE"), std::string::npos) << console;
-  // About 20 events a second for ~5 s after the page loaded: every chart
+  // About 20 events a second for the seconds after the page loaded (Chromium
+  // takes a few to start): every chart
   // was redrawn for each, with data on it.
   const std::string body = dom.substr(dom.find("<body"), 200);
   EXPECT_GE(attribute(body, "data-events"), 40u) << body;
