@@ -14,8 +14,8 @@ DEBIAN_PACKAGES := g++ make cmake libeigen3-dev libyaml-cpp-dev libcli11-dev lib
                    gcc-avr avr-libc binutils-avr simavr libsimavr-dev
 # moa report: Chart.js, inlined into the page at build time; Chromium for its browser test.
 DEBIAN_PACKAGES += libjs-chart.js chromium
-# moa live --serve: the dashboard's HTTP server.
-DEBIAN_PACKAGES += libcpp-httplib-dev
+# moa live --serve: the dashboard's HTTP server (a shared library; its flags come from pkg-config).
+DEBIAN_PACKAGES += libcpp-httplib-dev pkgconf
 # The core cross-compiled for a Cortex-M4F (embedded/): GCC, newlib, libstdc++.
 DEBIAN_PACKAGES += gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
 
