@@ -16,6 +16,8 @@ DEBIAN_PACKAGES := g++ make cmake libeigen3-dev libyaml-cpp-dev libcli11-dev lib
 DEBIAN_PACKAGES += libjs-chart.js chromium
 # The Python module (pybind11, numpy), its tests (pytest) and example (matplotlib).
 DEBIAN_PACKAGES += python3-dev pybind11-dev python3-numpy python3-pytest python3-matplotlib
+# moa live --serve: the dashboard's HTTP server (a shared library; its flags come from pkg-config).
+DEBIAN_PACKAGES += libcpp-httplib-dev pkgconf
 # The core cross-compiled for a Cortex-M4F (embedded/): GCC, newlib, libstdc++.
 DEBIAN_PACKAGES += gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
 

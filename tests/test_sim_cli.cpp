@@ -171,7 +171,8 @@ TEST(SimCli, UnknownScenarioIsAnErrorAndWritesNothing) {
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_THAT(r.err, HasSubstr("scenario 'sekimori-c': not a built-in scenario (calibration, "
                                "differential, faults-dirty, faults-liftoff, faults-spikes, "
-                               "faults-stuck, kimlee, sekimori-a, sekimori-b) and no such file"));
+                               "faults-stuck, guided, kimlee, sekimori-a, sekimori-b) and no such "
+                               "file"));
   EXPECT_FALSE(fs::exists(dir));
 }
 

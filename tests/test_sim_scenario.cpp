@@ -258,7 +258,7 @@ TEST(SimScenario, UnknownNameListsTheBuiltins) {
     EXPECT_EQ(
         std::string(e.what()),
         "scenario 'sekimori-c': not a built-in scenario (calibration, differential, faults-dirty, "
-        "faults-liftoff, faults-spikes, faults-stuck, kimlee, "
+        "faults-liftoff, faults-spikes, faults-stuck, guided, kimlee, "
         "sekimori-a, sekimori-b) and no such file");
   }
 }

@@ -8,6 +8,7 @@
 #include <optional>
 #include <string>
 
+#include "calibrate_wizard.hpp"
 #include "commands.hpp"
 #include "moa/io/calibration_run.hpp"
 #include "moa/io/config.hpp"
@@ -63,7 +64,6 @@ void add_calibrate(CLI::App& app, Action& action) {
   cmd->add_option("--method", args->method,
                   "kimlee: Kim & Lee Section IV (positions only); exact: all extrinsics against "
                   "wheels.csv; guided: pushes and a spin, no reference")
-      ->required()
       ->check(CLI::IsMember({"kimlee", "exact", "guided"}));
   cmd->add_option("--log", args->log, "Log directory with mice.csv and wheels.csv (kimlee, exact)")
       ->check(CLI::ExistingPath);
@@ -108,7 +108,29 @@ void add_calibrate(CLI::App& app, Action& action) {
       ->capture_default_str();
   cmd->add_flag("--json", args->json, "Print the report as one JSON object (SI units)");
   cmd->add_flag("--quiet", args->quiet, "Print nothing on success");
-  cmd->callback([&action, args] { action = [args] { return run_calibrate(*args); }; });
+  // --guided [--live]: the live, step-by-step guided calibration (calibrate_wizard.cpp).
+  auto wizard = std::make_shared<WizardArgs>();
+  add_wizard_flags(cmd, *wizard);
+  cmd->callback([&action, args, wizard] {
+    if (wizard->live) {
+      wizard->config = args->config;
+      wizard->out = args->out;
+      wizard->distance = args->distance;
+      wizard->turns = args->turns;
+      wizard->tolerances.distance_sd = args->distance_sd;
+      wizard->tolerances.turn_sd = args->turn_sd;
+      wizard->tolerances.centre_sd = args->centre_sd;
+      wizard->tolerances.heading_sd = args->heading_sd;
+      action = [wizard] { return run_wizard(*wizard); };
+      return;
+    }
+    if (wizard->guided && args->method.empty()) args->method = "guided";
+    action = [args, wizard] {
+      if (args->method.empty()) throw io::Error("--method is required (or --guided)");
+      refuse_live_flags(*wizard);
+      return run_calibrate(*args);
+    };
+  });
 }
 
 }  // namespace moa::cli
