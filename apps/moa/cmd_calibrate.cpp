@@ -115,12 +115,9 @@ void add_calibrate(CLI::App& app, Action& action) {
     if (wizard->live) {
       wizard->config = args->config;
       wizard->out = args->out;
-      wizard->distance = args->distance;
-      wizard->turns = args->turns;
-      wizard->tolerances.distance_sd = args->distance_sd;
-      wizard->tolerances.turn_sd = args->turn_sd;
-      wizard->tolerances.centre_sd = args->centre_sd;
-      wizard->tolerances.heading_sd = args->heading_sd;
+      wizard->distance = args->options.distance;
+      wizard->turns = args->options.turns;
+      wizard->tolerances = args->options.tolerances;
       action = [wizard] { return run_wizard(*wizard); };
       return;
     }
