@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "baselines.hpp"
+#include "bench_replay.hpp"
 #include "commands.hpp"
 #include "moa/core/consensus.hpp"
 #include "moa/core/estimate.hpp"
@@ -28,6 +29,8 @@ struct BenchArgs {
   int updates = 2000;
   std::vector<int> sizes{2, 4, 8};
   bool json = false;
+  bool replay = false;
+  ReplayBenchArgs replay_args;
 };
 
 /// N sensors radial around the robot (Sekimori & Miyazaki's layout), HDNS-2051.
@@ -197,7 +200,36 @@ void add_bench(CLI::App& app, Action& action) {
       ->check(CLI::Range(2, kMaxSensors))
       ->capture_default_str();
   cmd->add_flag("--json", args->json, "One JSON object on stdout");
-  cmd->callback([&action, args] { action = [args] { return run_bench(*args); }; });
+  auto& r = args->replay_args;
+  cmd->add_flag("--replay", args->replay,
+                "Instead: moa odometry over a generated log against a parse-only pass of its "
+                "mice.csv (best of --repeats; the log is written to a temporary directory and "
+                "removed)");
+  cmd->add_option("--duration", r.duration, "--replay: seconds of log")
+      ->check(CLI::Range(1.0, 3600.0))
+      ->capture_default_str();
+  cmd->add_option("--row-rate", r.row_rate, "--replay: mice rows per second per sensor")
+      ->check(CLI::Range(1.0, 10000.0))
+      ->capture_default_str();
+  cmd->add_option("--rate", r.epoch_rate, "--replay: epochs per second (moa odometry --rate)")
+      ->check(CLI::Range(1.0, 10000.0))
+      ->capture_default_str();
+  cmd->add_option("--estimator", r.estimator, "--replay: ls, sekimori or consensus")
+      ->capture_default_str();
+  cmd->add_option("--repeats", r.repeats, "--replay: timed runs of each pass (best is reported)")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
+  cmd->add_option("--dir", r.dir,
+                  "--replay: directory for the temporary log (default: system temp)")
+      ->check(CLI::ExistingDirectory);
+  cmd->callback([&action, args] {
+    action = [args] {
+      if (!args->replay) return run_bench(*args);
+      ReplayBenchArgs replay = args->replay_args;
+      replay.json = args->json;
+      return run_replay_bench(replay);
+    };
+  });
 }
 
 }  // namespace moa::cli
