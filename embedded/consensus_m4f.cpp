@@ -13,9 +13,9 @@
 #include <type_traits>
 #include <variant>
 
-#include "moa/core/dead_reckoner.hpp"
 #include "moa/core/array.hpp"
 #include "moa/core/consensus.hpp"
+#include "moa/core/dead_reckoner.hpp"
 #include "moa/core/estimate.hpp"
 #include "moa/core/sensor.hpp"
 

@@ -19,9 +19,9 @@
 #include <thread>
 #include <vector>
 
+#include "moa/core/se2.hpp"
 #include "moa/io/config.hpp"
 #include "moa/io/serial_protocol.hpp"
-#include "moa/core/se2.hpp"
 #include "support/pty.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"

@@ -28,10 +28,10 @@ int run_odometry(const OdometryArgs& args) {
   const io::RobotConfig config = io::read_config(args.config);
   const OdometryOptions options = resolve_odometry_flags(args.flags, config, args.config);
   const io::LogFiles log = io::resolve_log(args.log);
-  io::refuse_output_onto_inputs(args.out, "--out",
-                                {args.config, log.mice, log.wheels.value_or(""),
-                                 log.camera.value_or(""), log.truth.value_or(""),
-                                 log.faults.value_or("")});
+  io::refuse_output_onto_inputs(
+      args.out, "--out",
+      {args.config, log.mice, log.wheels.value_or(""), log.camera.value_or(""),
+       log.truth.value_or(""), log.faults.value_or("")});
 
   const bool progress = !args.quiet && isatty(STDERR_FILENO);
   auto last_report = std::chrono::steady_clock::now();

@@ -49,7 +49,7 @@ AtomicFile::AtomicFile(std::filesystem::path target)
   if (!out_) {
     const int error = errno;
     throw IoError(fmt::format("{}: cannot open for writing ({})", target_.string(),
-                            error != 0 ? std::strerror(error) : "unknown error"));
+                              error != 0 ? std::strerror(error) : "unknown error"));
   }
 }
 

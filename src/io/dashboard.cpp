@@ -1,4 +1,5 @@
 #include "moa/io/dashboard.hpp"
+#include "moa/io/html.hpp"
 
 #include <fmt/core.h>
 #include <httplib.h>
@@ -75,28 +76,6 @@ std::string script_safe(std::string json) {
   return out;
 }
 
-std::string html_text(std::string_view text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
 
 }  // namespace
 
@@ -117,11 +96,11 @@ std::string dashboard_page(const RobotConfig& config, std::string_view title) {
   std::string page;
   page += "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n";
   page += "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n";
-  page += fmt::format("<title>{}</title>\n<style>\n", html_text(title));
+  page += fmt::format("<title>{}</title>\n<style>\n", html(title));
   page += dashboard_assets::page_css();
   page += "</style>\n</head>\n<body data-moa-status=\"loading\">\n";
   page += fmt::format("<header><h1>{}</h1><p id=\"status\">connecting</p></header>\n",
-                      html_text(title));
+                      html(title));
   page +=
       "<div id=\"moa-errors\" class=\"errors\" hidden></div>\n"
       "<main>\n"

@@ -154,8 +154,8 @@ struct MiceReader::Impl {
     const auto i = static_cast<std::size_t>(row.sensor);
     const bool moved = row.counts.x() != 0.0 || row.counts.y() != 0.0;
     if (moved && rows[i] > 0 && last[i].t == row.t && last[i].moved) {
-      csv.fail(fmt::format("duplicate row: sensor '{}' already has a row at t = {} (line {})",
-                           name, row.t, last[i].line));
+      csv.fail(fmt::format("duplicate row: sensor '{}' already has a row at t = {} (line {})", name,
+                           row.t, last[i].line));
     }
     ++rows[i];
     if (!(rows[i] > 1 && last[i].t == row.t && !moved)) last[i] = {row.t, csv.line(), moved};
@@ -175,7 +175,7 @@ struct MiceReader::Impl {
   std::optional<std::size_t> squal, flags;
   std::optional<SensorRow> peeked;
   std::optional<double> start;
-  std::vector<std::size_t> rows;                     // per sensor, read so far
+  std::vector<std::size_t> rows;  // per sensor, read so far
   struct Last {
     double t = 0.0;
     std::size_t line = 0;

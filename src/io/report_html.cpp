@@ -8,6 +8,7 @@
 #include <string_view>
 
 #include "moa/io/report.hpp"
+#include "moa/io/html.hpp"
 #include "report_assets.hpp"
 
 namespace moa::io {
@@ -15,32 +16,6 @@ namespace {
 
 constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
-/// Text for HTML element content and attribute values.
-std::string html(std::string_view text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      case '\'':
-        out += "&#39;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
 
 /// Builds JSON text. Strings are escaped so that they cannot end the
 /// <script> element they sit in ('<', '>' and '&' as \u escapes).
