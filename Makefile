@@ -17,6 +17,9 @@ DEBIAN_PACKAGES += libjs-chart.js chromium
 # The core cross-compiled for a Cortex-M4F (embedded/): GCC, newlib, libstdc++.
 DEBIAN_PACKAGES += gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
 
+# The libFuzzer targets of every reader (tests/fuzz/run.sh, a step of .ci/run): clang and its runtime.
+DEBIAN_PACKAGES += clang libclang-rt-14-dev
+
 # Under CI (CI=true) warnings are errors.
 ifeq ($(CI),true)
 CMAKE_FLAGS += -DMOA_WARNINGS_AS_ERRORS=ON
@@ -59,6 +62,7 @@ demo: build
 	  --log examples/logs/mixed-motion --estimator ls --out $(DEMO_OUT)/odometry.csv
 	$(MOA) evaluate --truth examples/logs/mixed-motion/truth.csv --odometry $(DEMO_OUT)/odometry.csv
 	@echo "moa demo: odometry written to $(DEMO_OUT)/odometry.csv"
+	@rm -rf $(DEMO_OUT)/sekimori-b  # simulate refuses a directory holding other files (a report)
 	$(MOA) simulate --scenario sekimori-b --seed 1 --out $(DEMO_OUT)/sekimori-b
 	$(MOA) odometry --config $(DEMO_OUT)/sekimori-b/robot.yaml --log $(DEMO_OUT)/sekimori-b \
 	  --estimator consensus --out $(DEMO_OUT)/sekimori-b/odometry.csv
