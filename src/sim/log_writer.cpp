@@ -165,8 +165,14 @@ std::filesystem::path temporary_dir_beside(const std::filesystem::path& dir) {
 
 LogSummary write_log(const Scenario& scenario, std::uint64_t seed, const std::filesystem::path& out,
                      const Progress& progress) {
-  const std::filesystem::path dir = out.has_filename() ? out : out.parent_path();
   std::error_code ec;
+  // Absolute, so that "run/", "." or ".." have a name and a parent to write beside.
+  std::filesystem::path dir = std::filesystem::absolute(out, ec).lexically_normal();
+  if (ec) throw io::Error(fmt::format("{}: {}", out.string(), ec.message()));
+  if (!dir.has_filename()) dir = dir.parent_path();
+  if (dir == dir.root_path()) {
+    throw io::Error(fmt::format("{}: cannot write a log over the root directory", out.string()));
+  }
   // Refused before the run, not after it: an empty or new directory, or a
   // previous run to be replaced whole (never a mix of two runs' files).
   bool replace = false;
@@ -215,11 +221,21 @@ LogSummary write_log(const Scenario& scenario, std::uint64_t seed, const std::fi
     io::write_config(scenario.truth, temp / "robot.true.yaml");
     summary = sink.commit();
   }
-  if (!replace) {
-    // rename(2) puts a directory in place of a missing or empty one at once.
+  if (!std::filesystem::exists(dir, ec)) {
     std::filesystem::rename(temp, dir, ec);
     if (ec) throw io::Error(fmt::format("{}: cannot write ({})", dir.string(), ec.message()));
     placed = true;
+  } else if (!replace) {
+    // Into the empty directory file by file (it stays the same directory,
+    // which a shell may be in), mice.csv first: a run stopped half way in
+    // is recognised as a previous run, and replaced by the next.
+    for (const auto name : kLogFiles) {
+      if (!std::filesystem::exists(temp / name, ec)) continue;
+      std::filesystem::rename(temp / name, dir / name, ec);
+      if (ec) {
+        throw io::Error(fmt::format("{}: cannot write ({})", (dir / name).string(), ec.message()));
+      }
+    }
   } else {
     // The new run and the old swap places at once; the old is then removed.
     if (::renameat2(AT_FDCWD, temp.c_str(), AT_FDCWD, dir.c_str(), RENAME_EXCHANGE) != 0) {
