@@ -172,7 +172,8 @@ TEST(SimCli, UnknownScenarioIsAnErrorAndWritesNothing) {
   const auto r = simulate("sekimori-c", 1, dir);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_THAT(r.err, HasSubstr("scenario 'sekimori-c': not a built-in scenario (calibration, "
-                               "differential, kimlee, sekimori-a, sekimori-b) and no such file"));
+                               "differential, faults-dirty, faults-liftoff, faults-spikes, "
+                               "faults-stuck, kimlee, sekimori-a, sekimori-b) and no such file"));
   EXPECT_FALSE(fs::exists(dir));
 }
 

@@ -299,9 +299,11 @@ TEST(SimScenario, UnknownNameListsTheBuiltins) {
     load_scenario("sekimori-c");
     FAIL() << "no error";
   } catch (const io::Error& e) {
-    EXPECT_EQ(std::string(e.what()),
-              "scenario 'sekimori-c': not a built-in scenario (calibration, differential, kimlee, "
-              "sekimori-a, sekimori-b) and no such file");
+    EXPECT_EQ(
+        std::string(e.what()),
+        "scenario 'sekimori-c': not a built-in scenario (calibration, differential, faults-dirty, "
+        "faults-liftoff, faults-spikes, faults-stuck, kimlee, "
+        "sekimori-a, sekimori-b) and no such file");
   }
 }
 

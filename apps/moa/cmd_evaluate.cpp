@@ -8,7 +8,8 @@
 #include "commands.hpp"
 #include "moa/analysis/evaluate.hpp"
 #include "moa/io/error.hpp"
-#include "moa/io/log.hpp"
+#include "moa/io/evaluate.hpp"
+#include "moa/io/json.hpp"
 
 namespace moa::cli {
 namespace {
@@ -20,25 +21,19 @@ struct EvaluateArgs {
 };
 
 int run_evaluate(const EvaluateArgs& args) {
-  std::vector<StampedPose> truth;
-  for (const auto& row : io::read_all<io::TruthRow>(args.truth)) truth.push_back({row.t, row.pose});
-  if (truth.size() < 2) throw io::Error(fmt::format("{}: needs at least two rows", args.truth));
-
-  // odometry.csv begins with t,x,y,theta: the truth reader reads exactly those.
-  io::TruthReader odometry(args.odometry);
-  TrajectoryErrorAccumulator acc(truth);
-  while (const auto row = odometry.next()) acc.add(row->t, row->pose);
-  const TrajectoryError e = acc.result();
-  if (e.samples == 0) {
-    throw io::Error(
-        fmt::format("{}: no row lies within the time span of {}", args.odometry, args.truth));
-  }
+  const TrajectoryError e = io::evaluate_files(args.truth, args.odometry);
   if (args.json) {
-    fmt::print(
-        "{{\"samples\": {}, \"outside_truth_span\": {}, \"max_translation_m\": {:.9g}, "
-        "\"rms_translation_m\": {:.9g}, \"max_heading_rad\": {:.9g}, \"rms_heading_rad\": "
-        "{:.9g}}}\n",
-        e.samples, e.outside, e.max_translation, e.rms_translation, e.max_heading, e.rms_heading);
+    // Shortest round-trip numbers: the experiments' figures read back exactly.
+    io::JsonWriter json;
+    json.begin_object()
+        .member("samples", e.samples)
+        .member("outside_truth_span", e.outside)
+        .member("max_translation_m", e.max_translation)
+        .member("rms_translation_m", e.rms_translation)
+        .member("max_heading_rad", e.max_heading)
+        .member("rms_heading_rad", e.rms_heading)
+        .end_object();
+    fmt::print("{}\n", json.str());
   } else {
     fmt::print("samples compared         {}\n", e.samples);
     if (e.outside > 0) fmt::print("outside the truth's span {} (not compared)\n", e.outside);

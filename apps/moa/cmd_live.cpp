@@ -35,8 +35,10 @@
 #include "moa/io/evdev.hpp"
 #include "moa/io/log.hpp"
 #include "moa/io/mice_writer.hpp"
+#include "moa/io/odometry_csv.hpp"
+#include "moa/io/odometry_run.hpp"
 #include "moa/io/serial_reader.hpp"
-#include "pipeline.hpp"
+#include "odometry_options.hpp"
 #include "sensor_binding.hpp"
 
 namespace moa::cli {
@@ -75,14 +77,6 @@ class StopSignals {
   struct sigaction old_term_ {};
 };
 
-/// No limit on silences: live rows come at the pace of real time, so a
-/// robot parked for hours is no runaway of still epochs.
-PipelineOptions live_pipeline_options() {
-  PipelineOptions options;
-  options.max_gap = std::numeric_limits<double>::infinity();
-  return options;
-}
-
 struct LiveArgs {
   std::string config;
   std::vector<std::string> mice;
@@ -90,31 +84,11 @@ struct LiveArgs {
   int baud = 115200;
   std::string record;
   std::string out;
-  PipelineOptions pipeline = live_pipeline_options();
-  std::vector<double> initial_pose{0.0, 0.0, 0.0};
+  OdometryFlags odometry;
   double duration = 0.0;
   double start_timeout = 5.0;
   bool no_grab = false;
   bool quiet = false;
-};
-
-// odometry.csv rows on stdout, in OdometryWriter's format (same columns,
-// shortest round-trip numbers), flushed at every status tick.
-class StdoutOdometry {
- public:
-  explicit StdoutOdometry(const std::vector<std::string>& extra_columns) {
-    fmt::print("t,x,y,theta,vx,vy,omega");
-    for (const auto& c : extra_columns) fmt::print(",{}", c);
-    fmt::print("\n");
-  }
-  void write(double t, const Pose2& pose, const Twist2& twist,
-             const std::vector<std::string>& extra) {
-    fmt::print("{},{},{},{},{},{},{}", t, pose.t.x(), pose.t.y(), pose.theta, twist.v.x(),
-               twist.v.y(), twist.omega);
-    for (const auto& value : extra) fmt::print(",{}", value);
-    fmt::print("\n");
-  }
-  void flush() { std::fflush(stdout); }
 };
 
 // Rows per second over the last few seconds, for the status line.
@@ -141,7 +115,8 @@ int run_live(LiveArgs args) {
     throw io::Error("give either --mouse NAME=DEV (one per mouse) or --serial DEV");
   }
   const io::RobotConfig config = io::read_config(args.config);
-  args.pipeline.initial = Pose2{{args.initial_pose[0], args.initial_pose[1]}, args.initial_pose[2]};
+  const OdometryOptions odometry_options =
+      resolve_odometry_flags(args.odometry, config, args.config);
   const bool status = !args.quiet && isatty(STDERR_FILENO);
   const bool to_stdout = args.out == "-";
   const auto started = std::chrono::steady_clock::now();
@@ -215,33 +190,25 @@ int run_live(LiveArgs args) {
     recording = std::make_unique<io::MiceWriter>(dir / "mice.csv", config.names, serial != nullptr,
                                                  io::MiceWriter::Durability::kJournal, comments);
   }
-  std::unique_ptr<io::OdometryWriter> odometry_file;
-  std::unique_ptr<StdoutOdometry> odometry_stdout;
+  std::unique_ptr<io::OdometryCsvWriter> odometry_out;
   if (to_stdout) {
-    odometry_stdout = std::make_unique<StdoutOdometry>(odometry_extra_columns(false));
+    odometry_out = std::make_unique<io::OdometryCsvWriter>(stdout, config.names, false);
   } else if (!args.out.empty()) {
-    odometry_file = std::make_unique<io::OdometryWriter>(args.out, odometry_extra_columns(false));
+    odometry_out = std::make_unique<io::OdometryCsvWriter>(args.out, config.names, false);
   }
 
-  std::vector<std::string> extra;
-  Pose2 pose = args.pipeline.initial.value_or(Pose2{});
-  Pipeline pipeline(
-      config, args.config, t0, args.pipeline, nullptr, nullptr, [&](const PipelineStep& step) {
-        pose = step.pose;
-        if (!odometry_file && !odometry_stdout) return;
-        odometry_extra_values(step, config, extra);
-        if (odometry_file) {
-          odometry_file->write(step.sample.t, step.pose, step.estimate.estimate.twist, extra);
-        } else {
-          odometry_stdout->write(step.sample.t, step.pose, step.estimate.estimate.twist, extra);
-        }
-      });
+  const auto odometry = io::make_odometry(config, args.config, t0, odometry_options);
+  Pose2 pose = odometry_options.initial.value_or(Pose2{});
+  const auto on_step = [&](const OdometryStep& step) {
+    pose = step.pose;
+    if (odometry_out) odometry_out->write(step);
+  };
 
   RateMeter meter;
   std::size_t rows = 0;
   show_status = [&] {
     if (recording) recording->flush();
-    if (odometry_stdout) odometry_stdout->flush();
+    if (to_stdout) odometry_out->flush();
     if (!status) return;
     const auto now = std::chrono::steady_clock::now();
     std::string alive;
@@ -261,9 +228,15 @@ int run_live(LiveArgs args) {
     status_shown = true;
   };
 
+  double t_last = t0;
   const auto feed = [&](const SensorRow& row) {
     if (recording) recording->write(row);
-    pipeline.push(row, where);
+    if (const auto e = odometry->push(row, on_step)) {
+      throw io::Error(
+          fmt::format("{}: row at t = {} s: {}", where, row.t,
+                      e == OdometryError::kRow ? describe(odometry->row_error()) : describe(*e)));
+    }
+    t_last = row.t;
     ++rows;
     meter.add(1);
   };
@@ -283,10 +256,9 @@ int run_live(LiveArgs args) {
     if (status_shown) fmt::print(stderr, "\n");
     throw;
   }
-  pipeline.finish();
+  odometry->finish(t_last, on_step);
   if (recording) recording->commit();
-  if (odometry_file) odometry_file->commit();
-  if (odometry_stdout) odometry_stdout->flush();
+  if (odometry_out) odometry_out->commit();
   if (status_shown) fmt::print(stderr, "\r\033[K");
 
   if (!args.quiet) {
@@ -294,7 +266,7 @@ int run_live(LiveArgs args) {
     fmt::print(
         report,
         "moa live: {} rows, {} samples over {:.3f} s; final pose x {} m, y {} m, theta {} rad\n",
-        rows, pipeline.samples(), pipeline.last_time() - t0, pose.t.x(), pose.t.y(), pose.theta);
+        rows, odometry->steps(), t_last - t0, pose.t.x(), pose.t.y(), pose.theta);
     if (evdev) {
       const auto bindings = parse_bindings(args.mice, "--mouse");
       for (std::size_t i = 0; i < bindings.size(); ++i) {
@@ -313,7 +285,9 @@ int run_live(LiveArgs args) {
                  (fs::path(args.record) / "mice.csv").string(),
                  (fs::path(args.record) / "robot.yaml").string(), args.record);
     }
-    if (odometry_file) fmt::print(report, "moa live: odometry written to {}\n", args.out);
+    if (odometry_out && !to_stdout) {
+      fmt::print(report, "moa live: odometry written to {}\n", args.out);
+    }
   }
   return 0;
 }
@@ -341,20 +315,10 @@ void add_live(CLI::App& app, Action& action) {
                   "Record the rows to DIR (log v1 mice.csv + robot.yaml) for replay with "
                   "`moa odometry`");
   cmd->add_option("--out", args->out, "Write odometry.csv to FILE (at the end), or '-' for stdout");
-  cmd->add_option("--estimator", args->pipeline.estimator, "Twist estimator (as moa odometry)")
-      ->check(CLI::IsMember({"ls", "sekimori", "consensus"}))
-      ->capture_default_str();
-  cmd->add_option("--rate", args->pipeline.rate, "Epoch rate of the synchroniser, Hz")
-      ->check(CLI::Range(0.1, 10000.0))
-      ->capture_default_str();
-  cmd->add_option("--max-row-interval", args->pipeline.max_row_interval,
-                  "Longest interval one row may cover, s")
-      ->check(CLI::Range(1e-4, 10.0))
-      ->capture_default_str();
-  cmd->add_option("--initial-pose", args->initial_pose,
-                  "Initial pose X,Y,THETA in the world frame (m, m, rad)")
-      ->expected(3)
-      ->delimiter(',');
+  // No limit on silences: live rows come at the pace of real time, so a
+  // robot parked for hours is no runaway of still epochs.
+  args->odometry.options.max_gap = std::numeric_limits<double>::infinity();
+  add_odometry_flags(cmd, args->odometry, /*live=*/true);
   cmd->add_option("--duration", args->duration, "Stop after this many seconds (0: at Ctrl-C)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--start-timeout", args->start_timeout,

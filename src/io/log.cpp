@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <iterator>
 #include <string_view>
 
@@ -229,7 +230,17 @@ bool breaks_csv(std::string_view text) {
 
 struct OdometryWriter::Impl {
   Impl(const std::filesystem::path& path, std::vector<std::string> extra)
-      : file_name(path.string()), extra_columns(std::move(extra)), file(path) {}
+      : file_name(path.string()), extra_columns(std::move(extra)), file(std::in_place, path) {}
+  Impl(std::FILE* out, std::vector<std::string> extra)
+      : file_name("<stdout>"), extra_columns(std::move(extra)), stream(out) {}
+
+  void put(std::string_view text) {
+    if (file) {
+      file->stream().write(text.data(), static_cast<std::streamsize>(text.size()));
+    } else if (std::fwrite(text.data(), 1, text.size(), stream) != text.size()) {
+      fail("write failed");
+    }
+  }
 
   [[noreturn]] void fail(std::string_view what) const {
     throw Error(printable(fmt::format("{}: {}", file_name, what)));
@@ -237,7 +248,8 @@ struct OdometryWriter::Impl {
 
   std::string file_name;
   std::vector<std::string> extra_columns;
-  AtomicFile file;
+  std::optional<AtomicFile> file;  ///< or, when writing a stream:
+  std::FILE* stream = nullptr;
   fmt::memory_buffer line;
   std::optional<double> last_t;
   bool committed = false;
@@ -246,6 +258,15 @@ struct OdometryWriter::Impl {
 OdometryWriter::OdometryWriter(const std::filesystem::path& file,
                                std::vector<std::string> extra_columns)
     : impl_(std::make_unique<Impl>(file, std::move(extra_columns))) {
+  header();
+}
+
+OdometryWriter::OdometryWriter(std::FILE* stream, std::vector<std::string> extra_columns)
+    : impl_(std::make_unique<Impl>(stream, std::move(extra_columns))) {
+  header();
+}
+
+void OdometryWriter::header() {
   std::vector<std::string_view> columns(kOdometryColumns.begin(), kOdometryColumns.end());
   for (const auto& name : impl_->extra_columns) {
     // Readers trim spaces around fields, so such a name would not read back.
@@ -259,7 +280,7 @@ OdometryWriter::OdometryWriter(const std::filesystem::path& file,
     }
     columns.push_back(name);
   }
-  impl_->file.stream() << fmt::format("{}\n", fmt::join(columns, ","));
+  impl_->put(fmt::format("{}\n", fmt::join(columns, ",")));
 }
 
 OdometryWriter::~OdometryWriter() = default;
@@ -299,12 +320,20 @@ void OdometryWriter::write(double t, const Pose2& pose, const Twist2& twist,
   fmt::format_to(std::back_inserter(impl.line), "{}", fmt::join(values, ","));
   for (const auto& value : extra) fmt::format_to(std::back_inserter(impl.line), ",{}", value);
   impl.line.push_back('\n');
-  impl.file.stream().write(impl.line.data(), static_cast<std::streamsize>(impl.line.size()));
+  impl.put(std::string_view(impl.line.data(), impl.line.size()));
+}
+
+void OdometryWriter::flush() {
+  if (impl_->stream) std::fflush(impl_->stream);
 }
 
 void OdometryWriter::commit() {
   if (impl_->committed) impl_->fail("already committed");
-  impl_->file.commit();
+  if (impl_->file) {
+    impl_->file->commit();
+  } else {
+    std::fflush(impl_->stream);
+  }
   impl_->committed = true;
 }
 

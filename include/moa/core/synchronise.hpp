@@ -20,6 +20,7 @@
 // validate says so).
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <optional>
@@ -92,6 +93,14 @@ class Synchroniser {
     return std::nullopt;
   }
 
+  /// Time has reached t on another stream fed in the same time order (a
+  /// wheel row, a clock): no later row can reach back before
+  /// t - max_row_interval, so the epochs that end by then are final.
+  template <class Sink>
+  void advance(double t, Sink&& sink) {
+    if (std::isfinite(t) && t >= last_row_t_) emit_until(t - options_.max_row_interval, sink);
+  }
+
   /// Emits every remaining epoch up to t_end (the last epoch is cut at
   /// t_end). Call once at the end of the stream.
   template <class Sink>
@@ -138,7 +147,7 @@ class Synchroniser {
   SynchroniserOptions options_;
   FixedRing<ArraySample, kMaxPendingEpochs> ring_;  // epochs next_ .. next_ + size - 1
   std::array<double, kMaxSensors> last_t_{};        // per sensor, end of its previous row
-  std::int64_t next_ = 0;          // first epoch not yet emitted
+  std::int64_t next_ = 0;                           // first epoch not yet emitted
   double last_row_t_;
 };
 

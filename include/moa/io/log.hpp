@@ -9,15 +9,16 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include "moa/io/config.hpp"
 #include "moa/core/se2.hpp"
 #include "moa/core/synchronise.hpp"
+#include "moa/io/config.hpp"
 
 namespace moa::io {
 
@@ -94,13 +95,18 @@ std::vector<Row> read_all(const std::filesystem::path& file) {
 class OdometryWriter {
  public:
   OdometryWriter(const std::filesystem::path& file, std::vector<std::string> extra_columns = {});
+  /// Rows to an open stream (stdout for `moa live`); commit() flushes it.
+  OdometryWriter(std::FILE* stream, std::vector<std::string> extra_columns);
   ~OdometryWriter();
   /// One row; `extra` must hold one value per extra column (already text).
   void write(double t, const Pose2& pose, const Twist2& twist,
              const std::vector<std::string>& extra = {});
   void commit();
+  /// Flushes a stream (no-op for a file, which appears on commit()).
+  void flush();
 
  private:
+  void header();
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

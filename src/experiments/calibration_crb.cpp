@@ -25,11 +25,11 @@
 #include <string>
 #include <vector>
 
-#include "experiments.hpp"
+#include "experiments_list.hpp"
 #include "moa/calibration/exact.hpp"
 #include "moa/io/error.hpp"
 
-namespace moa::cli {
+namespace moa::experiments {
 namespace {
 
 constexpr double kDuration = 20.0;
@@ -106,7 +106,10 @@ MountVector difference(const SensorMount& a, const SensorMount& b) {
   return d;
 }
 
-int run_calibration_crb(const ExperimentOptions& options) {
+}  // namespace
+
+Result calibration_crb(const Options& options) {
+  std::string text, json;
   const int runs = options.runs > 0 ? options.runs : 50;
   const SensorArray nominal = nominal_array();
   const SensorArray truth = true_array(nominal);
@@ -173,47 +176,40 @@ int run_calibration_crb(const ExperimentOptions& options) {
 
   const std::array<const char*, kMountParameters> names{"position_x", "position_y", "yaw",
                                                         "scale_x", "scale_y"};
-  if (options.json) {
-    std::vector<std::string> rows;
-    for (int p = 0; p < p_all; ++p) {
-      rows.push_back(fmt::format(
-          "{{\"sensor\": {}, \"parameter\": \"{}\", \"true\": {:.9g}, \"rmse\": {:.6g}, "
-          "\"bias\": {:.6g}, \"crb_sd\": {:.6g}, \"efficiency\": {:.4f}, \"rmse_ols\": {:.6g}}}",
-          p / kMountParameters, names[static_cast<std::size_t>(p % kMountParameters)],
-          mount_parameters(truth[p / kMountParameters])(p % kMountParameters), rmse(p), bias(p),
-          bound(p), efficiency(p), rmse_ols(p)));
-    }
-    fmt::print(
-        "{{\"experiment\": \"calibration-crb\", \"runs\": {}, \"samples\": {}, \"count_sd\": {}, "
-        "\"reference_sd\": [{}, {}, {}], \"median_efficiency\": {:.4f}, \"mirror_found_runs\": {}, "
-        "\"parameters\": [{}]}}\n",
-        runs, clean.size(), kCountSd, kSpeedSd, kSpeedSd, kRateSd, median, mirrors_found,
-        fmt::join(rows, ", "));
-    return 0;
+  {
+  std::vector<std::string> rows;
+  for (int p = 0; p < p_all; ++p) {
+    rows.push_back(fmt::format(
+        "{{\"sensor\": {}, \"parameter\": \"{}\", \"true\": {:.9g}, \"rmse\": {:.6g}, "
+        "\"bias\": {:.6g}, \"crb_sd\": {:.6g}, \"efficiency\": {:.4f}, \"rmse_ols\": {:.6g}}}",
+        p / kMountParameters, names[static_cast<std::size_t>(p % kMountParameters)],
+        mount_parameters(truth[p / kMountParameters])(p % kMountParameters), rmse(p), bias(p),
+        bound(p), efficiency(p), rmse_ols(p)));
   }
-  fmt::print(
+  json = fmt::format(
+      "{{\"experiment\": \"calibration-crb\", \"runs\": {}, \"samples\": {}, \"count_sd\": {}, "
+      "\"reference_sd\": [{}, {}, {}], \"median_efficiency\": {:.4f}, \"mirror_found_runs\": {}, "
+      "\"parameters\": [{}]}}\n",
+      runs, clean.size(), kCountSd, kSpeedSd, kSpeedSd, kRateSd, median, mirrors_found,
+      fmt::join(rows, ", "));
+  }
+  text += fmt::format(
       "Exact calibration against its Cramer-Rao bound: 4 sensors, errors up to 8 mm, 4 deg, 4 %,\n"
       "sensor 2 mirrored (not in the nominal config); {} s of mixed motion, {} reference\n"
       "intervals; noise: {} count per axis, reference {} m/s and {} rad/s; {} runs.\n"
       "units: m, rad, 1. efficiency = CRB / MSE (MSE / CRB scatters as chi2({}) / {}).\n\n",
       kDuration, clean.size(), kCountSd, kSpeedSd, kRateSd, runs, runs, runs);
-  fmt::print("{:<6} {:<11} {:>12} {:>11} {:>11} {:>11} {:>10} {:>11}\n", "sensor", "parameter",
+  text += fmt::format("{:<6} {:<11} {:>12} {:>11} {:>11} {:>11} {:>10} {:>11}\n", "sensor", "parameter",
              "true", "RMSE", "bias", "sqrt(CRB)", "efficiency", "RMSE OLS");
   for (int p = 0; p < p_all; ++p) {
-    fmt::print("{:<6} {:<11} {:>12.6f} {:>11.3e} {:>11.2e} {:>11.3e} {:>10.3f} {:>11.3e}\n",
+    text += fmt::format("{:<6} {:<11} {:>12.6f} {:>11.3e} {:>11.2e} {:>11.3e} {:>10.3f} {:>11.3e}\n",
                p / kMountParameters, names[static_cast<std::size_t>(p % kMountParameters)],
                mount_parameters(truth[p / kMountParameters])(p % kMountParameters), rmse(p),
                bias(p), bound(p), efficiency(p), rmse_ols(p));
   }
-  fmt::print("\nmedian efficiency {:.3f}; mirroring right in {} of {} runs\n", median,
+  text += fmt::format("\nmedian efficiency {:.3f}; mirroring right in {} of {} runs\n", median,
              mirrors_found, runs);
-  return 0;
+  return {text, json};
 }
 
-const ExperimentRegistration kRegistered{
-    "calibration-crb",
-    "Monte Carlo error of the exact calibration against its Cramer-Rao bound (efficiency table)",
-    run_calibration_crb};
-
-}  // namespace
-}  // namespace moa::cli
+}  // namespace moa::experiments

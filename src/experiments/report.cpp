@@ -1,4 +1,4 @@
-#include "experiment_report.hpp"
+#include "moa/experiments/report.hpp"
 
 #include <fmt/core.h>
 
@@ -12,9 +12,10 @@
 #include "moa/io/report.hpp"
 #include "moa/sim/log_writer.hpp"
 #include "moa/sim/scenario.hpp"
-#include "pipeline.hpp"
+#include "moa/experiments/simulated_run.hpp"
+#include "moa/io/odometry_run.hpp"
 
-namespace moa::cli {
+namespace moa::experiments {
 namespace {
 
 namespace fs = std::filesystem;
@@ -28,52 +29,16 @@ constexpr ExperimentReportRecipe kRecipes[] = {
     {"calibration-crb", "calibration", "consensus", false},
 };
 
-/// A fresh directory removed with everything in it when this goes.
-class TemporaryDirectory {
- public:
-  TemporaryDirectory() {
-    std::random_device random;
-    path_ = fs::temp_directory_path() / fmt::format("moa-experiment-report-{:08x}", random());
-    fs::create_directories(path_);
-  }
-  ~TemporaryDirectory() {
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
-  TemporaryDirectory(const TemporaryDirectory&) = delete;
-  TemporaryDirectory& operator=(const TemporaryDirectory&) = delete;
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
-
 /// What `moa odometry --estimator E [--fuse-camera]` writes, into `out`.
 void write_odometry(const fs::path& log, const ExperimentReportRecipe& recipe,
                     double camera_latency, const fs::path& out) {
   const fs::path config_path = log / "robot.yaml";
   const io::RobotConfig config = io::read_config(config_path);
-  io::MiceReader reader(log, config);
-  PipelineOptions options;
-  options.estimator = recipe.estimator;
+  OdometryOptions options;
+  options.estimator = *estimator_from_name(recipe.estimator);
   options.fuse_camera = recipe.fuse_camera;
   options.camera_latency = camera_latency;
-  std::unique_ptr<io::WheelsReader> wheels;
-  if (fs::exists(log / "wheels.csv"))
-    wheels = std::make_unique<io::WheelsReader>(log / "wheels.csv");
-  std::unique_ptr<io::CameraReader> camera;
-  if (recipe.fuse_camera) camera = std::make_unique<io::CameraReader>(log / "camera.csv");
-  io::OdometryWriter writer(out, odometry_extra_columns(recipe.fuse_camera));
-  std::vector<std::string> extra;
-  Pipeline pipeline(config, config_path.string(), reader.start_time(), options, std::move(wheels),
-                    std::move(camera), [&](const PipelineStep& step) {
-                      odometry_extra_values(step, config, extra);
-                      writer.write(step.sample.t, step.pose, step.estimate.estimate.twist, extra);
-                    });
-  const std::string where = (log / "mice.csv").string();
-  while (const auto row = reader.next()) pipeline.push(*row, where);
-  pipeline.finish();
-  writer.commit();
+  io::write_odometry(config, config_path.string(), io::resolve_log(log), options, out);
 }
 
 }  // namespace
@@ -88,7 +53,7 @@ const ExperimentReportRecipe* experiment_report_recipe(std::string_view experime
 void write_experiment_report(const ExperimentReportRecipe& recipe, std::uint64_t seed,
                              const fs::path& out) {
   const sim::Scenario scenario = sim::load_scenario(recipe.scenario);
-  TemporaryDirectory dir;
+  ScratchDirectory dir("moa-experiment-report");
   const fs::path log = dir.path() / "log";
   sim::write_log(scenario, seed, log);
   const fs::path odometry = dir.path() / "odometry.csv";
@@ -111,4 +76,4 @@ void write_experiment_report(const ExperimentReportRecipe& recipe, std::uint64_t
   io::write_report(inputs, out);
 }
 
-}  // namespace moa::cli
+}  // namespace moa::experiments

@@ -7,7 +7,7 @@
 #include <filesystem>
 #include <string_view>
 
-namespace moa::cli {
+namespace moa::experiments {
 
 struct ExperimentReportRecipe {
   const char* experiment;  ///< registered experiment name
@@ -25,4 +25,4 @@ const ExperimentReportRecipe* experiment_report_recipe(std::string_view experime
 void write_experiment_report(const ExperimentReportRecipe& recipe, std::uint64_t seed,
                              const std::filesystem::path& out);
 
-}  // namespace moa::cli
+}  // namespace moa::experiments

@@ -1,0 +1,115 @@
+#include "odometry_options.hpp"
+
+#include <fmt/core.h>
+
+#include <cmath>
+
+#include "moa/io/error.hpp"
+
+namespace moa::cli {
+
+const CLI::Validator kFinite(
+    [](std::string& text) -> std::string {
+      double x = 0.0;
+      if (!CLI::detail::lexical_cast(text, x)) return fmt::format("'{}' is not a number", text);
+      if (!std::isfinite(x)) return fmt::format("{} is not a finite number", text);
+      return {};
+    },
+    "FINITE", "finite");
+
+void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
+  OdometryOptions& o = f.options;
+  cmd->add_option("--estimator", f.estimator,
+                  "Twist estimator: ls (all sensors, least squares), sekimori (pairwise voting, "
+                  "Sekimori & Miyazaki), consensus (largest consistent set)" +
+                      std::string(live ? ""
+                                       : ", wheels (wheels.csv alone), oracle (least squares "
+                                         "over the sensors without a simulated fault: needs "
+                                         "faults.csv)"))
+      ->check(live ? CLI::IsMember({"ls", "sekimori", "consensus"})
+                   : CLI::IsMember({"ls", "sekimori", "consensus", "wheels", "oracle"}))
+      ->capture_default_str();
+  cmd->add_option("--sensors", f.sensors,
+                  "The sensors the estimator may use, by config name (e.g. m1,m3); default all")
+      ->delimiter(',');
+  cmd->add_option("--e-th", o.sekimori.e_th,
+                  "sekimori: E_th of eq. (7), m^2, threshold on a pair's displacement residual "
+                  "per epoch ((0.2 mm)^2 at 100 Hz; core/sekimori.hpp says why)")
+      ->check(kFinite & CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--r-th", o.sekimori.r_th,
+                  "sekimori: r_th of eq. (7), agreeing pairs a sensor needs to be reliable "
+                  "(default max(1, N - 2))")
+      ->check(CLI::Range(1, kMaxSensors));
+  cmd->add_option("--alpha", o.consensus.alpha,
+                  "consensus: false-rejection rate of the chi-square consistency test, in (0, 0.5)")
+      ->check(kFinite & CLI::Range(1e-12, 0.5))
+      ->capture_default_str();
+  cmd->add_option("--rate", o.rate, "Epoch rate of the synchroniser, Hz (0.1 to 10000)")
+      ->check(kFinite & CLI::Range(0.1, 10000.0))
+      ->capture_default_str();
+  cmd->add_option("--max-row-interval", o.max_row_interval,
+                  "Longest interval one mice.csv row may cover, s (a sensor silent for longer "
+                  "was still before its row); at most 61 epochs")
+      ->check(kFinite & CLI::Range(1e-4, 10.0))
+      ->capture_default_str();
+  cmd->add_option("--max-gap", o.max_gap,
+                  "Longest time all sensors may stay silent, s (a gap is no motion, written "
+                  "epoch by epoch; a longer one is an error)")
+      ->check(kFinite & CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--initial-pose", f.initial_pose,
+                  "Initial pose X,Y,THETA in the world frame (m, m, rad)")
+      ->expected(3)
+      ->delimiter(',')
+      ->check(kFinite);
+  if (live) return;
+  cmd->add_flag("--no-wheels", f.no_wheels,
+                "Ignore wheels.csv (by default it is the fallback and plausibility check)");
+  cmd->add_flag("--fuse-camera", o.fuse_camera,
+                "Fuse camera.csv position fixes with an EKF (adds pose covariance columns)");
+  cmd->add_option("--camera-latency", o.camera_latency,
+                  "Delay from a fix's capture (camera.csv t) to its arrival, s: late fixes are "
+                  "applied at their capture time")
+      ->check(kFinite & CLI::NonNegativeNumber)
+      ->capture_default_str();
+  cmd->add_option("--camera-sigma", o.camera_sigma,
+                  "Std. dev. of a camera fix, m, when camera.csv has no sx, sy")
+      ->check(kFinite & CLI::PositiveNumber)
+      ->capture_default_str();
+}
+
+OdometryOptions resolve_odometry_flags(const OdometryFlags& f, const io::RobotConfig& config,
+                                       const std::string& config_path) {
+  OdometryOptions o = f.options;
+  const auto kind = estimator_from_name(f.estimator);
+  if (!kind) throw io::Error(fmt::format("--estimator: unknown estimator '{}'", f.estimator));
+  o.estimator = *kind;
+  o.use_wheels = !f.no_wheels;
+  if (o.estimator == EstimatorKind::kWheels && f.no_wheels) {
+    throw io::Error("--estimator wheels and --no-wheels exclude each other");
+  }
+  if (!f.sensors.empty()) {
+    o.sensors = 0;
+    for (const auto& name : f.sensors) {
+      const auto i = config.index_of(name);
+      if (!i) {
+        std::string names;
+        for (const auto& n : config.names) names += (names.empty() ? "" : ", ") + n;
+        throw io::Error(
+            fmt::format("--sensors: unknown sensor '{}' ({} has {})", name, config_path, names));
+      }
+      if (contains(o.sensors, *i)) {
+        throw io::Error(fmt::format("--sensors: sensor '{}' named twice", name));
+      }
+      o.sensors |= SensorMask{1} << *i;
+    }
+  }
+  if (f.initial_pose.size() == 3) {
+    o.initial = Pose2{{f.initial_pose[0], f.initial_pose[1]}, f.initial_pose[2]};
+  }
+  if (const char* e = o.validate(); *e) throw io::Error(fmt::format("invalid option: {}", e));
+  return o;
+}
+
+}  // namespace moa::cli

@@ -1,0 +1,35 @@
+// The odometry pipeline's options on the command line, shared by
+// `moa odometry` and `moa live`: one set of flags, one validation.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <string>
+#include <vector>
+
+#include "moa/core/odometry.hpp"
+#include "moa/io/config.hpp"
+
+namespace moa::cli {
+
+/// A CLI11 check that refuses NaN and infinities ("--rate: nan is not a
+/// finite number"): CLI11's ranges let NaN through.
+extern const CLI::Validator kFinite;
+
+struct OdometryFlags {
+  std::string estimator = "consensus";
+  std::vector<std::string> sensors;  ///< names; empty: all
+  std::vector<double> initial_pose;  ///< x, y, theta
+  bool no_wheels = false;
+  OdometryOptions options;
+};
+
+/// Adds the pipeline's flags to `cmd`; `live` leaves out what needs a log
+/// (camera fusion, the oracle).
+void add_odometry_flags(CLI::App* cmd, OdometryFlags& flags, bool live = false);
+
+/// The options for `config`: estimator and sensor names resolved, options
+/// validated. Throws io::Error naming the flag.
+OdometryOptions resolve_odometry_flags(const OdometryFlags& flags, const io::RobotConfig& config,
+                                       const std::string& config_path);
+
+}  // namespace moa::cli

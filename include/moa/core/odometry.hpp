@@ -1,0 +1,223 @@
+// The odometry pipeline: every front end (moa odometry, moa live, the
+// experiments, the benchmarks, the Python bindings, the Cortex-M4F program)
+// runs this one type.
+//
+//   mice rows ──> Synchroniser ──> ArraySample (one epoch, period 1/rate)
+//   wheel rows ─> WheelAverager ──┐      │
+//                                 v      v
+//                  twist estimator (ls | sekimori | consensus | wheels | oracle)
+//                                        │ RobustEstimate: twist, covariance,
+//                                        │ source, used/excluded + reasons
+//                                        v
+//                  DeadReckoner, or PoseEkf with camera fixes (fuse_camera)
+//                                        │
+//                                        v
+//                  OdometryStep (pose, twist, covariances, selection) -> sink
+//
+// Inputs are fed in time order of their own time stamps: mice rows by t,
+// wheel rows by t, camera fixes by capture time (the CSV readers' order; a
+// front end merging several streams feeds the earliest first). An epoch
+// (t - dt, t] is processed once the synchroniser has made it final and, when
+// wheels are used, once a wheel row at or after t has been fed (or finish()
+// is called), so the wheel twist averaged over the epoch is complete. A
+// camera fix captured at t_c is applied at the first epoch ending at or after
+// t_c + camera_latency, at its capture time (PoseEkf handles late fixes).
+//
+// Heap-free: fixed-size state and rings (kMaxSensors, kMaxPendingEpochs,
+// PoseEkf::kHistory); the sink is a non-owning callable reference.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string_view>
+#include <type_traits>
+#include <utility>
+#include <variant>
+
+#include "moa/core/array.hpp"
+#include "moa/core/consensus.hpp"
+#include "moa/core/dead_reckoner.hpp"
+#include "moa/core/ekf.hpp"
+#include "moa/core/estimate.hpp"
+#include "moa/core/fallback.hpp"
+#include "moa/core/noise_model.hpp"
+#include "moa/core/ring.hpp"
+#include "moa/core/robust_estimate.hpp"
+#include "moa/core/se2.hpp"
+#include "moa/core/sekimori.hpp"
+#include "moa/core/subset.hpp"
+#include "moa/core/synchronise.hpp"
+#include "moa/core/wheels.hpp"
+
+namespace moa {
+
+/// The twist estimators the pipeline can run.
+enum class EstimatorKind : std::uint8_t {
+  kLs,         ///< weighted least squares over all selected sensors (Kim & Lee eq. (7))
+  kSekimori,   ///< pairwise voting (Sekimori & Miyazaki eqs. (4), (7)-(9)), wheels as fallback
+  kConsensus,  ///< largest chi-square-consistent subset, wheels as fallback and check
+  kWheels,     ///< wheel odometry alone (the mice are not used)
+  kOracle,     ///< least squares over the sensors with no simulated fault in the epoch
+};
+const char* describe(EstimatorKind kind);
+/// "ls", "sekimori", "consensus", "wheels", "oracle"; nullopt otherwise.
+std::optional<EstimatorKind> estimator_from_name(std::string_view name);
+
+struct OdometryOptions {
+  EstimatorKind estimator = EstimatorKind::kConsensus;
+  /// The sensors the estimator may use (bit i: sensor i); the others are
+  /// reported as excluded, reason "unselected".
+  SensorMask sensors = ~SensorMask{0};
+  double rate = 100.0;             ///< Hz, epochs (1 / SynchroniserOptions::period)
+  double max_row_interval = 0.05;  ///< s, longest interval one mice row covers
+  double max_gap = 3600.0;         ///< s, longest silence of all sensors
+  bool use_wheels = true;          ///< wheel rows fed are used (fallback, plausibility)
+  /// world_T_robot at the first epoch's start. Unset: identity, or with
+  /// fuse_camera the first fix fed before the first epoch is processed.
+  std::optional<Pose2> initial;
+  bool fuse_camera = false;            ///< EKF with camera fixes
+  double camera_latency = 0.0;         ///< s from a fix's capture to its arrival
+  double camera_sigma = 0.005;         ///< m, fix sd when the fix gives none
+  double camera_heading_sigma = 0.02;  ///< rad, sd of a fix's heading
+  SekimoriOptions sekimori;
+  ConsensusOptions consensus;
+  EkfOptions ekf;
+
+  /// Empty when the options can be used, else what is wrong, naming the
+  /// field ("rate: must be positive and finite (Hz)"), in the manner of
+  /// Ceres' Options::IsValid. Thresholds of the estimators included.
+  const char* validate() const;
+  SynchroniserOptions synchroniser() const { return {1.0 / rate, max_row_interval, max_gap}; }
+};
+
+/// A camera fix: position (world frame, m), optionally heading (rad), with
+/// standard deviations (m) when the camera gives them.
+struct CameraFix {
+  double t = 0.0;  ///< s, capture time
+  Eigen::Vector2d position{0.0, 0.0};
+  std::optional<double> theta;
+  std::optional<Eigen::Vector2d> sigma;
+};
+
+/// Counts of what happened to the camera fixes.
+struct FixCounts {
+  std::size_t applied = 0, rejected = 0, too_old = 0, invalid = 0;
+};
+
+/// One output epoch.
+struct OdometryStep {
+  const ArraySample* sample = nullptr;  ///< the epoch's counts; valid during the sink call
+  RobustEstimate estimate;              ///< twist (robot frame), covariance, selection
+  Pose2 pose;                           ///< world_T_robot at sample->t
+  bool fused = false;                   ///< pose_covariance is the EKF's
+  Eigen::Matrix3d pose_covariance = Eigen::Matrix3d::Zero();  ///< (x, y, theta), with fuse_camera
+  double t() const { return sample->t; }
+};
+
+enum class OdometryError : std::uint8_t {
+  kRow,              ///< the mice row is invalid (row_error says why)
+  kNoInterval,       ///< an epoch with no positive, finite interval
+  kWheelsFull,       ///< wheel rows fed too far ahead of the mice rows
+  kFixesFull,        ///< camera fixes fed too far ahead of the mice rows
+  kWheelsBackwards,  ///< a wheel row earlier than the previous one, or not finite
+};
+const char* describe(OdometryError error);
+
+/// A non-owning reference to a callable, as std::function without the heap:
+/// the referenced callable must outlive the call it is passed to.
+template <class Signature>
+class FunctionRef;
+template <class R, class... Args>
+class FunctionRef<R(Args...)> {
+ public:
+  template <class F>
+  requires(!std::is_same_v<std::remove_cvref_t<F>, FunctionRef>) FunctionRef(
+      F&& f)  // NOLINT(google-explicit-constructor): a reference, like std::function_ref
+      : object_(const_cast<void*>(static_cast<const void*>(&f))),
+        call_([](void* object, Args... args) -> R {
+          return (*static_cast<std::remove_reference_t<F>*>(object))(std::forward<Args>(args)...);
+        }) {}
+  R operator()(Args... args) const { return call_(object_, std::forward<Args>(args)...); }
+
+ private:
+  void* object_;
+  R (*call_)(void*, Args...);
+};
+
+using StepSink = FunctionRef<void(const OdometryStep&)>;
+
+class Odometry {
+ public:
+  /// Camera fixes that may wait for their epoch.
+  static constexpr std::size_t kMaxPendingFixes = 32;
+
+  /// Final epochs that may wait for the wheel row that covers them.
+  static constexpr std::size_t kMaxWaitingEpochs = 16;
+
+  /// Builds the pipeline for `array` with validated options (`validate()`
+  /// empty), the first epoch starting at t0 (s). Built in place (the object
+  /// is large: rings of epochs and the EKF's history), so check
+  /// geometry_error() before use: a geometry the estimator cannot use.
+  Odometry(const SensorArray& array, double t0, const OdometryOptions& options);
+  std::optional<GeometryError> geometry_error() const { return geometry_error_; }
+
+  /// A mice row; calls sink for every epoch that became ready.
+  std::optional<OdometryError> push(const SensorRow& row, StepSink sink);
+  /// A wheel-odometry row: twist (robot frame) averaged over the interval
+  /// since the previous wheel row, ending at t. Ignored unless use_wheels.
+  std::optional<OdometryError> push_wheels(double t, const Twist2& twist, StepSink sink);
+  /// A camera fix (ignored unless fuse_camera).
+  std::optional<OdometryError> push_fix(const CameraFix& fix);
+  /// Ends the stream at t_end (the last row's time): emits every remaining
+  /// epoch, the last one cut at t_end.
+  void finish(double t_end, StepSink sink);
+
+  /// The row error of the last kRow error.
+  RowError row_error() const { return row_error_; }
+  std::size_t steps() const { return steps_; }
+  const FixCounts& fixes() const { return fixes_; }
+  const OdometryOptions& options() const { return options_; }
+  const Pose2& pose() const;
+
+ private:
+  /// The estimator, built for the selected sensors only (sub_array_).
+  using Estimator = std::variant<std::monostate, LsEstimator, SekimoriEstimator, ConsensusEstimator,
+                                 SubsetSolver>;
+  void on_epoch(const ArraySample& sample, StepSink sink);
+  void drain(bool all, StepSink sink);
+  void process(const ArraySample& sample, StepSink sink);
+  bool estimate(const ArraySample& sample, const std::optional<Twist2>& wheels,
+                RobustEstimate& out);
+  void apply_fixes(double t);
+  Eigen::Matrix2d fix_covariance(const CameraFix& fix) const;
+
+  OdometryOptions options_;
+  int n_;                                    ///< sensors in the configured array
+  int m_;                                    ///< selected sensors
+  std::array<int, kMaxSensors> selected_{};  ///< index in the array of selected sensor k
+  SensorArray sub_array_;
+  Estimator estimator_;
+  NoiseModel noise_;   ///< oracle's noise model
+  Fallback fallback_;  ///< for the wheels and oracle estimators
+  PointMeasurements points_;
+  ArraySample compact_;  ///< the selected sensors' counts of the current epoch
+  Synchroniser sync_;
+  WheelAverager wheels_;
+  bool wheels_seen_ = false;
+  double last_wheel_t_ = 0.0;
+  FixedRing<ArraySample, kMaxWaitingEpochs> ready_;  ///< final epochs waiting for wheels
+  FixedRing<CameraFix, kMaxPendingFixes> pending_fixes_;
+  DeadReckoner reckoner_;
+  std::optional<PoseEkf> ekf_;
+  bool started_ = false;
+  double t0_;
+  FixCounts fixes_;
+  std::size_t steps_ = 0;
+  RowError row_error_ = RowError::kTimeNotFinite;
+  std::optional<OdometryError> deferred_error_;
+  std::optional<GeometryError> geometry_error_;
+};
+
+}  // namespace moa

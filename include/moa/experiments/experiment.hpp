@@ -1,0 +1,43 @@
+// The papers' experiments as a library module: `moa experiment NAME`, the
+// tests and the Python bindings run them from here. Each returns its text
+// and its JSON; the caller prints.
+//
+// JSON of every experiment: {"experiment", "runs", "seeds", "rows": [...]};
+// a row has its labels, its figures (means over the runs, SI units) and, for
+// the methods run through the odometry pipeline, "runs": one object per run
+// with its seed, its figures and "reproduce": the moa calls that recompute
+// them ($OUT a scratch directory; the last call is `moa evaluate --json`).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <string>
+#include <string_view>
+
+namespace moa::experiments {
+
+struct Options {
+  std::uint64_t seed = 1;  ///< first seed; run k uses seed + k
+  int runs = 0;            ///< repetitions; 0: the experiment's default
+  /// Called with a short status ("table 4, speed (b): run 3/10").
+  std::function<void(const std::string&)> progress;
+};
+
+struct Result {
+  std::string text;  ///< the table a person reads, with its conclusions
+  std::string json;  ///< one JSON object
+};
+
+struct Experiment {
+  const char* name;
+  const char* summary;
+  Result (*run)(const Options& options);
+};
+
+/// Every experiment, sorted by name.
+std::span<const Experiment> all();
+/// The experiment called `name`, nullptr if none.
+const Experiment* find(std::string_view name);
+
+}  // namespace moa::experiments

@@ -1,0 +1,82 @@
+// odometry.csv (docs/formats/log.md): the pipeline's steps as rows, and the
+// rows read back with their selection columns typed.
+//
+//   t,x,y,theta,vx,vy,omega,sd_vx,sd_vy,sd_omega,source,used,excluded[,pxx,pxy,pyy,ptt]
+//
+// used:     the sensors of the estimate, names joined by '+'
+// excluded: name:reason[/flag...] joined by ';', reason a describe(Exclusion)
+//           word, flags the noise inflations (over-speed, low-squal, overflow)
+// pxx..ptt: the EKF's pose covariance (m^2, m^2, m^2, rad^2) with camera fusion
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "moa/core/odometry.hpp"
+#include "moa/io/config.hpp"
+
+namespace moa::io {
+
+/// Writes a step per row; the file appears only on commit() (an exception
+/// or a signal leaves no file behind).
+class OdometryCsvWriter {
+ public:
+  /// `names`: the sensor names in config order; `fused`: adds the pose
+  /// covariance columns.
+  OdometryCsvWriter(const std::filesystem::path& file, std::vector<std::string> names, bool fused);
+  /// The same rows to an open stream (stdout), flushed by flush() and commit().
+  OdometryCsvWriter(std::FILE* stream, std::vector<std::string> names, bool fused);
+  ~OdometryCsvWriter();
+  void write(const OdometryStep& step);
+  void flush();
+  void commit();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// One odometry.csv row. The selection fields are set only when the file has
+/// the selection columns (has_selection()).
+struct OdometryRow {
+  double t = 0.0;
+  Pose2 pose;
+  Twist2 twist;
+  std::optional<Eigen::Vector3d> sd;  ///< sd_vx, sd_vy, sd_omega
+  std::optional<Source> source;
+  SensorMask used = 0;
+  /// Per sensor: kNone when used or not listed.
+  std::array<Exclusion, kMaxSensors> excluded{};
+  std::array<std::uint8_t, kMaxSensors> noise_flags{};
+  /// Sensors listed in `used` or `excluded`.
+  SensorMask listed = 0;
+  std::optional<Eigen::Vector4d> pose_covariance;  ///< pxx, pxy, pyy, ptt
+};
+
+/// Streams odometry.csv; sensor names must be the config's. Throws io::Error
+/// with file, line and column on anything malformed.
+class OdometryCsvReader {
+ public:
+  OdometryCsvReader(const std::filesystem::path& file, const RobotConfig& config,
+                    std::string config_path);
+  ~OdometryCsvReader();
+  std::optional<OdometryRow> next();
+  bool has_selection() const;
+  const std::string& file() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// "inconsistent/over-speed": an exclusion and its noise flags as written.
+std::string describe_exclusion(Exclusion reason, std::uint8_t noise_flags);
+
+}  // namespace moa::io

@@ -1,0 +1,58 @@
+// The odometry pipeline (moa/core/odometry.hpp) over the files of a log
+// directory: mice.csv, and when present and asked for wheels.csv,
+// camera.csv, faults.csv, merged in time order. `moa odometry`, the
+// experiments and the Python bindings all run this.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+
+#include "moa/core/odometry.hpp"
+#include "moa/io/config.hpp"
+
+namespace moa::io {
+
+/// The files of a log (log format v1), found from the directory or its
+/// mice.csv: the one resolver of "log directory or mice.csv".
+struct LogFiles {
+  std::filesystem::path dir;
+  std::filesystem::path mice;
+  std::optional<std::filesystem::path> wheels, camera, truth, faults;
+};
+/// Throws io::Error when `log` is neither a directory with mice.csv nor a file.
+LogFiles resolve_log(const std::filesystem::path& log);
+
+struct OdometryRun {
+  std::size_t rows = 0;          ///< mice rows read
+  std::size_t steps = 0;         ///< epochs written
+  double t0 = 0.0, t_end = 0.0;  ///< s, first epoch's start, last row's time
+  FixCounts fixes;
+};
+
+using StepCallback = std::function<void(const OdometryStep&)>;
+/// Called now and then with the mice rows read so far and their time (s).
+using ProgressCallback = std::function<void(std::size_t rows, double t)>;
+
+/// Runs the pipeline: wheels.csv is fed when options.use_wheels and it
+/// exists, camera.csv when options.fuse_camera (required then), faults.csv
+/// (or `faults`) when the estimator is the oracle (required then). Throws
+/// io::Error naming the file, line or option on anything wrong.
+OdometryRun run_odometry(const RobotConfig& config, const std::string& config_path,
+                         const LogFiles& log, const OdometryOptions& options,
+                         const StepCallback& on_step, const ProgressCallback& progress = {});
+
+/// run_odometry writing odometry.csv (written whole on success, else not at all).
+OdometryRun write_odometry(const RobotConfig& config, const std::string& config_path,
+                           const LogFiles& log, const OdometryOptions& options,
+                           const std::filesystem::path& out, const ProgressCallback& progress = {});
+
+/// Builds the pipeline in place on the heap (it is large), or throws
+/// io::Error naming `config_path` for a geometry the estimator refuses and
+/// the option for invalid options.
+std::unique_ptr<Odometry> make_odometry(const RobotConfig& config, const std::string& config_path,
+                                        double t0, const OdometryOptions& options);
+
+}  // namespace moa::io

@@ -1,0 +1,375 @@
+#include "moa/core/odometry.hpp"
+
+#include <cmath>
+
+namespace moa {
+
+const char* describe(EstimatorKind kind) {
+  switch (kind) {
+    case EstimatorKind::kLs:
+      return "ls";
+    case EstimatorKind::kSekimori:
+      return "sekimori";
+    case EstimatorKind::kConsensus:
+      return "consensus";
+    case EstimatorKind::kWheels:
+      return "wheels";
+    case EstimatorKind::kOracle:
+      return "oracle";
+  }
+  return "?";
+}
+
+std::optional<EstimatorKind> estimator_from_name(std::string_view name) {
+  for (const auto kind : {EstimatorKind::kLs, EstimatorKind::kSekimori, EstimatorKind::kConsensus,
+                          EstimatorKind::kWheels, EstimatorKind::kOracle}) {
+    if (name == describe(kind)) return kind;
+  }
+  return std::nullopt;
+}
+
+const char* describe(OdometryError error) {
+  switch (error) {
+    case OdometryError::kRow:
+      return "invalid mice row";
+    case OdometryError::kNoInterval:
+      return "an epoch has no positive, finite interval";
+    case OdometryError::kWheelsFull:
+      return "wheel rows fed too far ahead of the mice rows";
+    case OdometryError::kFixesFull:
+      return "camera fixes fed too far ahead of the mice rows";
+    case OdometryError::kWheelsBackwards:
+      return "wheel row time not finite or earlier than the previous one";
+  }
+  return "?";
+}
+
+namespace {
+bool positive_finite(double x) { return std::isfinite(x) && x > 0.0; }
+}  // namespace
+
+const char* OdometryOptions::validate() const {
+  if (!positive_finite(rate)) return "rate: must be positive and finite (Hz)";
+  if (sensors == 0) return "sensors: no sensor selected";
+  if (const char* e = synchroniser().validate(); *e) {
+    if (!positive_finite(max_row_interval))
+      return "max_row_interval: must be positive and finite (s)";
+    if (!(max_gap > 0.0)) return "max_gap: must be positive (s)";
+    return "max_row_interval: longer than 61 epochs (1/rate each); lower it or the rate";
+  }
+  if (initial && !(std::isfinite(initial->t.x()) && std::isfinite(initial->t.y()) &&
+                   std::isfinite(initial->theta))) {
+    return "initial: pose must be finite";
+  }
+  if (!(std::isfinite(camera_latency) && camera_latency >= 0.0))
+    return "camera_latency: must be finite and not negative (s)";
+  if (!positive_finite(camera_sigma)) return "camera_sigma: must be positive and finite (m)";
+  if (!positive_finite(camera_heading_sigma))
+    return "camera_heading_sigma: must be positive and finite (rad)";
+  if (!positive_finite(sekimori.e_th)) return "sekimori.e_th: must be positive and finite (m^2)";
+  if (sekimori.r_th != -1 && (sekimori.r_th < 1 || sekimori.r_th > kMaxSensors))
+    return "sekimori.r_th: must be -1 (automatic) or 1 to 16";
+  if (!(std::isfinite(consensus.alpha) && consensus.alpha > 0.0 && consensus.alpha < 0.5))
+    return "consensus.alpha: must be in (0, 0.5)";
+  const NoiseModelOptions& n = consensus.noise;
+  if (!(std::isfinite(n.relative) && n.relative >= 0.0))
+    return "consensus.noise.relative: must be finite and not negative";
+  if (!positive_finite(n.speed_onset)) return "consensus.noise.speed_onset: must be positive";
+  if (!(std::isfinite(n.speed_cap) && n.speed_cap >= 1.0))
+    return "consensus.noise.speed_cap: must be finite and at least 1";
+  for (const WheelNoise* w : {&consensus.wheels, &sekimori.wheels}) {
+    if (!(positive_finite(w->base_v) && positive_finite(w->base_omega) &&
+          std::isfinite(w->relative) && w->relative >= 0.0)) {
+      return "wheels noise: base_v, base_omega must be positive, relative not negative";
+    }
+  }
+  if (!ekf.twist_noise_floor.allFinite() || (ekf.twist_noise_floor.array() < 0.0).any())
+    return "ekf.twist_noise_floor: must be finite and not negative";
+  return "";
+}
+
+Odometry::Odometry(const SensorArray& array, double t0, const OdometryOptions& options)
+    : options_(options),
+      n_(array.size()),
+      m_(0),
+      noise_(array, options.consensus.noise),
+      sync_(array.size(), t0, options.synchroniser()),
+      reckoner_(options.initial.value_or(Pose2{})),
+      t0_(t0) {
+  if (n_ > kMaxSensors) {
+    geometry_error_ = GeometryError::kTooManySensors;
+    return;
+  }
+  // The selected sensors as an array of their own: every estimator sees
+  // exactly the sensors it may use.
+  std::array<SensorMount, kMaxSensors> mounts{};
+  for (int i = 0; i < n_; ++i) {
+    if (!contains(options_.sensors, i)) continue;
+    selected_[static_cast<std::size_t>(m_)] = i;
+    mounts[static_cast<std::size_t>(m_)] = array[i];
+    ++m_;
+  }
+  sub_array_ =
+      SensorArray(std::span<const SensorMount>(mounts.data(), static_cast<std::size_t>(m_)));
+  noise_ = NoiseModel(sub_array_, options_.consensus.noise);
+  const double period = 1.0 / options_.rate;
+  const auto take = [&](auto built) {
+    using T = std::decay_t<decltype(std::get<0>(built))>;
+    if (const auto* e = std::get_if<GeometryError>(&built)) {
+      geometry_error_ = *e;
+    } else {
+      estimator_.template emplace<T>(std::move(std::get<T>(built)));
+    }
+  };
+  switch (options_.estimator) {
+    case EstimatorKind::kLs:
+      take(LsEstimator::create(sub_array_, all_sensors(m_), period));
+      break;
+    case EstimatorKind::kSekimori:
+      take(SekimoriEstimator::create(sub_array_, options_.sekimori));
+      break;
+    case EstimatorKind::kConsensus:
+      take(ConsensusEstimator::create(sub_array_, options_.consensus));
+      break;
+    case EstimatorKind::kWheels:
+      break;
+    case EstimatorKind::kOracle:
+      // The same geometry checks as least squares over all selected sensors.
+      if (const auto built = LsEstimator::create(sub_array_, all_sensors(m_), period);
+          std::holds_alternative<GeometryError>(built)) {
+        geometry_error_ = std::get<GeometryError>(built);
+      } else {
+        estimator_.emplace<SubsetSolver>(sub_array_);
+      }
+      break;
+  }
+}
+
+const Pose2& Odometry::pose() const { return ekf_ ? ekf_->pose() : reckoner_.pose(); }
+
+Eigen::Matrix2d Odometry::fix_covariance(const CameraFix& fix) const {
+  const Eigen::Vector2d sd =
+      fix.sigma ? *fix.sigma : Eigen::Vector2d::Constant(options_.camera_sigma);
+  return sd.cwiseAbs2().asDiagonal();
+}
+
+std::optional<OdometryError> Odometry::push(const SensorRow& row, StepSink sink) {
+  deferred_error_.reset();
+  const auto error = sync_.push(row, [&](const ArraySample& s) { on_epoch(s, sink); });
+  if (error) {
+    row_error_ = *error;
+    return OdometryError::kRow;
+  }
+  return deferred_error_;
+}
+
+std::optional<OdometryError> Odometry::push_wheels(double t, const Twist2& twist, StepSink sink) {
+  if (!options_.use_wheels) return std::nullopt;
+  if (!std::isfinite(t) || (wheels_seen_ && t < last_wheel_t_)) {
+    return OdometryError::kWheelsBackwards;
+  }
+  if (wheels_.full()) {
+    // Rows older than the oldest waiting epoch are no longer needed.
+    if (!ready_.empty())
+      (void)wheels_.average(ready_.front().t - ready_.front().dt, ready_.front().t);
+    if (wheels_.full()) return OdometryError::kWheelsFull;
+  }
+  wheels_.push(t, twist);
+  wheels_seen_ = true;
+  last_wheel_t_ = t;
+  deferred_error_.reset();
+  drain(false, sink);
+  // Mice silent while the wheels report: the epochs no mice row can reach
+  // any more are final, so the wheel rows they need do not pile up.
+  sync_.advance(t, [&](const ArraySample& s) { on_epoch(s, sink); });
+  return deferred_error_;
+}
+
+std::optional<OdometryError> Odometry::push_fix(const CameraFix& fix) {
+  if (!options_.fuse_camera) return std::nullopt;
+  if (pending_fixes_.full()) return OdometryError::kFixesFull;
+  pending_fixes_.push_back(fix);
+  return std::nullopt;
+}
+
+void Odometry::finish(double t_end, StepSink sink) {
+  sync_.finish(t_end, [&](const ArraySample& s) {
+    // A zero-length tail carries no motion.
+    if (std::isfinite(s.dt) && s.dt > 0.0) on_epoch(s, sink);
+  });
+  drain(true, sink);
+}
+
+void Odometry::on_epoch(const ArraySample& sample, StepSink sink) {
+  const bool wait = options_.use_wheels && wheels_seen_;
+  if (!wait && ready_.empty()) {
+    process(sample, sink);
+    return;
+  }
+  if (ready_.full()) {
+    // The wheels lag too far: go on without their row for the oldest epoch.
+    process(ready_.front(), sink);
+    ready_.pop_front();
+  }
+  ready_.push_back(sample);
+  drain(false, sink);
+}
+
+void Odometry::drain(bool all, StepSink sink) {
+  while (!ready_.empty() && (all || wheels_.covers(ready_.front().t))) {
+    process(ready_.front(), sink);
+    ready_.pop_front();
+  }
+}
+
+void Odometry::apply_fixes(double t) {
+  while (!pending_fixes_.empty()) {
+    const CameraFix& f = pending_fixes_.front();
+    if (f.t + options_.camera_latency > t) return;
+    FixResult result;
+    if (f.theta) {
+      Eigen::Matrix3d r = Eigen::Matrix3d::Zero();
+      r.topLeftCorner<2, 2>() = fix_covariance(f);
+      r(2, 2) = options_.camera_heading_sigma * options_.camera_heading_sigma;
+      result = ekf_->update_pose(f.t, {f.position.x(), f.position.y(), *f.theta}, r);
+    } else {
+      result = ekf_->update_position(f.t, f.position, fix_covariance(f));
+    }
+    switch (result) {
+      case FixResult::kApplied:
+        ++fixes_.applied;
+        break;
+      case FixResult::kRejected:
+        ++fixes_.rejected;
+        break;
+      case FixResult::kTooOld:
+        ++fixes_.too_old;
+        break;
+      case FixResult::kFuture:
+        return;  // keep it until the filter has reached its time
+      case FixResult::kInvalid:
+        ++fixes_.invalid;
+        break;
+    }
+    pending_fixes_.pop_front();
+  }
+}
+
+bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& wheels,
+                        RobustEstimate& out) {
+  // The selected sensors' part of the epoch.
+  compact_.t = sample.t;
+  compact_.dt = sample.dt;
+  compact_.size = m_;
+  for (int k = 0; k < m_; ++k) {
+    const auto i = static_cast<std::size_t>(selected_[static_cast<std::size_t>(k)]);
+    const auto u = static_cast<std::size_t>(k);
+    compact_.counts[u] = sample.counts[i];
+    compact_.squal[u] = sample.squal[i];
+    compact_.flags[u] = sample.flags[i];
+    compact_.faults[u] = sample.faults[i];
+  }
+  RobustEstimate e;
+  bool ok = true;
+  if (auto* ls = std::get_if<LsEstimator>(&estimator_)) {
+    const auto x = ls->estimate(compact_);
+    ok = x.has_value();
+    if (ok) e.estimate = *x;
+  } else if (auto* s = std::get_if<SekimoriEstimator>(&estimator_)) {
+    const auto x = s->estimate(compact_, wheels);
+    ok = x.has_value();
+    if (ok) e = *x;
+  } else if (auto* c = std::get_if<ConsensusEstimator>(&estimator_)) {
+    const auto x = c->estimate(compact_, wheels);
+    ok = x.has_value();
+    if (ok) e = *x;
+  } else if (auto* solver = std::get_if<SubsetSolver>(&estimator_)) {
+    // Oracle: least squares over the sensors the simulator says are sound,
+    // weighted by the consensus's noise model.
+    ok = std::isfinite(sample.dt) && sample.dt > 0.0;
+    if (ok) {
+      noise_.measure(compact_, fallback_.last_twist(), points_, e.noise_flags);
+      SensorMask good = 0;
+      for (int k = 0; k < m_; ++k) {
+        if (compact_.faults[static_cast<std::size_t>(k)] == 0) {
+          good |= SensorMask{1} << k;
+        } else {
+          e.excluded[static_cast<std::size_t>(k)] = Exclusion::kFaulty;
+        }
+      }
+      if (const auto fit = solver->fit(good, points_)) {
+        e.estimate.twist = fit->twist;
+        e.estimate.covariance = fit->covariance;
+        e.estimate.used = good;
+        fallback_.good(fit->twist, fit->covariance, sample.t);
+      } else {
+        for (int k = 0; k < m_; ++k) {
+          if (contains(good, k)) e.excluded[static_cast<std::size_t>(k)] = Exclusion::kFallback;
+        }
+        fallback_.apply(e, wheels, options_.consensus.wheels, options_.consensus.hold, sample.t);
+      }
+    }
+  } else {
+    // Wheels alone: the mice are not used.
+    ok = std::isfinite(sample.dt) && sample.dt > 0.0;
+    fallback_.apply(e, wheels, options_.consensus.wheels, options_.consensus.hold, sample.t);
+    if (wheels) fallback_.good(*wheels, e.estimate.covariance, sample.t);
+    for (int k = 0; k < m_; ++k) e.excluded[static_cast<std::size_t>(k)] = Exclusion::kUnselected;
+  }
+  if (!ok) return false;
+  // Back to the configured array's indices.
+  out = RobustEstimate{};
+  out.estimate.twist = e.estimate.twist;
+  out.estimate.covariance = e.estimate.covariance;
+  out.source = e.source;
+  for (int i = 0; i < n_; ++i) out.excluded[static_cast<std::size_t>(i)] = Exclusion::kUnselected;
+  for (int k = 0; k < m_; ++k) {
+    const int i = selected_[static_cast<std::size_t>(k)];
+    const auto u = static_cast<std::size_t>(i), v = static_cast<std::size_t>(k);
+    if (contains(e.estimate.used, k)) out.estimate.used |= SensorMask{1} << i;
+    out.excluded[u] = e.excluded[v];
+    out.noise_flags[u] = e.noise_flags[v];
+  }
+  return true;
+}
+
+void Odometry::process(const ArraySample& sample, StepSink sink) {
+  const std::optional<Twist2> wheels = options_.use_wheels && wheels_seen_
+                                           ? wheels_.average(sample.t - sample.dt, sample.t)
+                                           : std::nullopt;
+  OdometryStep step;
+  step.sample = &sample;
+  if (!estimate(sample, wheels, step.estimate)) {
+    deferred_error_ = OdometryError::kNoInterval;
+    return;
+  }
+  if (!started_) {
+    started_ = true;
+    if (options_.fuse_camera) {
+      // The filter starts at the given pose, or at the first fix's position.
+      Eigen::Matrix3d p0 = Eigen::Vector3d(1e-8, 1e-8, 1e-8).asDiagonal();
+      Pose2 initial = options_.initial.value_or(Pose2{});
+      if (!options_.initial && !pending_fixes_.empty()) {
+        initial.t = pending_fixes_.front().position;
+        p0.topLeftCorner<2, 2>() = fix_covariance(pending_fixes_.front());
+        p0(2, 2) = 1e-4;
+        pending_fixes_.pop_front();  // it made the initial position
+      }
+      ekf_.emplace(t0_, initial, p0, options_.ekf);
+    }
+  }
+  const Twist2& twist = step.estimate.estimate.twist;
+  if (ekf_) {
+    ekf_->predict(sample.t, twist, step.estimate.estimate.covariance, sample.dt);
+    apply_fixes(sample.t);
+    step.pose = ekf_->pose();
+    step.fused = true;
+    step.pose_covariance = ekf_->covariance();
+  } else {
+    step.pose = reckoner_.step(twist, sample.dt);
+  }
+  ++steps_;
+  sink(step);
+}
+
+}  // namespace moa

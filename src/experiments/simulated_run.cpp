@@ -1,0 +1,143 @@
+#include "moa/experiments/simulated_run.hpp"
+
+#include <fmt/core.h>
+
+#include <cmath>
+#include <random>
+#include <stdexcept>
+
+#include "moa/io/evaluate.hpp"
+#include "moa/io/odometry_run.hpp"
+#include "moa/sim/log_writer.hpp"
+#include "moa/sim/scenario.hpp"
+
+namespace moa::experiments {
+namespace fs = std::filesystem;
+
+std::vector<std::string> odometry_flags(const OdometryOptions& o, const io::RobotConfig& config) {
+  const OdometryOptions d;
+  std::vector<std::string> flags;
+  if (o.estimator != d.estimator) flags.insert(flags.end(), {"--estimator", describe(o.estimator)});
+  const SensorMask all = all_sensors(config.array.size());
+  if ((o.sensors & all) != all) {
+    std::string names;
+    for (int i = 0; i < config.array.size(); ++i) {
+      if (contains(o.sensors, i)) {
+        names += (names.empty() ? "" : ",") + config.names[static_cast<std::size_t>(i)];
+      }
+    }
+    flags.insert(flags.end(), {"--sensors", names});
+  }
+  if (!o.use_wheels) flags.emplace_back("--no-wheels");
+  if (o.fuse_camera) flags.emplace_back("--fuse-camera");
+  if (o.camera_latency != d.camera_latency) {
+    flags.insert(flags.end(), {"--camera-latency", fmt::format("{}", o.camera_latency)});
+  }
+  if (o.rate != d.rate) flags.insert(flags.end(), {"--rate", fmt::format("{}", o.rate)});
+  // What the command line has no flag for must stay at its default.
+  if (o.max_row_interval != d.max_row_interval || o.max_gap != d.max_gap || o.initial ||
+      o.camera_sigma != d.camera_sigma || o.camera_heading_sigma != d.camera_heading_sigma ||
+      o.sekimori.e_th != d.sekimori.e_th || o.sekimori.r_th != d.sekimori.r_th ||
+      o.consensus.alpha != d.consensus.alpha) {
+    throw std::invalid_argument("odometry_flags: an option the experiments do not vary");
+  }
+  return flags;
+}
+
+ScratchDirectory::ScratchDirectory(const std::string& prefix) {
+  std::random_device random;
+  path_ = fs::temp_directory_path() / fmt::format("{}-{:08x}", prefix, random());
+  fs::create_directories(path_);
+}
+
+ScratchDirectory::~ScratchDirectory() {
+  std::error_code ignored;
+  fs::remove_all(path_, ignored);
+}
+
+SimulatedRun::SimulatedRun(const std::string& scenario, std::uint64_t seed, const fs::path& scratch)
+    : scenario_(scenario), seed_(seed), dir_(scratch / fmt::format("{}-seed{}", scenario, seed)) {
+  const sim::Scenario s = sim::load_scenario(scenario);
+  sim::write_log(s, seed, dir_);
+  config_ = io::read_config(dir_ / "robot.yaml");
+  camera_latency_ = s.camera.latency;
+}
+
+SimulatedRun::~SimulatedRun() {
+  std::error_code ignored;
+  fs::remove_all(dir_, ignored);
+}
+
+RunRecord SimulatedRun::run(const Method& method) const {
+  const fs::path config = dir_ / "robot.yaml";
+  const fs::path odometry = dir_ / fmt::format("odometry-{}.csv", runs_++);
+  io::write_odometry(config_, config.string(), io::resolve_log(dir_), method.options, odometry);
+  RunRecord r;
+  r.seed = seed_;
+  r.error = io::evaluate_files(dir_ / "truth.csv", odometry);
+  fs::remove(odometry);
+  std::string flags;
+  for (const auto& f : odometry_flags(method.options, config_)) flags += " " + f;
+  r.reproduce = {
+      fmt::format("moa simulate --scenario {} --seed {} --out $OUT", scenario_, seed_),
+      fmt::format("moa odometry --config $OUT/robot.yaml --log $OUT{} --out $OUT/odometry.csv",
+                  flags),
+      "moa evaluate --truth $OUT/truth.csv --odometry $OUT/odometry.csv --json"};
+  return r;
+}
+
+Spread spread(const std::vector<double>& values) {
+  Spread s;
+  if (values.empty()) return s;
+  for (const double v : values) s.mean += v;
+  s.mean /= static_cast<double>(values.size());
+  if (values.size() > 1) {
+    double ss = 0.0;
+    for (const double v : values) ss += (v - s.mean) * (v - s.mean);
+    s.sd = std::sqrt(ss / static_cast<double>(values.size() - 1));
+  }
+  return s;
+}
+
+}  // namespace moa::experiments
+
+#include "moa/io/json.hpp"
+
+namespace moa::experiments {
+
+MeanError mean_error(const std::vector<RunRecord>& runs) {
+  std::vector<double> a, b, c, d;
+  for (const auto& r : runs) {
+    a.push_back(r.error.max_translation);
+    b.push_back(r.error.rms_translation);
+    c.push_back(r.error.max_heading);
+    d.push_back(r.error.rms_heading);
+  }
+  return {spread(a), spread(b), spread(c), spread(d)};
+}
+
+void write_runs(io::JsonWriter& json, const std::vector<RunRecord>& runs) {
+  const MeanError m = mean_error(runs);
+  json.member("max_translation_m", m.max_translation.mean)
+      .member("rms_translation_m", m.rms_translation.mean)
+      .member("max_heading_rad", m.max_heading.mean)
+      .member("rms_heading_rad", m.rms_heading.mean)
+      .member("sd_max_translation_m", m.max_translation.sd)
+      .member("sd_max_heading_rad", m.max_heading.sd);
+  json.key("runs").begin_array();
+  for (const auto& r : runs) {
+    json.begin_object()
+        .member("seed", r.seed)
+        .member("max_translation_m", r.error.max_translation)
+        .member("rms_translation_m", r.error.rms_translation)
+        .member("max_heading_rad", r.error.max_heading)
+        .member("rms_heading_rad", r.error.rms_heading)
+        .member("samples", r.error.samples);
+    json.key("reproduce").begin_array();
+    for (const auto& call : r.reproduce) json.value(call);
+    json.end_array().end_object();
+  }
+  json.end_array();
+}
+
+}  // namespace moa::experiments

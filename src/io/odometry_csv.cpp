@@ -1,0 +1,249 @@
+#include "moa/io/odometry_csv.hpp"
+
+#include <fmt/core.h>
+
+#include <cmath>
+#include <string_view>
+
+#include "moa/io/csv.hpp"
+#include "moa/io/error.hpp"
+#include "moa/io/log.hpp"
+
+namespace moa::io {
+namespace {
+
+constexpr std::array<std::pair<std::uint8_t, std::string_view>, 3> kNoiseFlagNames{{
+    {kNoiseOverSpeed, "over-speed"},
+    {kNoiseLowSqual, "low-squal"},
+    {kNoiseOverflow, "overflow"},
+}};
+
+std::string sd(double variance) {
+  return fmt::format("{:.6g}", std::sqrt(std::max(variance, 0.0)));
+}
+
+std::vector<std::string> extra_columns(bool fused) {
+  std::vector<std::string> columns{"sd_vx", "sd_vy", "sd_omega", "source", "used", "excluded"};
+  if (fused) columns.insert(columns.end(), {"pxx", "pxy", "pyy", "ptt"});
+  return columns;
+}
+
+std::string joined(const std::vector<std::string>& names) {
+  std::string out;
+  for (const auto& name : names) out += (out.empty() ? "" : ", ") + name;
+  return out;
+}
+
+}  // namespace
+
+std::string describe_exclusion(Exclusion reason, std::uint8_t noise_flags) {
+  std::string out = describe(reason);
+  for (const auto& [bit, name] : kNoiseFlagNames) {
+    if (noise_flags & bit) {
+      out += '/';
+      out += name;
+    }
+  }
+  return out;
+}
+
+// ------------------------------------------------------------------ writer
+
+struct OdometryCsvWriter::Impl {
+  template <class Target>
+  Impl(const Target& target, std::vector<std::string> sensor_names, bool with_cov)
+      : names(std::move(sensor_names)), fused(with_cov), writer(target, extra_columns(with_cov)) {
+    extra.resize(fused ? 10 : 6);
+  }
+  std::vector<std::string> names;
+  bool fused;
+  OdometryWriter writer;
+  std::vector<std::string> extra;
+};
+
+OdometryCsvWriter::OdometryCsvWriter(const std::filesystem::path& file,
+                                     std::vector<std::string> names, bool fused)
+    : impl_(std::make_unique<Impl>(file, std::move(names), fused)) {}
+
+OdometryCsvWriter::OdometryCsvWriter(std::FILE* stream, std::vector<std::string> names, bool fused)
+    : impl_(std::make_unique<Impl>(stream, std::move(names), fused)) {}
+
+OdometryCsvWriter::~OdometryCsvWriter() = default;
+
+void OdometryCsvWriter::flush() { impl_->writer.flush(); }
+
+void OdometryCsvWriter::write(const OdometryStep& step) {
+  Impl& s = *impl_;
+  auto& out = s.extra;
+  const RobustEstimate& e = step.estimate;
+  if (s.fused) {
+    const Eigen::Matrix3d& p = step.pose_covariance;
+    out[6] = fmt::format("{:.6g}", p(0, 0));
+    out[7] = fmt::format("{:.6g}", p(0, 1));
+    out[8] = fmt::format("{:.6g}", p(1, 1));
+    out[9] = fmt::format("{:.6g}", p(2, 2));
+  }
+  out[0] = sd(e.estimate.covariance(0, 0));
+  out[1] = sd(e.estimate.covariance(1, 1));
+  out[2] = sd(e.estimate.covariance(2, 2));
+  out[3] = describe(e.source);
+  out[4].clear();
+  out[5].clear();
+  for (std::size_t i = 0; i < s.names.size(); ++i) {
+    if (contains(e.estimate.used, static_cast<int>(i))) {
+      if (!out[4].empty()) out[4] += '+';
+      out[4] += s.names[i];
+    } else {
+      if (!out[5].empty()) out[5] += ';';
+      out[5] += s.names[i] + ':' + describe_exclusion(e.excluded[i], e.noise_flags[i]);
+    }
+  }
+  s.writer.write(step.t(), step.pose, e.estimate.twist, out);
+}
+
+void OdometryCsvWriter::commit() { impl_->writer.commit(); }
+
+// ------------------------------------------------------------------ reader
+
+struct OdometryCsvReader::Impl {
+  Impl(const std::filesystem::path& file, const RobotConfig& cfg, std::string cfg_path)
+      : csv(file), config(cfg), config_path(std::move(cfg_path)) {
+    for (const char* name : {"t", "x", "y", "theta", "vx", "vy", "omega"}) {
+      columns.push_back(csv.required_column(name));
+    }
+    used = csv.column("used");
+    excluded = csv.column("excluded");
+    source = csv.column("source");
+    const auto a = csv.column("sd_vx"), b = csv.column("sd_vy"), c = csv.column("sd_omega");
+    if (a && b && c) sd = {*a, *b, *c};
+    const auto pxx = csv.column("pxx"), pxy = csv.column("pxy"), pyy = csv.column("pyy"),
+               ptt = csv.column("ptt");
+    if (pxx && pxy && pyy && ptt) cov = {*pxx, *pxy, *pyy, *ptt};
+  }
+
+  int sensor(std::size_t column, std::string_view name, const OdometryRow& r) const {
+    const auto index = config.index_of(name);
+    if (!index) {
+      csv.fail_field(column, fmt::format("unknown sensor '{}' ({} has {})", printable(name),
+                                         config_path, joined(config.names)));
+    }
+    if (contains(r.listed, *index)) {
+      csv.fail_field(column, fmt::format("sensor '{}' is listed twice", name));
+    }
+    return *index;
+  }
+
+  void parse_used(std::size_t column, OdometryRow& r) const {
+    const std::string_view text = csv.field(column);
+    if (text.empty()) return;
+    std::size_t start = 0;
+    while (true) {
+      const std::size_t end = std::min(text.find('+', start), text.size());
+      const int i = sensor(column, text.substr(start, end - start), r);
+      r.used |= SensorMask{1} << i;
+      r.listed |= SensorMask{1} << i;
+      if (end == text.size()) return;
+      start = end + 1;
+    }
+  }
+
+  void parse_excluded(std::size_t column, OdometryRow& r) const {
+    const std::string_view text = csv.field(column);
+    if (text.empty()) return;
+    std::size_t start = 0;
+    while (true) {
+      const std::size_t end = std::min(text.find(';', start), text.size());
+      const std::string_view entry = text.substr(start, end - start);
+      const std::size_t colon = entry.rfind(':');
+      if (colon == std::string_view::npos || colon == 0 || colon + 1 == entry.size()) {
+        csv.fail_field(column, fmt::format("'{}' is not name:reason", printable(entry)));
+      }
+      const int i = sensor(column, entry.substr(0, colon), r);
+      r.listed |= SensorMask{1} << i;
+      std::string_view rest = entry.substr(colon + 1);
+      const std::size_t slash = std::min(rest.find('/'), rest.size());
+      const std::string_view reason = rest.substr(0, slash);
+      const auto u = static_cast<std::size_t>(i);
+      bool known = false;
+      for (const auto x : {Exclusion::kLift, Exclusion::kInconsistent, Exclusion::kUnreliable,
+                           Exclusion::kFallback, Exclusion::kUnselected, Exclusion::kFaulty}) {
+        if (reason == describe(x)) {
+          r.excluded[u] = x;
+          known = true;
+        }
+      }
+      if (!known) {
+        csv.fail_field(
+            column, fmt::format("'{}': unknown reason '{}'", printable(entry), printable(reason)));
+      }
+      rest = slash < rest.size() ? rest.substr(slash + 1) : std::string_view{};
+      while (!rest.empty()) {
+        const std::size_t next = std::min(rest.find('/'), rest.size());
+        const std::string_view flag = rest.substr(0, next);
+        bool found = false;
+        for (const auto& [bit, name] : kNoiseFlagNames) {
+          if (flag == name) {
+            r.noise_flags[u] |= bit;
+            found = true;
+          }
+        }
+        if (!found) {
+          csv.fail_field(column,
+                         fmt::format("'{}': unknown flag '{}'", printable(entry), printable(flag)));
+        }
+        rest = next < rest.size() ? rest.substr(next + 1) : std::string_view{};
+      }
+      if (end == text.size()) return;
+      start = end + 1;
+    }
+  }
+
+  CsvReader csv;
+  const RobotConfig& config;
+  std::string config_path;
+  std::vector<std::size_t> columns;
+  std::optional<std::size_t> used, excluded, source;
+  std::optional<std::array<std::size_t, 3>> sd;
+  std::optional<std::array<std::size_t, 4>> cov;
+};
+
+OdometryCsvReader::OdometryCsvReader(const std::filesystem::path& file, const RobotConfig& config,
+                                     std::string config_path)
+    : impl_(std::make_unique<Impl>(file, config, std::move(config_path))) {}
+
+OdometryCsvReader::~OdometryCsvReader() = default;
+
+bool OdometryCsvReader::has_selection() const { return impl_->used && impl_->excluded; }
+const std::string& OdometryCsvReader::file() const { return impl_->csv.file(); }
+
+std::optional<OdometryRow> OdometryCsvReader::next() {
+  Impl& s = *impl_;
+  if (!s.csv.next()) return std::nullopt;
+  const auto& c = s.columns;
+  OdometryRow r;
+  r.t = s.csv.time(c[0]);
+  r.pose = Pose2{{s.csv.number(c[1]), s.csv.number(c[2])}, s.csv.number(c[3])};
+  r.twist = Twist2{{s.csv.number(c[4]), s.csv.number(c[5])}, s.csv.number(c[6])};
+  if (s.sd)
+    r.sd = Eigen::Vector3d(s.csv.number((*s.sd)[0]), s.csv.number((*s.sd)[1]),
+                           s.csv.number((*s.sd)[2]));
+  if (s.cov) {
+    r.pose_covariance = Eigen::Vector4d(s.csv.number((*s.cov)[0]), s.csv.number((*s.cov)[1]),
+                                        s.csv.number((*s.cov)[2]), s.csv.number((*s.cov)[3]));
+  }
+  if (s.source) {
+    const std::string_view text = s.csv.field(*s.source);
+    for (const auto x : {Source::kMice, Source::kWheels, Source::kHold}) {
+      if (text == describe(x)) r.source = x;
+    }
+    if (!r.source) {
+      s.csv.fail_field(*s.source,
+                       fmt::format("unknown source '{}' (mice, wheels, hold)", printable(text)));
+    }
+  }
+  if (s.used) s.parse_used(*s.used, r);
+  if (s.excluded) s.parse_excluded(*s.excluded, r);
+  return r;
+}
+
+}  // namespace moa::io
