@@ -122,30 +122,35 @@ TEST_P(Interrupted, SimulateRemovesItsTemporariesAndSaysSo) {
 }
 
 TEST_P(Interrupted, OdometryRemovesItsTemporaryAndSaysSo) {
-  // mice.csv is a pipe that this test feeds and keeps open: the run waits
-  // for rows until the signal comes.
+  // A log of three million rows: seconds of work, ended when its output's
+  // temporary file appears.
   const auto dir = test::scratch_dir("interrupt-odometry");
   fs::create_directories(dir / "log");
   std::ofstream(dir / "log" / "robot.yaml")
       << "version: 1\nsensors:\n  - {name: m1, position: [0.1, 0], yaw: 0, cpi: 800}\n"
          "  - {name: m2, position: [-0.1, 0], yaw: 0, cpi: 800}\n";
-  ASSERT_EQ(::mkfifo((dir / "log" / "mice.csv").c_str(), 0644), 0);
+  {
+    std::ofstream mice(dir / "log" / "mice.csv");
+    mice << "t,sensor,dx,dy\n";
+    std::string rows;
+    for (int i = 0; i < 1'500'000; ++i) {
+      const std::string t = std::to_string(i) + "e-3";
+      rows += t + ",m1,1,0\n" + t + ",m2,1,0\n";
+      if (rows.size() > (1u << 20)) {
+        mice << rows;
+        rows.clear();
+      }
+    }
+    mice << rows;
+  }
   fs::create_directories(dir / "out");
   Child child{start_moa({"odometry", "--config", (dir / "log" / "robot.yaml").string(), "--log",
                          (dir / "log").string(), "--estimator", "ls", "--out",
                          (dir / "out" / "odometry.csv").string()},
                         dir)};
-  const int fifo = ::open((dir / "log" / "mice.csv").c_str(), O_WRONLY);
-  ASSERT_GE(fifo, 0);
-  std::string rows = "t,sensor,dx,dy\n";
-  for (int i = 0; i < 200; ++i) {
-    rows += std::to_string(i) + ".0,m1,1,0\n" + std::to_string(i) + ".0,m2,1,0\n";
-  }
-  ASSERT_EQ(::write(fifo, rows.data(), rows.size()), static_cast<ssize_t>(rows.size()));
   ASSERT_TRUE(wait_for_temporary(dir / "out"));
   ::kill(child.pid, GetParam().signal);
   EXPECT_EQ(exit_code(child), GetParam().exit_code);
-  ::close(fifo);
   EXPECT_EQ(slurp(dir / "stderr"),
             std::string("moa: interrupted by ") + GetParam().name + "; temporary files removed\n");
   EXPECT_TRUE(fs::is_empty(dir / "out"));
