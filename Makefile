@@ -21,6 +21,9 @@ DEBIAN_PACKAGES += libcpp-httplib-dev pkgconf
 # The core cross-compiled for a Cortex-M4F (embedded/): GCC, newlib, libstdc++.
 DEBIAN_PACKAGES += gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
 
+# The libFuzzer targets of every reader (tests/fuzz/run.sh, a step of .ci/run): clang and its runtime.
+DEBIAN_PACKAGES += clang libclang-rt-14-dev
+
 # Under CI (CI=true) warnings are errors.
 ifeq ($(CI),true)
 CMAKE_FLAGS += -DMOA_WARNINGS_AS_ERRORS=ON

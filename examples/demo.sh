@@ -19,6 +19,7 @@ echo "== 1. A clean log ($log): four sensors with yaw, scale and mirroring, inte
 echo
 echo "== 2. Sekimori & Miyazaki's path (Table 3) at 0.5 m/s, simulated: sensors that lose track,"
 echo "      mounts 0.2 mm off, the consensus estimator"
+rm -rf "$sim"  # simulate writes only into an empty directory or over its own run
 "$moa" simulate --scenario sekimori-b --seed 1 --out "$sim"
 "$moa" odometry --config "$sim/robot.yaml" --log "$sim" --estimator consensus --out "$sim/odometry.csv"
 "$moa" evaluate --config "$sim/robot.yaml" --truth "$sim/truth.csv" --odometry "$sim/odometry.csv" |

@@ -6,6 +6,7 @@
 #include <string_view>
 
 #include "commands.hpp"
+#include "moa/io/cleanup.hpp"
 #include "moa/io/error.hpp"
 #include "odometry_options.hpp"
 
@@ -41,6 +42,8 @@ std::string subcommand_names(CLI::App& app) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // Ctrl-C or SIGTERM: no temporary file left behind, exit 130 or 143.
+  moa::io::remove_temporaries_on_signal();
   CLI::App app{
       "moa: robot velocity and pose from an array of optical mouse sensors.\n"
       "Formats: robot config v1 (YAML), log format v1 (a directory of CSV files)."};

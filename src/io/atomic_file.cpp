@@ -44,7 +44,7 @@ bool sync_to_disk(const std::filesystem::path& file) {
 }  // namespace
 
 AtomicFile::AtomicFile(std::filesystem::path target)
-    : target_(std::move(target)), temp_(temporary_beside(target_)) {
+    : target_(std::move(target)), temp_(temporary_beside(target_)), registered_(temp_) {
   out_.open(temp_, std::ios::binary | std::ios::trunc);
   if (!out_) {
     const int error = errno;
@@ -58,6 +58,7 @@ AtomicFile::~AtomicFile() {
   out_.close();
   std::error_code ignored;
   std::filesystem::remove(temp_, ignored);
+  registered_.release();
 }
 
 void AtomicFile::commit() {
@@ -72,6 +73,7 @@ void AtomicFile::commit() {
   std::error_code ec;
   std::filesystem::rename(temp_, target_, ec);
   if (ec) throw IoError(fmt::format("{}: cannot write ({})", target_.string(), ec.message()));
+  registered_.release();
   committed_ = true;
 }
 

@@ -11,9 +11,10 @@
 //       max_speed: 0.3556        # optional, m/s
 //       noise: 0.002             # optional (moa extension), m/s per axis
 //
-// Unknown keys and missing required keys are errors that name the key and
-// the sensor; so are wrong types, non-finite numbers, cpi or scale <= 0,
-// duplicate names and an unsupported version.
+// Unknown keys and missing required keys are errors that name the line,
+// the key and the sensor; so are wrong types, non-finite numbers, cpi or
+// scale <= 0, duplicate names and an unsupported version. The YAML is read
+// by the strict reader shared with the simulator's scenarios (io/yaml.hpp).
 #pragma once
 
 #include <filesystem>
