@@ -81,9 +81,9 @@ struct OdometryCsvWriter::Impl {
     }
     if (selection && *selection == now) return text;
     selection = now;
-    text = ",";
-    text += describe(e.source);
-    text += ',';
+    // fmt, not operator+= of a const char*: GCC 12 at -O3 misreads the
+    // latter's length (-Wstringop-overflow, a false positive).
+    text = fmt::format(",{},", describe(e.source));
     bool first = true;
     for (std::size_t i = 0; i < names.size(); ++i) {
       if (!contains(now.used, static_cast<int>(i))) continue;
