@@ -20,6 +20,7 @@ struct OdometryArgs {
   std::string config;
   std::string log;
   std::string out;
+  std::string faults;  ///< --faults FILE: the oracle's faults.csv, if not the log's
   OdometryFlags flags;
   bool quiet = false;
 };
@@ -27,7 +28,8 @@ struct OdometryArgs {
 int run_odometry(const OdometryArgs& args) {
   const io::RobotConfig config = io::read_config(args.config);
   const OdometryOptions options = resolve_odometry_flags(args.flags, config, args.config);
-  const io::LogFiles log = io::resolve_log(args.log);
+  io::LogFiles log = io::resolve_log(args.log);
+  if (!args.faults.empty()) log.faults = args.faults;
   io::refuse_output_onto_inputs(
       args.out, "--out",
       {args.config, log.mice, log.wheels.value_or(""), log.camera.value_or(""),
@@ -80,6 +82,9 @@ void add_odometry(CLI::App& app, Action& action) {
   cmd->add_option("--out", args->out, "Output odometry.csv (written whole or not at all)")
       ->required();
   add_odometry_flags(cmd, args->flags);
+  cmd->add_option("--faults", args->faults,
+                  "oracle: the simulator's faults.csv (default: the log's own)")
+      ->check(CLI::ExistingFile);
   cmd->add_flag("--quiet", args->quiet, "Print nothing on success");
   cmd->callback([&action, args] { action = [args] { return run_odometry(*args); }; });
 }

@@ -127,7 +127,7 @@ Odometry::Odometry(const SensorArray& array, double t0, const OdometryOptions& o
     if (const auto* e = std::get_if<GeometryError>(&built)) {
       geometry_error_ = *e;
     } else {
-      estimator_.template emplace<T>(std::move(std::get<T>(built)));
+      estimator_.template emplace<T>(std::move(*std::get_if<T>(&built)));
     }
   };
   switch (options_.estimator) {
@@ -144,9 +144,11 @@ Odometry::Odometry(const SensorArray& array, double t0, const OdometryOptions& o
       break;
     case EstimatorKind::kOracle:
       // The same geometry checks as least squares over all selected sensors.
+      // std::get_if, not std::get: no exception path (the core builds without
+      // exceptions for microcontrollers).
       if (const auto built = LsEstimator::create(sub_array_, all_sensors(m_), period);
-          std::holds_alternative<GeometryError>(built)) {
-        geometry_error_ = std::get<GeometryError>(built);
+          const auto* e = std::get_if<GeometryError>(&built)) {
+        geometry_error_ = *e;
       } else {
         estimator_.emplace<SubsetSolver>(sub_array_);
       }
