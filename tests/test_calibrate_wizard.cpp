@@ -113,7 +113,8 @@ TEST(CalibrateWizard, WalksThroughEveryStepWithARedoAndWritesTheCalibration) {
 
   ASSERT_TRUE(moa.wait_for("Step 1 of 3: push along x", 1, deadline)) << moa.output();
   ASSERT_TRUE(moa.wait_for("Not good enough", 1, deadline)) << moa.output();
-  EXPECT_THAT(moa.output(), HasSubstr("turned while pushing"));
+  // The reason follows on its own line: wait for it rather than race it.
+  EXPECT_TRUE(moa.wait_for("turned while pushing", 1, deadline)) << moa.output();
   moa.type("r");
   ASSERT_TRUE(moa.wait_for("Again.", 1, deadline)) << moa.output();
   ASSERT_TRUE(moa.wait_for("Good enough.", 1, deadline)) << moa.output();
