@@ -76,7 +76,6 @@ std::string script_safe(std::string json) {
   return out;
 }
 
-
 }  // namespace
 
 std::string dashboard_page(const RobotConfig& config, std::string_view title) {
@@ -99,8 +98,7 @@ std::string dashboard_page(const RobotConfig& config, std::string_view title) {
   page += fmt::format("<title>{}</title>\n<style>\n", html(title));
   page += dashboard_assets::page_css();
   page += "</style>\n</head>\n<body data-moa-status=\"loading\">\n";
-  page += fmt::format("<header><h1>{}</h1><p id=\"status\">connecting</p></header>\n",
-                      html(title));
+  page += fmt::format("<header><h1>{}</h1><p id=\"status\">connecting</p></header>\n", html(title));
   page +=
       "<div id=\"moa-errors\" class=\"errors\" hidden></div>\n"
       "<main>\n"

@@ -7,15 +7,14 @@
 #include <numbers>
 #include <string_view>
 
-#include "moa/io/report.hpp"
 #include "moa/io/html.hpp"
+#include "moa/io/report.hpp"
 #include "report_assets.hpp"
 
 namespace moa::io {
 namespace {
 
 constexpr double kDegPerRad = 180.0 / std::numbers::pi;
-
 
 /// Builds JSON text. Strings are escaped so that they cannot end the
 /// <script> element they sit in ('<', '>' and '&' as \u escapes).
