@@ -1,5 +1,5 @@
 # moa: the two commands of the README, and the steps they are made of.
-#   make demo   set up, build, run the main job
+#   make demo   set up, build only the moa program (quietly, log in build/demo-build.log), run the demo
 #   make test   set up, build, run every test
 # Set-up installs the Debian packages the build needs, only when missing.
 
@@ -14,8 +14,15 @@ DEBIAN_PACKAGES := g++ make cmake libeigen3-dev libyaml-cpp-dev libcli11-dev lib
                    gcc-avr avr-libc binutils-avr simavr libsimavr-dev
 # moa report: Chart.js, inlined into the page at build time; Chromium for its browser test.
 DEBIAN_PACKAGES += libjs-chart.js chromium
+# The Python module (pybind11, numpy), its tests (pytest) and example (matplotlib).
+DEBIAN_PACKAGES += python3-dev pybind11-dev python3-numpy python3-pytest python3-matplotlib
+# moa live --serve: the dashboard's HTTP server (a shared library; its flags come from pkg-config).
+DEBIAN_PACKAGES += libcpp-httplib-dev pkgconf
 # The core cross-compiled for a Cortex-M4F (embedded/): GCC, newlib, libstdc++.
 DEBIAN_PACKAGES += gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
+
+# The libFuzzer targets of every reader (tests/fuzz/run.sh, a step of .ci/run): clang and its runtime.
+DEBIAN_PACKAGES += clang libclang-rt-14-dev
 
 # Under CI (CI=true) warnings are errors.
 ifeq ($(CI),true)
@@ -37,8 +44,6 @@ deps:
 	  echo "moa: installing Debian packages:$$missing"; \
 	  $(SUDO) apt-get update -qq && \
 	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq --no-install-recommends $$missing; \
-	else \
-	  echo "moa: Debian packages present"; \
 	fi
 
 $(BUILD_DIR)/CMakeCache.txt:
@@ -52,22 +57,19 @@ build: configure
 test: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
 
+# The demo builds the moa program and the libraries it links, nothing else
+# (no tests, benchmarks or firmware), and keeps the build's output in a file.
 DEMO_OUT ?= $(BUILD_DIR)/demo
-demo: build
-	@mkdir -p $(DEMO_OUT)
-	$(MOA) odometry --config examples/logs/mixed-motion/robot.yaml \
-	  --log examples/logs/mixed-motion --estimator ls --out $(DEMO_OUT)/odometry.csv
-	$(MOA) evaluate --truth examples/logs/mixed-motion/truth.csv --odometry $(DEMO_OUT)/odometry.csv
-	@echo "moa demo: odometry written to $(DEMO_OUT)/odometry.csv"
-	$(MOA) simulate --scenario sekimori-b --seed 1 --out $(DEMO_OUT)/sekimori-b
-	$(MOA) odometry --config $(DEMO_OUT)/sekimori-b/robot.yaml --log $(DEMO_OUT)/sekimori-b \
-	  --estimator consensus --out $(DEMO_OUT)/sekimori-b/odometry.csv
-	$(MOA) evaluate --truth $(DEMO_OUT)/sekimori-b/truth.csv \
-	  --odometry $(DEMO_OUT)/sekimori-b/odometry.csv
-	@echo "moa demo: simulated log, its odometry and truth in $(DEMO_OUT)/sekimori-b"
-	$(MOA) report --config $(DEMO_OUT)/sekimori-b/robot.yaml --log $(DEMO_OUT)/sekimori-b \
-	  --odometry $(DEMO_OUT)/sekimori-b/odometry.csv --truth $(DEMO_OUT)/sekimori-b/truth.csv \
-	  --out $(DEMO_OUT)/sekimori-b/report.html
+DEMO_LOG := $(BUILD_DIR)/demo-build.log
+demo: deps
+	@mkdir -p $(BUILD_DIR)
+	@echo "moa demo: building the moa program (full log: $(DEMO_LOG))"
+	@start=$$(date +%s); \
+	{ $(MAKE) --no-print-directory $(BUILD_DIR)/CMakeCache.txt && \
+	  cmake --build $(BUILD_DIR) -j $(JOBS) --target moa_cli; } > $(DEMO_LOG) 2>&1 || \
+	{ tail -n 40 $(DEMO_LOG); echo "moa demo: the build failed; full log: $(DEMO_LOG)"; exit 1; }; \
+	echo "moa demo: built in $$(( $$(date +%s) - start )) s"
+	@sh examples/demo.sh $(MOA) $(DEMO_OUT)
 
 clean:
 	rm -rf $(BUILD_DIR)

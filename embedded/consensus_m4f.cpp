@@ -1,6 +1,7 @@
-// The consensus estimator and dead reckoning on a Cortex-M4F, for four
-// ADNS-3080 sensors at the corners of a square: the program whose flash
-// and RAM sizes docs/performance.md reports. The counts come from volatile
+// The library's odometry pipeline (moa::Odometry: synchroniser, consensus
+// estimator, dead reckoning) on a Cortex-M4F, for four ADNS-3080 sensors at
+// the corners of a square: the program whose flash and RAM sizes
+// docs/performance.md reports. The counts come from volatile
 // registers (on a board, an SPI driver's interrupt fills them), so the
 // compiler cannot fold the estimator away; the pose goes out the same way.
 //
@@ -13,10 +14,8 @@
 #include <type_traits>
 #include <variant>
 
-#include "moa/core/dead_reckoner.hpp"
 #include "moa/core/array.hpp"
-#include "moa/core/consensus.hpp"
-#include "moa/core/estimate.hpp"
+#include "moa/core/odometry.hpp"
 #include "moa/core/sensor.hpp"
 
 namespace {
@@ -38,12 +37,11 @@ volatile std::uint32_t g_updates;
 volatile float g_pose[3];
 volatile std::uint32_t g_used;
 
-// In .bss, so that the RAM figure shows the estimator's state. Trivially
-// destructible: nothing is registered to run at exit.
-std::optional<moa::ConsensusEstimator> g_estimator;
-moa::DeadReckoner g_reckoner;
-static_assert(std::is_trivially_destructible_v<moa::ConsensusEstimator>);
-static_assert(std::is_trivially_destructible_v<moa::DeadReckoner>);
+// In .bss, so that the RAM figure shows the pipeline's state: the library's
+// Odometry (synchroniser, consensus estimator, dead reckoning), the same
+// type `moa odometry` runs. Trivially destructible: nothing runs at exit.
+std::optional<moa::Odometry> g_odometry;
+static_assert(std::is_trivially_destructible_v<moa::Odometry>);
 
 moa::SensorArray square_array() {
   moa::SensorMount prototype;
@@ -53,31 +51,22 @@ moa::SensorArray square_array() {
   return moa::regular_polygon(kSensors, 0.06, std::numbers::pi / 4.0, prototype);
 }
 
-moa::ArraySample read_sample(double t) {
-  moa::ArraySample sample;
-  sample.t = t;
-  sample.dt = kPeriod;
-  sample.size = kSensors;
-  for (std::size_t i = 0; i < kSensors; ++i) {
-    sample.counts[i] =
-        Eigen::Vector2d(static_cast<double>(g_sensors[i].dx), static_cast<double>(g_sensors[i].dy));
-    sample.squal[i] = g_sensors[i].squal;
-    sample.flags[i] = g_sensors[i].flags;
-  }
-  return sample;
-}
-
 }  // namespace
 
 extern "C" [[noreturn]] void moa_m4f_main() {
-  const auto built = moa::ConsensusEstimator::create(square_array());
-  const auto* estimator = std::get_if<moa::ConsensusEstimator>(&built);
-  if (estimator == nullptr) {
+  moa::OdometryOptions options;
+  options.rate = 1.0 / kPeriod;
+  g_odometry.emplace(square_array(), 0.0, options);
+  if (g_odometry->geometry_error()) {
     for (;;) {
     }
   }
-  g_estimator.emplace(*estimator);
-
+  const auto sink = [](const moa::OdometryStep& step) {
+    g_pose[0] = static_cast<float>(step.pose.t.x());
+    g_pose[1] = static_cast<float>(step.pose.t.y());
+    g_pose[2] = static_cast<float>(step.pose.theta);
+    g_used = step.estimate.estimate.used;
+  };
   std::uint32_t seen = g_updates;
   double t = 0.0;
   for (;;) {
@@ -85,12 +74,18 @@ extern "C" [[noreturn]] void moa_m4f_main() {
     }
     seen = g_updates;
     t += kPeriod;
-    const auto out = g_estimator->estimate(read_sample(t));
-    if (!out) continue;
-    const moa::Pose2& pose = g_reckoner.step(out->estimate.twist, kPeriod);
-    g_pose[0] = static_cast<float>(pose.t.x());
-    g_pose[1] = static_cast<float>(pose.t.y());
-    g_pose[2] = static_cast<float>(pose.theta);
-    g_used = out->estimate.used;
+    // One row per sensor per update: every sensor reports at t, so the
+    // epoch ending at t is final at once and the sink runs.
+    for (int i = 0; i < kSensors; ++i) {
+      const auto u = static_cast<std::size_t>(i);
+      moa::SensorRow row;
+      row.t = t;
+      row.sensor = i;
+      row.counts = Eigen::Vector2d(static_cast<double>(g_sensors[u].dx),
+                                   static_cast<double>(g_sensors[u].dy));
+      row.squal = g_sensors[u].squal;
+      row.flags = g_sensors[u].flags;
+      (void)g_odometry->push(row, sink);  // a refused row is dropped: no error channel here
+    }
   }
 }

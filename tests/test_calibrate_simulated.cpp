@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "moa/io/config.hpp"
 #include "moa/core/se2.hpp"
+#include "moa/io/config.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"
 

@@ -1,4 +1,4 @@
-// The moa command end to end: what users and scripts rely on (spec/cli.md).
+// The moa command end to end: what users and scripts rely on (docs/formats/cli.md).
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -214,6 +214,19 @@ TEST(Cli, BenchJsonHasTheContractKeys) {
     EXPECT_THAT(r.out, HasSubstr(key));
   }
   EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1);
+}
+
+TEST(Cli, BenchReplayMeasuresBothPassesAndLeavesNoLog) {
+  // Keys and cleanup only: the times are the benchmark's to report.
+  const auto dir = test::scratch_dir("bench_replay");
+  const auto r =
+      test::run_moa("bench --replay --json --duration 2 --repeats 1 --dir " + dir.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* key : {"\"parse_only_s\"", "\"replay_s\"", "\"real_time_factor\"",
+                          "\"replay_over_parse\"", "\"mice_rows\": 8004", "\"epochs\": 2000"}) {
+    EXPECT_THAT(r.out, HasSubstr(key));
+  }
+  EXPECT_TRUE(fs::is_empty(dir));
 }
 
 TEST(Cli, RankDeficientConfigIsRefused) {

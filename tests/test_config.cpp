@@ -1,4 +1,4 @@
-// Robot config v1 (spec/config.md): parsing, every rejection with its exact
+// Robot config v1 (docs/formats/config.md): parsing, every rejection with its exact
 // message, and exact round-trip through format_config.
 #include <gtest/gtest.h>
 
@@ -196,9 +196,9 @@ TEST(Config, LimitsAreOptionalAndRead) {
   ASSERT_TRUE(c.limits);
   EXPECT_EQ(c.limits->accel, 1.5);
   EXPECT_EQ(c.limits->angular_accel, 12.0);
-  // A key left out takes MotionLimits' default.
+  // A key left out takes RobotLimits' default.
   const RobotConfig half = parse_config(two_sensors() + "limits: {accel: 3}\n", "robot.yaml");
-  EXPECT_EQ(half.limits->angular_accel, MotionLimits{}.angular_accel);
+  EXPECT_EQ(half.limits->angular_accel, RobotLimits{}.angular_accel);
   // Written back exactly.
   const RobotConfig back = parse_config(format_config(c), "robot.yaml");
   ASSERT_TRUE(back.limits);
@@ -210,38 +210,40 @@ TEST(Config, LimitsAreOptionalAndRead) {
 
 TEST(ConfigErrors, LimitsMustBePositiveAndFinite) {
   EXPECT_EQ(parse_error(two_sensors() + "limits: {accel: .nan}\n"),
-            "robot.yaml: limits: key 'accel': '.nan' is not a finite number");
+            "robot.yaml:11: key 'limits.accel': '.nan' is not a finite number");
   EXPECT_EQ(parse_error(two_sensors() + "limits: {angular_accel: 0}\n"),
-            "robot.yaml: limits.angular_accel: must be positive and finite (rad/s^2)");
+            "robot.yaml:11: key 'limits.angular_accel': must be > 0 (found 0)");
   EXPECT_EQ(parse_error(two_sensors() + "limits: {jerk: 1}\n"),
-            "robot.yaml: limits: unknown key 'jerk'");
+            "robot.yaml:11: unknown key 'limits.jerk' (known here: accel, angular_accel)");
   EXPECT_EQ(parse_error(two_sensors() + "limits: 2\n"),
-            "robot.yaml: key 'limits': expected a map, found a value");
+            "robot.yaml:11: key 'limits': expected a map, found '2'");
 }
 
 TEST(ConfigErrors, MissingRequiredKeyNamesKeyAndSensor) {
   EXPECT_EQ(parse_error(without_key("position")),
-            "robot.yaml: sensor 'm2': missing key 'position'");
-  EXPECT_EQ(parse_error(without_key("yaw")), "robot.yaml: sensor 'm2': missing key 'yaw'");
-  EXPECT_EQ(parse_error(without_key("cpi")), "robot.yaml: sensor 'm2': missing key 'cpi'");
+            "robot.yaml:4: sensor 'm2': missing key 'position'");
+  EXPECT_EQ(parse_error(without_key("yaw")), "robot.yaml:4: sensor 'm2': missing key 'yaw'");
+  EXPECT_EQ(parse_error(without_key("cpi")), "robot.yaml:4: sensor 'm2': missing key 'cpi'");
 }
 
 TEST(ConfigErrors, MissingNameNamesSensorByPosition) {
-  EXPECT_EQ(parse_error(without_key("name")), "robot.yaml: sensor 2: missing key 'name'");
+  EXPECT_EQ(parse_error(without_key("name")), "robot.yaml:4: sensor 2: missing key 'name'");
 }
 
 TEST(ConfigErrors, UnknownSensorKeyIsRejected) {
   EXPECT_EQ(parse_error(two_sensors("", "    cip: 800\n")),
-            "robot.yaml: sensor 'm2': unknown key 'cip'");
+            "robot.yaml:11: sensor 'm2': unknown key 'cip' (known here: name, position, yaw, cpi, "
+            "scale, mirrored, max_speed, noise)");
 }
 
 TEST(ConfigErrors, UnknownTopLevelKeyIsRejected) {
-  EXPECT_EQ(parse_error(two_sensors() + "sensorz: []\n"), "robot.yaml: unknown key 'sensorz'");
+  EXPECT_EQ(parse_error(two_sensors() + "sensorz: []\n"),
+            "robot.yaml:11: unknown key 'sensorz' (known here: version, sensors, limits)");
 }
 
 TEST(ConfigErrors, DuplicateKeyIsRejected) {
   EXPECT_EQ(parse_error(two_sensors("    cpi: 400\n")),
-            "robot.yaml: sensor 'm1': duplicate key 'cpi'");
+            "robot.yaml:7: sensor 'm1': duplicate key 'cpi'");
 }
 
 TEST(ConfigErrors, DuplicateSensorNameIsRejected) {
@@ -250,32 +252,32 @@ TEST(ConfigErrors, DuplicateSensorNameIsRejected) {
       "sensors:\n"
       "  - {name: m1, position: [0, 0], yaw: 0, cpi: 800}\n"
       "  - {name: m1, position: [1, 0], yaw: 0, cpi: 800}\n";
-  EXPECT_EQ(parse_error(text), "robot.yaml: duplicate sensor name 'm1'");
+  EXPECT_EQ(parse_error(text), "robot.yaml:4: duplicate sensor name 'm1'");
 }
 
 TEST(ConfigErrors, UnsupportedVersionIsRejected) {
   std::string text = two_sensors();
   text.replace(0, std::strlen("version: 1"), "version: 2");
-  EXPECT_EQ(parse_error(text), "robot.yaml: version 2 is not supported (expected 1)");
+  EXPECT_EQ(parse_error(text), "robot.yaml:1: version 2 is not supported (expected 1)");
 }
 
 TEST(ConfigErrors, VersionIsCheckedBeforeUnknownKeys) {
   EXPECT_EQ(parse_error("version: 3\nrobot: {}\n"),
-            "robot.yaml: version 3 is not supported (expected 1)");
+            "robot.yaml:1: version 3 is not supported (expected 1)");
 }
 
 TEST(ConfigErrors, MissingVersionIsRejected) {
   EXPECT_EQ(parse_error(two_sensors().substr(std::strlen("version: 1\n"))),
-            "robot.yaml: missing key 'version'");
+            "robot.yaml:1: missing key 'version'");
 }
 
 TEST(ConfigErrors, NonIntegerVersionIsRejected) {
   EXPECT_EQ(parse_error("version: 1.0\nsensors: []\n"),
-            "robot.yaml: key 'version': '1.0' is not an integer");
+            "robot.yaml:1: version 1.0 is not supported (expected 1)");
 }
 
 TEST(ConfigErrors, MissingSensorsIsRejected) {
-  EXPECT_EQ(parse_error("version: 1\n"), "robot.yaml: missing key 'sensors'");
+  EXPECT_EQ(parse_error("version: 1\n"), "robot.yaml:1: missing key 'sensors'");
 }
 
 TEST(ConfigErrors, EmptySensorListIsRejected) {
@@ -285,12 +287,12 @@ TEST(ConfigErrors, EmptySensorListIsRejected) {
 
 TEST(ConfigErrors, SensorsThatAreNotAListAreRejected) {
   EXPECT_EQ(parse_error("version: 1\nsensors: {m1: 1}\n"),
-            "robot.yaml: key 'sensors': expected a list of sensors, found a map");
+            "robot.yaml:2: key 'sensors': expected a list of sensors, found a map");
 }
 
 TEST(ConfigErrors, SensorThatIsNotAMapIsRejected) {
   EXPECT_EQ(parse_error("version: 1\nsensors: [m1]\n"),
-            "robot.yaml: sensor 1: expected a map, found a value");
+            "robot.yaml:2: sensor 1: expected a map, found 'm1'");
 }
 
 TEST(ConfigErrors, MoreThanMaxSensorsAreRejected) {
@@ -324,94 +326,94 @@ TEST(ConfigErrors, EmptyDocumentIsRejected) {
 
 TEST(ConfigErrors, SecondDocumentIsRejected) {
   EXPECT_EQ(parse_error(two_sensors() + "---\nversion: 1\n"),
-            "robot.yaml: expected one YAML document, found 2");
+            "robot.yaml:11: expected one YAML document, found another");
 }
 
 TEST(ConfigErrors, TopLevelThatIsNotAMapIsRejected) {
-  EXPECT_EQ(parse_error("- 1\n- 2\n"), "robot.yaml: expected a map, found a list");
+  EXPECT_EQ(parse_error("- 1\n- 2\n"), "robot.yaml:1: expected a map, found a list");
 }
 
 TEST(ConfigErrors, WrongTypesAreRejected) {
   EXPECT_EQ(parse_error(two_sensors("", "    scale: 1\n")),
-            "robot.yaml: sensor 'm2': key 'scale': expected [sx, sy], found a value");
+            "robot.yaml:11: sensor 'm2': key 'scale': expected a list of numbers, found '1'");
   EXPECT_EQ(parse_error(two_sensors("", "    scale: [1, 1, 1]\n")),
-            "robot.yaml: sensor 'm2': key 'scale': expected [sx, sy], found 3 elements");
+            "robot.yaml:11: sensor 'm2': key 'scale': expected 2 numbers, found 3");
   EXPECT_EQ(parse_error(two_sensors("", "    mirrored: yes\n")),
-            "robot.yaml: sensor 'm2': key 'mirrored': 'yes' is not true or false");
+            "robot.yaml:11: sensor 'm2': key 'mirrored': expected true or false, found 'yes'");
   EXPECT_EQ(parse_error(two_sensors("", "    max_speed: fast\n")),
-            "robot.yaml: sensor 'm2': key 'max_speed': 'fast' is not a number");
+            "robot.yaml:11: sensor 'm2': key 'max_speed': 'fast' is not a number");
   EXPECT_EQ(parse_error(two_sensors("", "    noise:\n")),
-            "robot.yaml: sensor 'm2': key 'noise': expected a number, found nothing");
+            "robot.yaml:12: sensor 'm2': key 'noise': expected a number, found nothing");
   EXPECT_EQ(
       parse_error("version: 1\nsensors:\n  - {name: [m1], position: [0, 0], yaw: 0, cpi: 1}\n"),
-      "robot.yaml: sensor 1: key 'name': expected a name, found a list");
+      "robot.yaml:3: sensor 1: key 'name': expected a name, found a list");
 }
 
 TEST(ConfigErrors, PositionMustHaveTwoNumbers) {
   const std::string base = "version: 1\nsensors:\n  - {name: m1, yaw: 0, cpi: 800, position: ";
   EXPECT_EQ(parse_error(base + "[0.1]}\n"),
-            "robot.yaml: sensor 'm1': key 'position': expected [x, y], found 1 elements");
+            "robot.yaml:3: sensor 'm1': key 'position': expected 2 numbers, found 1");
   EXPECT_EQ(parse_error(base + "[0.1, 0, 0]}\n"),
-            "robot.yaml: sensor 'm1': key 'position': expected [x, y], found 3 elements");
+            "robot.yaml:3: sensor 'm1': key 'position': expected 2 numbers, found 3");
   EXPECT_EQ(parse_error(base + "{x: 1}}\n"),
-            "robot.yaml: sensor 'm1': key 'position': expected [x, y], found a map");
+            "robot.yaml:3: sensor 'm1': key 'position': expected a list of numbers, found a map");
   EXPECT_EQ(parse_error(base + "[0.1, abc]}\n"),
-            "robot.yaml: sensor 'm1': key 'position': 'abc' is not a number");
+            "robot.yaml:3: sensor 'm1': key 'position': 'abc' is not a number");
 }
 
 TEST(ConfigErrors, TrailingGarbageInANumberIsRejected) {
   EXPECT_EQ(
       parse_error("version: 1\nsensors:\n  - {name: m1, position: [0, 0], yaw: 1.5x, cpi: 8}\n"),
-      "robot.yaml: sensor 'm1': key 'yaw': '1.5x' is not a number");
+      "robot.yaml:3: sensor 'm1': key 'yaw': '1.5x' is not a number");
 }
 
 TEST(ConfigErrors, NonFiniteNumbersAreRejected) {
   const std::string head = "version: 1\nsensors:\n  - {name: m1, ";
   EXPECT_EQ(parse_error(head + "position: [.nan, 0], yaw: 0, cpi: 800}\n"),
-            "robot.yaml: sensor 'm1': key 'position': '.nan' is not a finite number");
+            "robot.yaml:3: sensor 'm1': key 'position': '.nan' is not a finite number");
   EXPECT_EQ(parse_error(head + "position: [0, 0], yaw: .inf, cpi: 800}\n"),
-            "robot.yaml: sensor 'm1': key 'yaw': '.inf' is not a finite number");
+            "robot.yaml:3: sensor 'm1': key 'yaw': '.inf' is not a finite number");
   EXPECT_EQ(parse_error(head + "position: [0, 0], yaw: 0, cpi: -.Inf}\n"),
-            "robot.yaml: sensor 'm1': key 'cpi': '-.Inf' is not a finite number");
+            "robot.yaml:3: sensor 'm1': key 'cpi': '-.Inf' is not a finite number");
   EXPECT_EQ(parse_error(head + "position: [0, 0], yaw: nan, cpi: 800}\n"),
-            "robot.yaml: sensor 'm1': key 'yaw': 'nan' is not a finite number");
+            "robot.yaml:3: sensor 'm1': key 'yaw': 'nan' is not a finite number");
   EXPECT_EQ(parse_error(head + "position: [0, 0], yaw: 0, cpi: 800, max_speed: 1e999}\n"),
-            "robot.yaml: sensor 'm1': key 'max_speed': '1e999' is out of range");
+            "robot.yaml:3: sensor 'm1': key 'max_speed': '1e999' is out of range");
 }
 
 TEST(ConfigErrors, CpiMustBePositive) {
   EXPECT_EQ(parse_error("version: 1\nsensors:\n  - {name: m1, position: [0, 0], yaw: 0, cpi: 0}\n"),
-            "robot.yaml: sensor 'm1': key 'cpi': must be > 0 (found 0)");
+            "robot.yaml:3: sensor 'm1': key 'cpi': must be > 0 (found 0)");
   EXPECT_EQ(
       parse_error("version: 1\nsensors:\n  - {name: m1, position: [0, 0], yaw: 0, cpi: -800}\n"),
-      "robot.yaml: sensor 'm1': key 'cpi': must be > 0 (found -800)");
+      "robot.yaml:3: sensor 'm1': key 'cpi': must be > 0 (found -800)");
 }
 
 TEST(ConfigErrors, ScaleMustBePositive) {
   EXPECT_EQ(parse_error(two_sensors("    scale: [1, 0]\n")),
-            "robot.yaml: sensor 'm1': key 'scale': must be > 0 (found 0)");
+            "robot.yaml:7: sensor 'm1': key 'scale': must be > 0 (found [1, 0])");
   EXPECT_EQ(parse_error(two_sensors("    scale: [-1, 1]\n")),
-            "robot.yaml: sensor 'm1': key 'scale': must be > 0 (found -1)");
+            "robot.yaml:7: sensor 'm1': key 'scale': must be > 0 (found [-1, 1])");
 }
 
 TEST(ConfigErrors, MaxSpeedMustBePositive) {
   EXPECT_EQ(parse_error(two_sensors("    max_speed: 0\n")),
-            "robot.yaml: sensor 'm1': key 'max_speed': must be > 0 (found 0)");
+            "robot.yaml:7: sensor 'm1': key 'max_speed': must be > 0 (found 0)");
 }
 
 TEST(ConfigErrors, NoiseMustNotBeNegative) {
   EXPECT_EQ(parse_error(two_sensors("", "    noise: -0.001\n")),
-            "robot.yaml: sensor 'm2': key 'noise': must be >= 0 (found -0.001)");
+            "robot.yaml:11: sensor 'm2': key 'noise': must be >= 0 (found -0.001)");
 }
 
 TEST(ConfigErrors, NameThatCannotAppearInMiceCsvIsRejected) {
   const std::string message = parse_error(
       "version: 1\nsensors:\n  - {name: left mouse, position: [0, 0], yaw: 0, cpi: 1}\n");
-  EXPECT_TRUE(message.starts_with("robot.yaml: sensor 1: key 'name': invalid name 'left mouse'"))
+  EXPECT_TRUE(message.starts_with("robot.yaml:3: sensor 1: key 'name': invalid name 'left mouse'"))
       << message;
   EXPECT_TRUE(
       parse_error("version: 1\nsensors:\n  - {name: 'a,b', position: [0, 0], yaw: 0, cpi: 1}\n")
-          .starts_with("robot.yaml: sensor 1: key 'name': invalid name 'a,b'"));
+          .starts_with("robot.yaml:3: sensor 1: key 'name': invalid name 'a,b'"));
 }
 
 // ----------------------------------------------------------------- files
@@ -427,7 +429,9 @@ TEST(ConfigFile, ErrorsNameTheFile) {
   const auto path = dir.path() / "robot.yaml";
   std::ofstream(path) << two_sensors("", "    cip: 800\n");
   EXPECT_EQ(error_of([&] { read_config(path); }),
-            path.string() + ": sensor 'm2': unknown key 'cip'");
+            path.string() +
+                ":11: sensor 'm2': unknown key 'cip' (known here: name, position, yaw, cpi, scale, "
+                "mirrored, max_speed, noise)");
 }
 
 TEST(ConfigFile, WriteThenReadReproducesConfig) {

@@ -12,6 +12,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <string>
 #include <thread>
@@ -137,6 +138,33 @@ TEST(EvdevDecoder, HoldsAnIncompleteRecordUntilItIsComplete) {
   ASSERT_EQ(frames.size(), 1u);
   EXPECT_EQ(decoder.pending_bytes(), 0u);
   EXPECT_FALSE(decoder.in_frame());
+}
+
+TEST(EvdevDecoder, FarFutureTimesAreClampedNotOverflowed) {
+  // sec * 10^6 overflowed int64 (undefined behaviour) for such stamps.
+  Bytes bytes;
+  for (const auto sec : {std::numeric_limits<decltype(input_event{}.input_event_sec)>::max(),
+                         std::numeric_limits<decltype(input_event{}.input_event_sec)>::min()}) {
+    input_event ev{};
+    ev.input_event_sec = sec;
+    ev.input_event_usec = 5;
+    ev.type = EV_REL;
+    ev.code = REL_X;
+    ev.value = 1;
+    const auto* p = reinterpret_cast<const std::uint8_t*>(&ev);
+    bytes.insert(bytes.end(), p, p + sizeof ev);
+    ev.type = EV_SYN;
+    ev.code = SYN_REPORT;
+    ev.value = 0;
+    bytes.insert(bytes.end(), p, p + sizeof ev);
+  }
+  EvdevDecoder decoder;
+  std::vector<EvdevFrame> frames;
+  decoder.feed(bytes, frames);
+  ASSERT_EQ(frames.size(), 2u);
+  constexpr std::int64_t kMaxSec = EvdevDecoder::kMaxEventTimeUs / 1'000'000 - 1;
+  EXPECT_EQ(frames[0].time_us, kMaxSec * 1'000'000 + 5);
+  EXPECT_EQ(frames[1].time_us, -kMaxSec * 1'000'000 + 5);
 }
 
 TEST(EvdevDecoder, SynDroppedIsCountedAndTheMotionAroundItKept) {

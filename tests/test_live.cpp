@@ -19,9 +19,9 @@
 #include <thread>
 #include <vector>
 
+#include "moa/core/se2.hpp"
 #include "moa/io/config.hpp"
 #include "moa/io/serial_protocol.hpp"
-#include "moa/core/se2.hpp"
 #include "support/pty.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"
@@ -266,7 +266,8 @@ TEST(Live, BadArgumentsAreRejected) {
   auto r = run_moa("live" + config);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_EQ(r.err,
-            "moa live: error: give either --mouse NAME=DEV (one per mouse) or --serial DEV\n");
+            "moa live: error: give one of --mouse NAME=DEV (one per mouse), --serial DEV or "
+            "--replay LOGDIR\n");
   r = run_moa("live" + config + " --mouse zz=/dev/null");
   EXPECT_EQ(r.err, "moa live: error: --mouse zz=/dev/null: no sensor 'zz' in " +
                        scene.config.string() + "\n");

@@ -1,4 +1,4 @@
-// Log format v1 (spec/log-format.md): the CSV readers, every rejection with
+// Log format v1 (docs/formats/log.md): the CSV readers, every rejection with
 // its exact "FILE:LINE: what" message, and the all-or-nothing writers.
 #include <gtest/gtest.h>
 

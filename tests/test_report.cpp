@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -176,6 +177,27 @@ TEST(Report, PageIsOneSelfContainedFileWithEverySection) {
   // 1200 epochs, each series at most 2000 points: well under a megabyte with the library.
   EXPECT_LT(page.size(), 1'000'000u);
   if (!HasFailure()) fs::remove_all(out_dir);
+}
+
+TEST(Report, SummaryGivesMillimetresOverTheTruthsDistanceAndAVerdict) {
+  const ReportRun& r = report_run();
+  const io::ReportModel m = io::build_report(inputs_of(r), {.max_points = 200});
+  ASSERT_TRUE(m.errors.has_value());
+  ASSERT_TRUE(m.floor.has_value());
+  // The truth's path length, summed here from truth.csv (the odometry runs to its end).
+  double distance = 0.0;
+  const auto truth = io::read_all<io::TruthRow>(r.truth);
+  for (std::size_t k = 1; k < truth.size(); ++k)
+    distance += (truth[k].pose.t - truth[k - 1].pose.t).norm();
+  EXPECT_NEAR(m.errors->distance, distance, 1e-9 * distance);
+  // Sensor b counts double for a while: far above what rounding alone gives.
+  EXPECT_GT(m.errors->max_translation, 2.0 * m.floor->max_translation);
+  const std::string page = io::render_report(m);
+  char travelled[64];
+  std::snprintf(travelled, sizeof travelled, "mm over %.3g m travelled", distance);
+  EXPECT_THAT(page, HasSubstr(travelled));
+  EXPECT_THAT(page, HasSubstr("<tr class=\"verdict\"><th>verdict</th><td>"));
+  EXPECT_THAT(page, HasSubstr("x the quantisation floor"));
 }
 
 TEST(Report, WithoutTruthOrCalibrationTheirSectionsSayWhatToAdd) {

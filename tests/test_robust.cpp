@@ -250,7 +250,7 @@ TEST(Consensus, PairWithinTheRobotsLimitsPassesThePrior) {
   const SensorArray a = sekimori_array();
   auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a));
   ASSERT_EQ(est.estimate(clean_sample(a, kTruth))->estimate.used, 0b1111u);
-  const Twist2 faster{kTruth.v + Eigen::Vector2d(MotionLimits{}.accel * kDt, 0.0), kTruth.omega};
+  const Twist2 faster{kTruth.v + Eigen::Vector2d(RobotLimits{}.accel * kDt, 0.0), kTruth.omega};
   ArraySample s = clean_sample(a, faster);
   s.t += kDt;
   corrupt(a, s, 0, {0.3, 0.1});

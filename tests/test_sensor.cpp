@@ -17,7 +17,7 @@ TEST(Sensor, MeasurementModelFollowsSpecStepByStep) {
     const SensorMount m = test::random_mount(rng);
     const Twist2 x = test::random_twist(rng);
     const double dt = 0.01;
-    // spec/config.md, written out in scalars.
+    // docs/formats/config.md, written out in scalars.
     const double ux = x.v.x() - x.omega * m.position.y();
     const double uy = x.v.y() + x.omega * m.position.x();
     double wx = std::cos(m.yaw) * ux + std::sin(m.yaw) * uy;

@@ -5,12 +5,14 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "moa/io/config.hpp"
 #include "moa/io/log.hpp"
@@ -78,7 +80,7 @@ TEST(SimCli, SameSeedSameBytesOtherSeedOtherData) {
   EXPECT_EQ(slurp(root / "one" / "robot.true.yaml"), slurp(root / "three" / "robot.true.yaml"));
 }
 
-// spec/config.md applied to the truth: for each pair of consecutive truth
+// docs/formats/config.md applied to the truth: for each pair of consecutive truth
 // poses the body-frame motion (v dt, omega dt) from the SE(2) logarithm,
 // then counts = k diag(scale) F R(yaw)^T (v dt + omega dt J p).
 std::map<std::string, Eigen::Vector2d> model_totals(const fs::path& dir) {
@@ -171,8 +173,8 @@ TEST(SimCli, UnknownScenarioIsAnErrorAndWritesNothing) {
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_THAT(r.err, HasSubstr("scenario 'sekimori-c': not a built-in scenario (calibration, "
                                "differential, faults-dirty, faults-drift, faults-liftoff, "
-                               "faults-spikes, faults-stuck, faults-zero, kimlee, sekimori-a, "
-                               "sekimori-b) and no such file"));
+                               "faults-spikes, faults-stuck, faults-zero, guided, kimlee, "
+                               "sekimori-a, sekimori-b) and no such file"));
   EXPECT_FALSE(fs::exists(dir));
 }
 
@@ -194,7 +196,71 @@ TEST(SimCli, OutputThatIsAFileIsAnError) {
   std::ofstream(dir / "taken") << "x";
   const auto r = simulate("kimlee", 1, dir / "taken");
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_THAT(r.err, HasSubstr((dir / "taken").string() + ": cannot create the output directory"));
+  EXPECT_EQ(r.err, "moa simulate: error: " + (dir / "taken").string() +
+                       ": exists and is not a directory\n");
+}
+
+std::vector<std::string> entries(const fs::path& dir) {
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+TEST(SimCli, APreviousRunIsReplacedWholeNeverMixed) {
+  // sekimori-b has a camera, calibration has none: its camera.csv must not survive.
+  const auto root = test::scratch_dir("sim-replace");
+  ASSERT_EQ(simulate("sekimori-b", 1, root / "run").exit_code, 0);
+  ASSERT_TRUE(fs::exists(root / "run" / "camera.csv"));
+  const auto r = simulate("calibration", 1, root / "run");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(entries(root / "run"),
+            (std::vector<std::string>{"faults.csv", "mice.csv", "robot.true.yaml", "robot.yaml",
+                                      "truth.csv", "wheels.csv"}));
+  EXPECT_THAT(slurp(root / "run" / "mice.csv"), HasSubstr("scenario 'calibration'"));
+  // Nothing else beside it: no temporary directory left.
+  EXPECT_EQ(entries(root), std::vector<std::string>{"run"});
+}
+
+TEST(SimCli, ADirectoryWithOtherFilesIsRefusedAndKept) {
+  const auto root = test::scratch_dir("sim-foreign");
+  ASSERT_EQ(simulate("sekimori-b", 1, root / "run").exit_code, 0);
+  std::ofstream(root / "run" / "odometry.csv") << "mine\n";
+  const std::string before = slurp(root / "run" / "mice.csv");
+  const auto r = simulate("calibration", 1, root / "run");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(r.err, "moa simulate: error: " + (root / "run").string() +
+                       ": not empty and not a log written by moa simulate ('odometry.csv'); give "
+                       "an empty or new directory\n");
+  EXPECT_EQ(slurp(root / "run" / "mice.csv"), before);
+  EXPECT_EQ(slurp(root / "run" / "odometry.csv"), "mine\n");
+  EXPECT_EQ(entries(root), std::vector<std::string>{"run"});
+}
+
+TEST(SimCli, AnEmptyDirectoryIsWrittenInto) {
+  const auto root = test::scratch_dir("sim-empty");
+  fs::create_directories(root / "run");
+  ASSERT_EQ(simulate("kimlee", 1, root / "run").exit_code, 0);
+  EXPECT_TRUE(fs::exists(root / "run" / "mice.csv"));
+  EXPECT_EQ(entries(root), std::vector<std::string>{"run"});
+}
+
+TEST(SimCli, SeedsThatAreNotWholeNumbersAreRefused) {
+  // CLI11 alone turned both into 18446744073709551615.
+  const auto dir = test::scratch_dir("sim-seed-bad");
+  for (const std::string seed : {"-1", "1e23", "18446744073709551616", "1.5"}) {
+    const auto r = test::run_moa("simulate --scenario kimlee --seed " + seed + " --out " +
+                                 (dir / "out").string());
+    EXPECT_EQ(r.exit_code, 2) << seed;  // a usage error
+    EXPECT_EQ(r.err, "--seed: '" + seed +
+                         "' is not a whole number from 0 to 18446744073709551615\nRun with --help "
+                         "for more information.\n");
+    EXPECT_FALSE(fs::exists(dir / "out")) << seed;
+  }
+  const auto r = test::run_moa("simulate --scenario kimlee --seed 18446744073709551615 --out " +
+                               (dir / "out").string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("seed 18446744073709551615"));
 }
 
 }  // namespace

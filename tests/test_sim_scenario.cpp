@@ -162,7 +162,7 @@ INSTANTIATE_TEST_SUITE_P(
                 "s.yaml:3: key 'sensor_model.cpi': '.inf' is not a finite number"},
         BadCase{"not positive",
                 "version: 1\nname: t\nsensor_model: {preset: HDNS-2051, frame_rate: 0}\n",
-                "s.yaml:3: key 'sensor_model.frame_rate': must be > 0 (found 0)"},
+                "s.yaml:3: key 'sensor_model.frame_rate': must be within [1, 1000000] (found 0)"},
         BadCase{"unknown preset", "version: 1\nname: t\nsensor_model: {preset: PMW3360}\n",
                 "s.yaml:3: key 'sensor_model.preset': 'PMW3360' is not one of: HDNS-2051, "
                 "ADNS-3080"},
@@ -248,7 +248,51 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"invalid YAML", "version: 1\nname: [t\n",
                 "s.yaml:3: invalid YAML: end of sequence flow not found"},
         BadCase{"not a map", "- 1\n- 2\n", "s.yaml:1: expected a map, found a list"},
-        BadCase{"empty", "", "s.yaml: empty scenario"}));
+        BadCase{"empty", "", "s.yaml: empty scenario"},
+        // Hostile YAML: yaml-cpp 0.7's LoadAll() never returned on these.
+        BadCase{"a stray comma", ",", "s.yaml:1: invalid YAML: ',' outside a [list] or {map}"},
+        BadCase{"a stray comma and a tag", ",!",
+                "s.yaml:1: invalid YAML: ',' outside a [list] or {map}"},
+        BadCase{"a comma after an anchor", "&a ,",
+                "s.yaml:1: invalid YAML: ',' outside a [list] or {map}"},
+        BadCase{"a comma after a document", with("---\n,\n"),
+                "s.yaml:6: expected one YAML document, found another"},
+        BadCase{"deep nesting", "version: 1\nname: " + std::string(40, '[') + std::string(40, ']'),
+                "s.yaml:2: lists and maps nested deeper than 32 levels"},
+        // Numbers that overflowed the simulator's integer casts.
+        BadCase{"frame rate too high",
+                "version: 1\nname: t\nsensor_model: {preset: ADNS-3080, frame_rate: 1e30}\n",
+                "s.yaml:3: key 'sensor_model.frame_rate': must be within [1, 1000000] (found "
+                "1e+30)"},
+        BadCase{"frame rate too low",
+                "version: 1\nname: t\nsensor_model: {preset: ADNS-3080, frame_rate: 1e-300, "
+                "frame_noise: 1e-10}\n",
+                "s.yaml:3: key 'sensor_model.frame_rate': must be within [1, 1000000] (found "
+                "1e-300)"},
+        BadCase{"noise too large to write",
+                "version: 1\nname: t\nsensor_model: {preset: ADNS-3080, frame_noise: 1e200}\n"
+                "sensors: {layout: radial, angles_deg: [0, 120, 240], distance: 0.1}\n"
+                "motion: {type: twists, segments: [{twist: [0.1, 0, 0], duration: 1}]}\n",
+                "s.yaml:3: key 'sensor_model.frame_noise': the sensor noise it implies cannot be "
+                "written to robot.yaml ('inf' is not a finite number)"},
+        BadCase{"run too long", with("duration: 1e30\n"),
+                "s.yaml:6: key 'duration': must be at most 86400 s (found 1e+30)"},
+        BadCase{"run of 1e8 s", with("duration: 1e8\n"),
+                "s.yaml:6: key 'duration': must be at most 86400 s (found 100000000)"},
+        BadCase{"segment too long",
+                "version: 1\nname: t\nsensor_model: {preset: HDNS-2051}\n"
+                "sensors: {layout: radial, angles_deg: [0, 120, 240], distance: 0.1}\n"
+                "motion: {type: twists, segments: [{twist: [0.1, 0, 0], duration: 1e30}]}\n",
+                "s.yaml:5: key 'motion.segments[0].duration': must be at most 86400 s (found "
+                "1e+30)"},
+        BadCase{"too many frames",
+                "version: 1\nname: t\nsensor_model: {preset: ADNS-3080, frame_rate: 1e6}\n"
+                "sensors: {layout: radial, angles_deg: [0, 120, 240], distance: 0.1}\n"
+                "motion: {type: twists, segments: [{twist: [0.1, 0, 0], duration: 2000}]}\n",
+                "s.yaml:5: key 'motion': 2000 s at 1000000 frames/s is 2e+09 frames, at most "
+                "1e+09"},
+        BadCase{"truth rate too low", with("truth_rate: 1e-300\n"),
+                "s.yaml:6: key 'truth_rate': must be within [0.001, 1000000] (found 1e-300)"}));
 
 TEST(SimScenario, UnknownNameListsTheBuiltins) {
   try {
@@ -258,7 +302,7 @@ TEST(SimScenario, UnknownNameListsTheBuiltins) {
     EXPECT_EQ(
         std::string(e.what()),
         "scenario 'sekimori-c': not a built-in scenario (calibration, differential, faults-dirty, "
-        "faults-drift, faults-liftoff, faults-spikes, faults-stuck, faults-zero, kimlee, "
+        "faults-drift, faults-liftoff, faults-spikes, faults-stuck, faults-zero, guided, kimlee, "
         "sekimori-a, sekimori-b) and no such file");
   }
 }

@@ -1,5 +1,5 @@
 // The simulated optical sensor: counts against the measurement model of
-// spec/config.md written out independently here, quantisation with carried
+// docs/formats/config.md written out independently here, quantisation with carried
 // remainders, the downsampler, the delta register, SQUAL.
 #include <gtest/gtest.h>
 
@@ -15,7 +15,7 @@
 namespace moa::sim {
 namespace {
 
-// spec/config.md, term by term (not through SensorMount): counts over dt of
+// docs/formats/config.md, term by term (not through SensorMount): counts over dt of
 // a constant twist.
 Eigen::Vector2d model_counts(const SensorMount& m, const Twist2& x, double dt) {
   const double ux = x.v.x() - x.omega * m.position.y();

@@ -6,9 +6,9 @@
 #include <cmath>
 #include <string>
 
+#include "moa/analysis/evaluate.hpp"
 #include "moa/core/dead_reckoner.hpp"
 #include "moa/core/estimate.hpp"
-#include "moa/analysis/evaluate.hpp"
 #include "moa/sim/scenario.hpp"
 #include "moa/sim/simulate.hpp"
 

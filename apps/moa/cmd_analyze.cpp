@@ -12,9 +12,9 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "moa/analysis/sensitivity.hpp"
 #include "moa/io/config.hpp"
 #include "moa/io/error.hpp"
-#include "moa/analysis/sensitivity.hpp"
 
 namespace moa::cli {
 namespace {

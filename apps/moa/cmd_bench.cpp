@@ -14,10 +14,12 @@
 #include <vector>
 
 #include "baselines.hpp"
+#include "bench_replay.hpp"
 #include "commands.hpp"
 #include "moa/core/consensus.hpp"
 #include "moa/core/estimate.hpp"
 #include "moa/core/sekimori.hpp"
+#include "moa/io/json.hpp"
 
 namespace moa::cli {
 namespace {
@@ -27,6 +29,8 @@ struct BenchArgs {
   int updates = 2000;
   std::vector<int> sizes{2, 4, 8};
   bool json = false;
+  bool replay = false;
+  ReplayBenchArgs replay_args;
 };
 
 /// N sensors radial around the robot (Sekimori & Miyazaki's layout), HDNS-2051.
@@ -128,15 +132,6 @@ std::string cpu_model() {
   return "unknown";
 }
 
-std::string json_escape(const std::string& s) {
-  std::string out;
-  for (const char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
-  }
-  return out;
-}
-
 int run_bench(const BenchArgs& args) {
   std::vector<Row> rows;
   for (int n : args.sizes) {
@@ -166,13 +161,13 @@ int run_bench(const BenchArgs& args) {
         "\"sekimori_ns_per_update\": {:.1f}, \"naive_sekimori_ns_per_update\": {:.1f}, "
         "\"consensus_ns_per_update\": {:.1f}, \"ls_speedup\": {:.1f}, \"sekimori_speedup\": "
         "{:.1f}, "
-        "\"consensus_vs_naive_ls\": {:.2f}, \"per_n\": [{}], \"machine\": {{\"cpu\": \"{}\", "
-        "\"hardware_threads\": {}}}, \"compiler\": \"{}\", \"build\": \"{}\", \"batches\": {}, "
+        "\"consensus_vs_naive_ls\": {:.2f}, \"per_n\": [{}], \"machine\": {{\"cpu\": {}, "
+        "\"hardware_threads\": {}}}, \"compiler\": {}, \"build\": \"{}\", \"batches\": {}, "
         "\"updates_per_batch\": {}}}\n",
         four.n, four.ls, four.naive_ls, four.sekimori, four.naive_sekimori, four.consensus,
         four.naive_ls / four.ls, four.naive_sekimori / four.sekimori,
-        four.naive_ls / four.consensus, per_n, json_escape(cpu_model()),
-        std::thread::hardware_concurrency(), json_escape(__VERSION__), build, args.batches,
+        four.naive_ls / four.consensus, per_n, io::json_string(cpu_model()),
+        std::thread::hardware_concurrency(), io::json_string(__VERSION__), build, args.batches,
         args.updates);
     return 0;
   }
@@ -205,7 +200,36 @@ void add_bench(CLI::App& app, Action& action) {
       ->check(CLI::Range(2, kMaxSensors))
       ->capture_default_str();
   cmd->add_flag("--json", args->json, "One JSON object on stdout");
-  cmd->callback([&action, args] { action = [args] { return run_bench(*args); }; });
+  auto& r = args->replay_args;
+  cmd->add_flag("--replay", args->replay,
+                "Instead: moa odometry over a generated log against a parse-only pass of its "
+                "mice.csv (best of --repeats; the log is written to a temporary directory and "
+                "removed)");
+  cmd->add_option("--duration", r.duration, "--replay: seconds of log")
+      ->check(CLI::Range(1.0, 3600.0))
+      ->capture_default_str();
+  cmd->add_option("--row-rate", r.row_rate, "--replay: mice rows per second per sensor")
+      ->check(CLI::Range(1.0, 10000.0))
+      ->capture_default_str();
+  cmd->add_option("--rate", r.epoch_rate, "--replay: epochs per second (moa odometry --rate)")
+      ->check(CLI::Range(1.0, 10000.0))
+      ->capture_default_str();
+  cmd->add_option("--estimator", r.estimator, "--replay: ls, sekimori or consensus")
+      ->capture_default_str();
+  cmd->add_option("--repeats", r.repeats, "--replay: timed runs of each pass (best is reported)")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
+  cmd->add_option("--dir", r.dir,
+                  "--replay: directory for the temporary log (default: system temp)")
+      ->check(CLI::ExistingDirectory);
+  cmd->callback([&action, args] {
+    action = [args] {
+      if (!args->replay) return run_bench(*args);
+      ReplayBenchArgs replay = args->replay_args;
+      replay.json = args->json;
+      return run_replay_bench(replay);
+    };
+  });
 }
 
 }  // namespace moa::cli

@@ -1,15 +1,22 @@
-// moa evaluate: max and RMS translation and heading error against truth.
+// moa evaluate: max and RMS translation and heading error against truth,
+// the distance travelled, and a verdict against a reference where there is one.
 #include <fmt/core.h>
 
+#include <cmath>
 #include <memory>
+#include <numbers>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "commands.hpp"
 #include "moa/analysis/evaluate.hpp"
+#include "moa/io/config.hpp"
 #include "moa/io/error.hpp"
 #include "moa/io/evaluate.hpp"
 #include "moa/io/json.hpp"
+#include "moa/io/log.hpp"
 
 namespace moa::cli {
 namespace {
@@ -17,30 +24,69 @@ namespace {
 struct EvaluateArgs {
   std::string truth;
   std::string odometry;
+  std::string config;
+  std::optional<double> reference_mm;
+  std::string reference_label = "the reference";
   bool json = false;
 };
 
+constexpr double kDegPerRad = 180.0 / std::numbers::pi;
+
 int run_evaluate(const EvaluateArgs& args) {
+  if (args.reference_mm && !(std::isfinite(*args.reference_mm) && *args.reference_mm > 0.0)) {
+    throw io::Error(fmt::format("--reference-mm {}: must be a positive number of millimetres",
+                                *args.reference_mm));
+  }
   const TrajectoryError e = io::evaluate_files(args.truth, args.odometry);
+
+  std::vector<ErrorReference> references;
+  if (!args.config.empty()) {
+    std::vector<StampedPose> truth;
+    for (const auto& row : io::read_all<io::TruthRow>(args.truth)) {
+      truth.push_back({row.t, row.pose});
+    }
+    const auto floor = quantisation_floor(io::read_config(args.config).array, truth);
+    if (!floor) {
+      throw io::Error(fmt::format("{}: its sensors cannot give a twist on the path of {}",
+                                  args.config, args.truth));
+    }
+    references.push_back({floor->max_translation, "the quantisation floor", true});
+  }
+  if (args.reference_mm) references.push_back({*args.reference_mm * 1e-3, args.reference_label});
+
   if (args.json) {
     // Shortest round-trip numbers: the experiments' figures read back exactly.
     io::JsonWriter json;
     json.begin_object()
         .member("samples", e.samples)
         .member("outside_truth_span", e.outside)
+        .member("distance_m", e.distance)
         .member("max_translation_m", e.max_translation)
         .member("rms_translation_m", e.rms_translation)
         .member("max_heading_rad", e.max_heading)
-        .member("rms_heading_rad", e.rms_heading)
-        .end_object();
+        .member("rms_heading_rad", e.rms_heading);
+    if (!references.empty()) {
+      json.key("references").begin_array();
+      for (const ErrorReference& r : references) {
+        json.begin_object()
+            .member("label", std::string_view(r.label))
+            .member("max_translation_m", r.max_translation)
+            .member("verdict", std::string_view(verdict(e, r)))
+            .end_object();
+      }
+      json.end_array();
+    }
+    json.end_object();
     fmt::print("{}\n", json.str());
-  } else {
-    fmt::print("samples compared         {}\n", e.samples);
-    if (e.outside > 0) fmt::print("outside the truth's span {} (not compared)\n", e.outside);
-    fmt::print("translation error (m)    max {:.9g}  rms {:.9g}\n", e.max_translation,
-               e.rms_translation);
-    fmt::print("heading error (rad)      max {:.9g}  rms {:.9g}\n", e.max_heading, e.rms_heading);
+    return 0;
   }
+  fmt::print("samples compared        {}\n", e.samples);
+  if (e.outside > 0) fmt::print("outside the truth's span {} (not compared)\n", e.outside);
+  fmt::print("translation error       {}\n", describe_translation(e));
+  fmt::print("heading error           max {:.3g} deg, rms {:.3g} deg\n", e.max_heading * kDegPerRad,
+             e.rms_heading * kDegPerRad);
+  for (const ErrorReference& r : references)
+    fmt::print("verdict                 {}\n", verdict(e, r));
   return 0;
 }
 
@@ -49,14 +95,27 @@ int run_evaluate(const EvaluateArgs& args) {
 void add_evaluate(CLI::App& app, Action& action) {
   auto args = std::make_shared<EvaluateArgs>();
   auto* cmd = app.add_subcommand(
-      "evaluate", "Max and RMS translation (m) and heading (rad) error against truth");
+      "evaluate",
+      "Max and RMS translation (mm) and heading (deg) error against truth, the distance "
+      "travelled, and a verdict against the quantisation floor (--config) or a given figure");
   cmd->add_option("--truth", args->truth, "truth.csv (t,x,y,theta)")
       ->required()
       ->check(CLI::ExistingFile);
   cmd->add_option("--odometry", args->odometry, "odometry.csv written by moa odometry")
       ->required()
       ->check(CLI::ExistingFile);
-  cmd->add_flag("--json", args->json, "One JSON object on stdout, SI units");
+  cmd->add_option("--config", args->config,
+                  "robot.yaml of the run: judge the error against the quantisation floor, the "
+                  "error rounding to whole counts alone gives on the truth's path")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--reference-mm", args->reference_mm,
+                  "A max translation error (mm) to judge the run against, e.g. a paper's");
+  cmd->add_option("--reference-label", args->reference_label,
+                  "What --reference-mm is, e.g. \"Sekimori & Miyazaki's Table 4\"")
+      ->needs("--reference-mm");
+  cmd->add_flag("--json", args->json,
+                "One JSON object on stdout, SI units (m, rad), with distance_m and the "
+                "references' verdicts");
   cmd->callback([&action, args] { action = [args] { return run_evaluate(*args); }; });
 }
 

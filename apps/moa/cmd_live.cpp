@@ -1,7 +1,8 @@
 // moa live: odometry from devices as they stream, optionally recorded.
 //
-// Data path: EvdevReader or SerialReader (rows) -> the same Pipeline as
-// `moa odometry` -> odometry rows (file or stdout) and a status line.
+// Data path: EvdevReader, SerialReader or ReplayReader (rows; live_source.hpp)
+// -> the same pipeline as `moa odometry` -> odometry rows (file or stdout), a
+// status line and, with --serve, the dashboard (io/dashboard.hpp).
 // Recording: every row the pipeline sees goes to DIR/mice.csv, starting with
 // a zero row per sensor at the start time so that the log's clock starts
 // where the live run's did; `moa odometry --config DIR/robot.yaml --log DIR`
@@ -30,14 +31,14 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "live_source.hpp"
 #include "moa/io/config.hpp"
+#include "moa/io/dashboard.hpp"
 #include "moa/io/error.hpp"
-#include "moa/io/evdev.hpp"
 #include "moa/io/log.hpp"
 #include "moa/io/mice_writer.hpp"
 #include "moa/io/odometry_csv.hpp"
 #include "moa/io/odometry_run.hpp"
-#include "moa/io/serial_reader.hpp"
 #include "odometry_options.hpp"
 #include "sensor_binding.hpp"
 
@@ -79,15 +80,12 @@ class StopSignals {
 
 struct LiveArgs {
   std::string config;
-  std::vector<std::string> mice;
-  std::string serial;
-  int baud = 115200;
+  SourceFlags source;
   std::string record;
   std::string out;
+  std::string serve;
   OdometryFlags odometry;
   double duration = 0.0;
-  double start_timeout = 5.0;
-  bool no_grab = false;
   bool quiet = false;
 };
 
@@ -111,9 +109,6 @@ class RateMeter {
 
 int run_live(LiveArgs args) {
   namespace fs = std::filesystem;
-  if (args.mice.empty() == args.serial.empty()) {
-    throw io::Error("give either --mouse NAME=DEV (one per mouse) or --serial DEV");
-  }
   const io::RobotConfig config = io::read_config(args.config);
   const OdometryOptions odometry_options =
       resolve_odometry_flags(args.odometry, config, args.config);
@@ -138,39 +133,9 @@ int run_live(LiveArgs args) {
     if (show_status) show_status();
   };
 
-  std::unique_ptr<io::FrameSource> source;
-  io::EvdevReader* evdev = nullptr;
-  io::SerialReader* serial = nullptr;
-  std::string where;
-  if (!args.mice.empty()) {
-    std::vector<io::EvdevDevice> devices;
-    for (const auto& b : parse_bindings(args.mice, "--mouse")) {
-      const auto index = config.index_of(b.name);
-      if (!index) {
-        throw io::Error(fmt::format("--mouse {}={}: no sensor '{}' in {}", b.name, b.target, b.name,
-                                    args.config));
-      }
-      devices.push_back({b.name, b.target, *index});
-    }
-    if (static_cast<int>(devices.size()) < config.array.size()) {
-      hooks.warning(fmt::format("{} of the {} sensors of {} have a mouse; the others read as still",
-                                devices.size(), config.array.size(), args.config));
-    }
-    io::EvdevOptions options;
-    options.grab = !args.no_grab;
-    auto reader = std::make_unique<io::EvdevReader>(devices, options, hooks);
-    evdev = reader.get();
-    source = std::move(reader);
-    where = "mice";
-  } else {
-    io::SerialOptions options;
-    options.baud = args.baud;
-    options.start_timeout = args.start_timeout;
-    auto reader = std::make_unique<io::SerialReader>(args.serial, config, options, hooks);
-    serial = reader.get();
-    source = std::move(reader);
-    where = args.serial;
-  }
+  LiveSource live = open_source(args.source, config, args.config, hooks);
+  io::FrameSource* source = live.source.get();
+  const std::string& where = live.where;
   const double t0 = source->start_time();
 
   // Outputs. The odometry file appears whole at the end; the recording is
@@ -185,10 +150,10 @@ int run_live(LiveArgs args) {
     io::write_config(config, dir / "robot.yaml");
     std::vector<std::string> comments{
         fmt::format("recorded by moa live from {}; replay: moa odometry --config {} --log {}",
-                    evdev ? fmt::format("{} mice (evdev)", args.mice.size()) : args.serial,
-                    (dir / "robot.yaml").string(), dir.string())};
-    recording = std::make_unique<io::MiceWriter>(dir / "mice.csv", config.names, serial != nullptr,
-                                                 io::MiceWriter::Durability::kJournal, comments);
+                    live.origin, (dir / "robot.yaml").string(), dir.string())};
+    recording =
+        std::make_unique<io::MiceWriter>(dir / "mice.csv", config.names, live.serial != nullptr,
+                                         io::MiceWriter::Durability::kJournal, comments);
   }
   std::unique_ptr<io::OdometryCsvWriter> odometry_out;
   if (to_stdout) {
@@ -197,11 +162,21 @@ int run_live(LiveArgs args) {
     odometry_out = std::make_unique<io::OdometryCsvWriter>(args.out, config.names, false);
   }
 
+  std::unique_ptr<io::Dashboard> dashboard;
+  if (!args.serve.empty()) {
+    io::DashboardOptions options;
+    io::parse_listen_address(args.serve, "--serve", options);
+    options.title = fmt::format("moa live: {}", live.origin);
+    dashboard = std::make_unique<io::Dashboard>(config, options);
+    if (!args.quiet) fmt::print(stderr, "moa live: dashboard at {}\n", dashboard->url());
+  }
+
   const auto odometry = io::make_odometry(config, args.config, t0, odometry_options);
   Pose2 pose = odometry_options.initial.value_or(Pose2{});
   const auto on_step = [&](const OdometryStep& step) {
     pose = step.pose;
     if (odometry_out) odometry_out->write(step);
+    if (dashboard) dashboard->publish(step);
   };
 
   RateMeter meter;
@@ -211,15 +186,7 @@ int run_live(LiveArgs args) {
     if (to_stdout) odometry_out->flush();
     if (!status) return;
     const auto now = std::chrono::steady_clock::now();
-    std::string alive;
-    if (evdev) {
-      alive = fmt::format("mice {}/{} alive", evdev->alive(), args.mice.size());
-    } else {
-      const bool fresh = serial->seconds_since_data() < 1.0;
-      alive = fmt::format("sensors {}/{} alive, {} frames lost",
-                          fresh ? serial->hello().names.size() : 0, config.names.size(),
-                          serial->stats().lost_frames);
-    }
+    const std::string alive = live.alive(config);
     fmt::print(
         stderr,
         "\r\033[Kmoa live: {:.1f} s, {:.0f} rows/s, {}, x {:+.3f} m y {:+.3f} m theta {:+.1f} deg",
@@ -267,16 +234,16 @@ int run_live(LiveArgs args) {
         report,
         "moa live: {} rows, {} samples over {:.3f} s; final pose x {} m, y {} m, theta {} rad\n",
         rows, odometry->steps(), t_last - t0, pose.t.x(), pose.t.y(), pose.theta);
-    if (evdev) {
-      const auto bindings = parse_bindings(args.mice, "--mouse");
+    if (live.evdev) {
+      const auto bindings = parse_bindings(args.source.mice, "--mouse");
       for (std::size_t i = 0; i < bindings.size(); ++i) {
-        const auto& d = evdev->status(static_cast<int>(i));
+        const auto& d = live.evdev->status(static_cast<int>(i));
         fmt::print(report, "moa live: mouse {}: {} frames, lost {} times, {} SYN_DROPPED\n",
                    bindings[i].name, d.frames, d.lost, d.dropped);
       }
     }
-    if (serial) {
-      const auto& s = serial->stats();
+    if (live.serial) {
+      const auto& s = live.serial->stats();
       fmt::print(report, "moa live: {} DATA frames, {} lost, {} corrupt\n", s.data_frames,
                  s.lost_frames, s.corrupt);
     }
@@ -288,6 +255,13 @@ int run_live(LiveArgs args) {
     if (odometry_out && !to_stdout) {
       fmt::print(report, "moa live: odometry written to {}\n", args.out);
     }
+    if (dashboard) {
+      const auto d = dashboard->stats();
+      fmt::print(report,
+                 "moa live: dashboard sent {} events ({} dropped for slow clients, {} clients "
+                 "refused)\n",
+                 d.events, d.dropped, d.refused);
+    }
   }
   return 0;
 }
@@ -297,20 +271,13 @@ int run_live(LiveArgs args) {
 void add_live(CLI::App& app, Action& action) {
   auto args = std::make_shared<LiveArgs>();
   auto* cmd = app.add_subcommand(
-      "live", "Live odometry from USB mice (evdev) or a serial microcontroller; Ctrl-C ends");
+      "live",
+      "Live odometry from USB mice (evdev), a serial microcontroller or a replayed log; Ctrl-C "
+      "ends");
   cmd->add_option("--config", args->config, "Robot config v1 (YAML)")
       ->required()
       ->check(CLI::ExistingFile);
-  auto* mouse = cmd->add_option("--mouse", args->mice,
-                                "NAME=DEV: sensor NAME of the config is the evdev device DEV "
-                                "(prefer /dev/input/by-path/...-event-mouse); repeat per mouse");
-  auto* serial = cmd->add_option("--serial", args->serial,
-                                 "Serial port of the acquisition microcontroller "
-                                 "(docs/serial-protocol.md)");
-  mouse->excludes(serial);
-  cmd->add_option("--baud", args->baud, "Baud rate of --serial")
-      ->needs(serial)
-      ->capture_default_str();
+  add_source_flags(cmd, args->source);
   cmd->add_option("--record", args->record,
                   "Record the rows to DIR (log v1 mice.csv + robot.yaml) for replay with "
                   "`moa odometry`");
@@ -319,14 +286,11 @@ void add_live(CLI::App& app, Action& action) {
   // robot parked for hours is no runaway of still epochs.
   args->odometry.options.max_gap = std::numeric_limits<double>::infinity();
   add_odometry_flags(cmd, args->odometry, /*live=*/true);
+  cmd->add_option("--serve", args->serve,
+                  "[HOST:]PORT: serve the dashboard (a page at /, events at /events) while it "
+                  "runs; HOST defaults to 127.0.0.1 (docs/live.md)");
   cmd->add_option("--duration", args->duration, "Stop after this many seconds (0: at Ctrl-C)")
-      ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--start-timeout", args->start_timeout,
-                  "Seconds to wait for the serial device's HELLO and first DATA")
-      ->check(CLI::PositiveNumber)
-      ->capture_default_str();
-  cmd->add_flag("--no-grab", args->no_grab,
-                "Do not grab the mice (EVIOCGRAB): the desktop cursor follows them too");
+      ->check(kFinite & CLI::NonNegativeNumber);
   cmd->add_flag("--quiet", args->quiet, "No status line and no summary");
   cmd->callback([&action, args] { action = [args] { return run_live(*args); }; });
 }

@@ -10,6 +10,7 @@
 #include "commands.hpp"
 #include "moa/io/config.hpp"
 #include "moa/io/odometry_run.hpp"
+#include "moa/io/output_path.hpp"
 #include "odometry_options.hpp"
 
 namespace moa::cli {
@@ -19,6 +20,7 @@ struct OdometryArgs {
   std::string config;
   std::string log;
   std::string out;
+  std::string faults;  ///< --faults FILE: the oracle's faults.csv, if not the log's
   OdometryFlags flags;
   bool quiet = false;
 };
@@ -26,7 +28,12 @@ struct OdometryArgs {
 int run_odometry(const OdometryArgs& args) {
   const io::RobotConfig config = io::read_config(args.config);
   const OdometryOptions options = resolve_odometry_flags(args.flags, config, args.config);
-  const io::LogFiles log = io::resolve_log(args.log);
+  io::LogFiles log = io::resolve_log(args.log);
+  if (!args.faults.empty()) log.faults = args.faults;
+  io::refuse_output_onto_inputs(
+      args.out, "--out",
+      {args.config, log.mice, log.wheels.value_or(""), log.camera.value_or(""),
+       log.truth.value_or(""), log.faults.value_or("")});
 
   const bool progress = !args.quiet && isatty(STDERR_FILENO);
   auto last_report = std::chrono::steady_clock::now();
@@ -43,6 +50,7 @@ int run_odometry(const OdometryArgs& args) {
   const io::OdometryRun run =
       io::write_odometry(config, args.config, log, options, args.out, on_progress);
   if (progress) fmt::print(stderr, "\r\033[K");
+  for (const auto& w : run.warnings) fmt::print(stderr, "moa odometry: warning: {}\n", w);
   if (!args.quiet) {
     fmt::print(
         "moa odometry: {} rows, {} samples over {:.3f} s at {} Hz ({} estimator); odometry written "
@@ -74,6 +82,9 @@ void add_odometry(CLI::App& app, Action& action) {
   cmd->add_option("--out", args->out, "Output odometry.csv (written whole or not at all)")
       ->required();
   add_odometry_flags(cmd, args->flags);
+  cmd->add_option("--faults", args->faults,
+                  "oracle: the simulator's faults.csv (default: the log's own)")
+      ->check(CLI::ExistingFile);
   cmd->add_flag("--quiet", args->quiet, "Print nothing on success");
   cmd->callback([&action, args] { action = [args] { return run_odometry(*args); }; });
 }

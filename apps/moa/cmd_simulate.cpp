@@ -1,11 +1,13 @@
 // moa simulate: a scenario run through the simulator, written as a log
-// (spec/cli.md): log format v1 + robot.yaml (nominal) + robot.true.yaml.
+// (docs/formats/cli.md): log format v1 + robot.yaml (nominal) + robot.true.yaml.
 #include <fmt/core.h>
 #include <unistd.h>
 
+#include <charconv>
 #include <chrono>
 #include <cstdint>
 #include <string>
+#include <system_error>
 
 #include "commands.hpp"
 #include "moa/sim/log_writer.hpp"
@@ -53,6 +55,20 @@ int run_simulate(const SimulateArgs& args) {
   return 0;
 }
 
+// Digits only: CLI11 alone reads "-1" and "1e23" as 2^64 - 1.
+CLI::Validator seed_check() {
+  return CLI::Validator(
+      [](const std::string& text) -> std::string {
+        std::uint64_t value = 0;
+        const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+        if (text.empty() || ec != std::errc{} || end != text.data() + text.size()) {
+          return "'" + text + "' is not a whole number from 0 to 18446744073709551615";
+        }
+        return {};
+      },
+      "SEED");
+}
+
 std::string scenario_help() {
   std::string names;
   for (const auto& n : sim::builtin_scenarios()) names += (names.empty() ? "" : ", ") + n;
@@ -66,8 +82,11 @@ void add_simulate(CLI::App& app, Action& action) {
   auto* cmd = app.add_subcommand(
       "simulate", "Simulate a scenario: a log with truth, robot.yaml and robot.true.yaml");
   cmd->add_option("--scenario", args->scenario, scenario_help())->required();
-  cmd->add_option("--seed", args->seed, "Random seed: the same seed gives the same bytes")
-      ->capture_default_str();
+  cmd->add_option("--seed", args->seed,
+                  "Random seed, a whole number from 0 to 2^64 - 1: the same seed gives the "
+                  "same bytes")
+      ->capture_default_str()
+      ->check(seed_check());
   cmd->add_option("--out", args->out, "Output log directory (created if needed)")->required();
   cmd->add_flag("--quiet", args->quiet, "Print nothing on success");
   cmd->callback([&action, args] { action = [args] { return run_simulate(*args); }; });

@@ -21,5 +21,6 @@ void add_bench(CLI::App& app, Action& action);
 void add_report(CLI::App& app, Action& action);
 void add_calibrate(CLI::App& app, Action& action);
 void add_experiment(CLI::App& app, Action& action);
+void add_config(CLI::App& app, Action& action);
 
 }  // namespace moa::cli

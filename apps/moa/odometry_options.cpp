@@ -4,7 +4,7 @@
 
 #include <cmath>
 
-#include "moa/io/error.hpp"
+#include "moa/io/odometry_run.hpp"
 
 namespace moa::cli {
 
@@ -85,36 +85,11 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
 OdometryOptions resolve_odometry_flags(const OdometryFlags& f, const io::RobotConfig& config,
                                        const std::string& config_path) {
   OdometryOptions o = f.options;
-  const auto kind = estimator_from_name(f.estimator);
-  if (!kind) throw io::Error(fmt::format("--estimator: unknown estimator '{}'", f.estimator));
-  o.estimator = *kind;
-  o.use_wheels = !f.no_wheels;
   o.consensus.motion_prior = !f.no_motion_prior;
-  if (config.limits) o.consensus.limits = *config.limits;
-  if (o.estimator == EstimatorKind::kWheels && f.no_wheels) {
-    throw io::Error("--estimator wheels and --no-wheels exclude each other");
-  }
-  if (!f.sensors.empty()) {
-    o.sensors = 0;
-    for (const auto& name : f.sensors) {
-      const auto i = config.index_of(name);
-      if (!i) {
-        std::string names;
-        for (const auto& n : config.names) names += (names.empty() ? "" : ", ") + n;
-        throw io::Error(
-            fmt::format("--sensors: unknown sensor '{}' ({} has {})", name, config_path, names));
-      }
-      if (contains(o.sensors, *i)) {
-        throw io::Error(fmt::format("--sensors: sensor '{}' named twice", name));
-      }
-      o.sensors |= SensorMask{1} << *i;
-    }
-  }
   if (f.initial_pose.size() == 3) {
     o.initial = Pose2{{f.initial_pose[0], f.initial_pose[1]}, f.initial_pose[2]};
   }
-  if (const char* e = o.validate(); *e) throw io::Error(fmt::format("invalid option: {}", e));
-  return o;
+  return io::resolve_odometry_options(o, f.estimator, f.sensors, f.no_wheels, config, config_path);
 }
 
 }  // namespace moa::cli

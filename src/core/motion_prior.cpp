@@ -5,7 +5,7 @@
 
 namespace moa {
 
-const char* MotionLimits::validate() const {
+const char* RobotLimits::validate() const {
   if (!(std::isfinite(accel) && accel > 0.0))
     return "limits.accel: must be positive and finite (m/s^2)";
   if (!(std::isfinite(angular_accel) && angular_accel > 0.0))

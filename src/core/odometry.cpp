@@ -1,5 +1,6 @@
 #include "moa/core/odometry.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace moa {
@@ -40,6 +41,8 @@ const char* describe(OdometryError error) {
       return "camera fixes fed too far ahead of the mice rows";
     case OdometryError::kWheelsBackwards:
       return "wheel row time not finite or earlier than the previous one";
+    case OdometryError::kImpossibleCounts:
+      return "counts imply a speed far beyond what the sensor can track (a corrupt value?)";
   }
   return "?";
 }
@@ -102,6 +105,12 @@ Odometry::Odometry(const SensorArray& array, double t0, const OdometryOptions& o
     geometry_error_ = GeometryError::kTooManySensors;
     return;
   }
+  for (int i = 0; i < n_; ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    velocity_from_counts_[u] = array[i].robot_velocity_from_counts();
+    impossible_speed_[u] =
+        array[i].max_speed ? kImpossibleSpeedFactor * *array[i].max_speed : kImpossibleUnratedSpeed;
+  }
   // The selected sensors as an array of their own: every estimator sees
   // exactly the sensors it may use.
   std::array<SensorMount, kMaxSensors> mounts{};
@@ -120,7 +129,7 @@ Odometry::Odometry(const SensorArray& array, double t0, const OdometryOptions& o
     if (const auto* e = std::get_if<GeometryError>(&built)) {
       geometry_error_ = *e;
     } else {
-      estimator_.template emplace<T>(std::move(std::get<T>(built)));
+      estimator_.template emplace<T>(std::move(*std::get_if<T>(&built)));
     }
   };
   switch (options_.estimator) {
@@ -137,9 +146,11 @@ Odometry::Odometry(const SensorArray& array, double t0, const OdometryOptions& o
       break;
     case EstimatorKind::kOracle:
       // The same geometry checks as least squares over all selected sensors.
+      // std::get_if, not std::get: no exception path (the core builds without
+      // exceptions for microcontrollers).
       if (const auto built = LsEstimator::create(sub_array_, all_sensors(m_), period);
-          std::holds_alternative<GeometryError>(built)) {
-        geometry_error_ = std::get<GeometryError>(built);
+          const auto* e = std::get_if<GeometryError>(&built)) {
+        geometry_error_ = *e;
       } else {
         estimator_.emplace<SubsetSolver>(sub_array_);
       }
@@ -157,6 +168,15 @@ Eigen::Matrix2d Odometry::fix_covariance(const CameraFix& fix) const {
 
 std::optional<OdometryError> Odometry::push(const SensorRow& row, StepSink sink) {
   deferred_error_.reset();
+  if (row.sensor >= 0 && row.sensor < n_ && std::isfinite(row.t) && row.counts.allFinite()) {
+    // The row's interval as the synchroniser will take it, at least one epoch.
+    const auto i = static_cast<std::size_t>(row.sensor);
+    const double begin = std::max(sync_.last_time(row.sensor), row.t - options_.max_row_interval);
+    const double dt = std::max(row.t - begin, 1.0 / options_.rate);
+    if ((velocity_from_counts_[i] * row.counts).norm() > impossible_speed_[i] * dt) {
+      return OdometryError::kImpossibleCounts;
+    }
+  }
   const auto error = sync_.push(row, [&](const ArraySample& s) { on_epoch(s, sink); });
   if (error) {
     row_error_ = *error;

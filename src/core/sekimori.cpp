@@ -1,6 +1,6 @@
 #include "moa/core/sekimori.hpp"
 
-#include <Eigen/QR>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 
@@ -37,10 +37,21 @@ SekimoriEstimator::SekimoriEstimator(const SensorArray& array, SekimoriOptions o
       Eigen::Matrix<double, 4, 3> a;
       a.topRows<2>() = array[i].point_jacobian();
       a.bottomRows<2>() = array[j].point_jacobian();
-      // The last column of the full Q of A spans the orthogonal complement.
-      const Eigen::HouseholderQR<Eigen::Matrix<double, 4, 3>> qr(a);
-      const Eigen::Matrix4d q = qr.householderQ();
-      normals_[static_cast<std::size_t>(pair_index(i, j))] = q.col(3);
+      // The orthogonal complement of A's column space: the 4-D cross product
+      // of its three columns, n_k = (-1)^k det(A without row k) (no
+      // workspace, so nothing is allocated even at construction). A pair
+      // whose A has rank < 3 (coincident sensors) gets n = 0: it always agrees.
+      Eigen::Vector4d n;
+      for (int k = 0; k < 4; ++k) {
+        Eigen::Matrix3d minor;
+        for (int r = 0, row = 0; r < 4; ++r) {
+          if (r != k) minor.row(row++) = a.row(r);
+        }
+        n(k) = (k % 2 == 0 ? 1.0 : -1.0) * minor.determinant();
+      }
+      const double norm = n.norm();
+      normals_[static_cast<std::size_t>(pair_index(i, j))] =
+          norm > 1e-300 ? Eigen::Vector4d(n / norm) : Eigen::Vector4d::Zero();
     }
   }
   for (int i = 0; i < n_; ++i) measurements_.info[static_cast<std::size_t>(i)].setIdentity();

@@ -177,21 +177,21 @@ Result calibration_crb(const Options& options) {
   const std::array<const char*, kMountParameters> names{"position_x", "position_y", "yaw",
                                                         "scale_x", "scale_y"};
   {
-  std::vector<std::string> rows;
-  for (int p = 0; p < p_all; ++p) {
-    rows.push_back(fmt::format(
-        "{{\"sensor\": {}, \"parameter\": \"{}\", \"true\": {:.9g}, \"rmse\": {:.6g}, "
-        "\"bias\": {:.6g}, \"crb_sd\": {:.6g}, \"efficiency\": {:.4f}, \"rmse_ols\": {:.6g}}}",
-        p / kMountParameters, names[static_cast<std::size_t>(p % kMountParameters)],
-        mount_parameters(truth[p / kMountParameters])(p % kMountParameters), rmse(p), bias(p),
-        bound(p), efficiency(p), rmse_ols(p)));
-  }
-  json = fmt::format(
-      "{{\"experiment\": \"calibration-crb\", \"runs\": {}, \"samples\": {}, \"count_sd\": {}, "
-      "\"reference_sd\": [{}, {}, {}], \"median_efficiency\": {:.4f}, \"mirror_found_runs\": {}, "
-      "\"parameters\": [{}]}}\n",
-      runs, clean.size(), kCountSd, kSpeedSd, kSpeedSd, kRateSd, median, mirrors_found,
-      fmt::join(rows, ", "));
+    std::vector<std::string> rows;
+    for (int p = 0; p < p_all; ++p) {
+      rows.push_back(fmt::format(
+          "{{\"sensor\": {}, \"parameter\": \"{}\", \"true\": {:.9g}, \"rmse\": {:.6g}, "
+          "\"bias\": {:.6g}, \"crb_sd\": {:.6g}, \"efficiency\": {:.4f}, \"rmse_ols\": {:.6g}}}",
+          p / kMountParameters, names[static_cast<std::size_t>(p % kMountParameters)],
+          mount_parameters(truth[p / kMountParameters])(p % kMountParameters), rmse(p), bias(p),
+          bound(p), efficiency(p), rmse_ols(p)));
+    }
+    json = fmt::format(
+        "{{\"experiment\": \"calibration-crb\", \"runs\": {}, \"samples\": {}, \"count_sd\": {}, "
+        "\"reference_sd\": [{}, {}, {}], \"median_efficiency\": {:.4f}, \"mirror_found_runs\": {}, "
+        "\"parameters\": [{}]}}\n",
+        runs, clean.size(), kCountSd, kSpeedSd, kSpeedSd, kRateSd, median, mirrors_found,
+        fmt::join(rows, ", "));
   }
   text += fmt::format(
       "Exact calibration against its Cramer-Rao bound: 4 sensors, errors up to 8 mm, 4 deg, 4 %,\n"
@@ -199,16 +199,17 @@ Result calibration_crb(const Options& options) {
       "intervals; noise: {} count per axis, reference {} m/s and {} rad/s; {} runs.\n"
       "units: m, rad, 1. efficiency = CRB / MSE (MSE / CRB scatters as chi2({}) / {}).\n\n",
       kDuration, clean.size(), kCountSd, kSpeedSd, kRateSd, runs, runs, runs);
-  text += fmt::format("{:<6} {:<11} {:>12} {:>11} {:>11} {:>11} {:>10} {:>11}\n", "sensor", "parameter",
-             "true", "RMSE", "bias", "sqrt(CRB)", "efficiency", "RMSE OLS");
+  text += fmt::format("{:<6} {:<11} {:>12} {:>11} {:>11} {:>11} {:>10} {:>11}\n", "sensor",
+                      "parameter", "true", "RMSE", "bias", "sqrt(CRB)", "efficiency", "RMSE OLS");
   for (int p = 0; p < p_all; ++p) {
-    text += fmt::format("{:<6} {:<11} {:>12.6f} {:>11.3e} {:>11.2e} {:>11.3e} {:>10.3f} {:>11.3e}\n",
-               p / kMountParameters, names[static_cast<std::size_t>(p % kMountParameters)],
-               mount_parameters(truth[p / kMountParameters])(p % kMountParameters), rmse(p),
-               bias(p), bound(p), efficiency(p), rmse_ols(p));
+    text +=
+        fmt::format("{:<6} {:<11} {:>12.6f} {:>11.3e} {:>11.2e} {:>11.3e} {:>10.3f} {:>11.3e}\n",
+                    p / kMountParameters, names[static_cast<std::size_t>(p % kMountParameters)],
+                    mount_parameters(truth[p / kMountParameters])(p % kMountParameters), rmse(p),
+                    bias(p), bound(p), efficiency(p), rmse_ols(p));
   }
   text += fmt::format("\nmedian efficiency {:.3f}; mirroring right in {} of {} runs\n", median,
-             mirrors_found, runs);
+                      mirrors_found, runs);
   return {text, json};
 }
 

@@ -6,8 +6,8 @@
 // array is 1.05 x larger (eq. (52)); the robot turns on the spot at 1/3
 // rad/s; M = 10 measurements, each the counts of one downsampled packet of
 // K = 12 frames at 6400 fps (1.875 ms, eq. (50)). Simulated here in two ways:
-// noise-free (real-valued counts: what the note in reference/papers.md says
-// reproduces eq. (53)), and with integer counts (quantisation with the
+// noise-free (real-valued counts: the paper's eq. (53) is reproduced by
+// unquantised counts), and with integer counts (quantisation with the
 // remainder carried, a random start fraction per sensor and axis), repeated
 // --runs times. Fig. 3 is re-run on 500 such quantised samples.
 #include <fmt/core.h>
@@ -191,25 +191,25 @@ Result kimlee_example(const Options& options) {
 
   const auto& kept = ex.sensors[0].estimated;
   {
-  std::vector<std::string> rows;
-  for (const auto& f : fig3) {
-    rows.push_back(fmt::format(
-        "{{\"positions\": \"{}\", \"mean\": [{:.9g}, {:.9g}, {:.9g}], \"sd\": [{:.9g}, {:.9g}, "
-        "{:.9g}]}}",
-        f.positions, f.mean(0), f.mean(1), f.mean(2), f.sd(0), f.sd(1), f.sd(2)));
-  }
-  json = fmt::format(
-      "{{\"experiment\": \"kimlee-example\", \"units\": \"m\", \"nominal_eq51\": {}, "
-      "\"true_eq52\": {}, \"paper_eq53\": {}, \"kimlee\": {}, \"exact\": {}, \"kimlee_rank\": "
-      "{}, \"kimlee_singular_values\": [{:.9g}], \"kimlee_threshold\": {:.9g}, "
-      "\"exact_estimated\": [{}, {}, {}, {}, {}], \"quantised\": {{\"runs\": {}, "
-      "\"kimlee_mean\": {}, \"kimlee_sd\": {}, \"kimlee_rank_min\": {}, \"kimlee_rank_max\": {}, "
-      "\"exact_mean\": {}, \"exact_sd\": {}}}, \"fig3_samples\": {}, \"fig3\": [{}]}}\n",
-      json6(kEq51, kRadius), json6(kEq52, kRadius), json6(kEq53, kRadius),
-      json6(in_units(kl.calibrated), kRadius), json6(in_units(ex.calibrated), kRadius), kl.rank,
-      fmt::join(kl.singular_values, ", "), kl.threshold, kept[0], kept[1], kept[2], kept[3],
-      kept[4], runs, json6(kl_q.mean, kRadius), json6(kl_q.sd, kRadius), rank_min, rank_max,
-      json6(ex_q.mean, kRadius), json6(ex_q.sd, kRadius), kFig3Samples, fmt::join(rows, ", "));
+    std::vector<std::string> rows;
+    for (const auto& f : fig3) {
+      rows.push_back(fmt::format(
+          "{{\"positions\": \"{}\", \"mean\": [{:.9g}, {:.9g}, {:.9g}], \"sd\": [{:.9g}, {:.9g}, "
+          "{:.9g}]}}",
+          f.positions, f.mean(0), f.mean(1), f.mean(2), f.sd(0), f.sd(1), f.sd(2)));
+    }
+    json = fmt::format(
+        "{{\"experiment\": \"kimlee-example\", \"units\": \"m\", \"nominal_eq51\": {}, "
+        "\"true_eq52\": {}, \"paper_eq53\": {}, \"kimlee\": {}, \"exact\": {}, \"kimlee_rank\": "
+        "{}, \"kimlee_singular_values\": [{:.9g}], \"kimlee_threshold\": {:.9g}, "
+        "\"exact_estimated\": [{}, {}, {}, {}, {}], \"quantised\": {{\"runs\": {}, "
+        "\"kimlee_mean\": {}, \"kimlee_sd\": {}, \"kimlee_rank_min\": {}, \"kimlee_rank_max\": {}, "
+        "\"exact_mean\": {}, \"exact_sd\": {}}}, \"fig3_samples\": {}, \"fig3\": [{}]}}\n",
+        json6(kEq51, kRadius), json6(kEq52, kRadius), json6(kEq53, kRadius),
+        json6(in_units(kl.calibrated), kRadius), json6(in_units(ex.calibrated), kRadius), kl.rank,
+        fmt::join(kl.singular_values, ", "), kl.threshold, kept[0], kept[1], kept[2], kept[3],
+        kept[4], runs, json6(kl_q.mean, kRadius), json6(kl_q.sd, kRadius), rank_min, rank_max,
+        json6(ex_q.mean, kRadius), json6(ex_q.sd, kRadius), kFig3Samples, fmt::join(rows, ", "));
   }
 
   text += fmt::format(
@@ -224,7 +224,8 @@ Result kimlee_example(const Options& options) {
   text += fmt::format("{:<34}{}\n", "Kim & Lee's result, eq. (53)", fmt6(kEq53));
   text += fmt::format("{:<34}{}\n", "moa kimlee, noise-free", fmt6(in_units(kl.calibrated), 4));
   text += fmt::format("{:<34}{}\n", "moa exact, noise-free", fmt6(in_units(ex.calibrated), 4));
-  text += fmt::format("{:<34}{}\n", fmt::format("moa kimlee, integer counts (mean)"), fmt6(kl_q.mean, 4));
+  text += fmt::format("{:<34}{}\n", fmt::format("moa kimlee, integer counts (mean)"),
+                      fmt6(kl_q.mean, 4));
   text += fmt::format("{:<34}{}\n", fmt::format("  sd over {} runs", runs), fmt6(kl_q.sd, 4));
   text += fmt::format("{:<34}{}\n", "moa exact, integer counts (mean)", fmt6(ex_q.mean, 4));
   text += fmt::format("{:<34}{}\n", fmt::format("  sd over {} runs", runs), fmt6(ex_q.sd, 4));
@@ -254,11 +255,12 @@ Result kimlee_example(const Options& options) {
       kept[0], kept[1], kept[2], kept[3], kept[4], ex_to_52, ex_to_53,
       ex_to_52 < ex_to_53 ? "the truth" : "not the truth");
   text += fmt::format("\nFig. 3: velocity estimates over {} samples of integer counts (mean, sd)\n",
-             kFig3Samples);
-  text += fmt::format("{:<30} {:>20} {:>20} {:>22}\n", "positions", "vx m/s", "vy m/s", "omega rad/s");
+                      kFig3Samples);
+  text +=
+      fmt::format("{:<30} {:>20} {:>20} {:>22}\n", "positions", "vx m/s", "vy m/s", "omega rad/s");
   for (const auto& f : fig3) {
-    text += fmt::format("{:<30} {:>9.5f} {:>9.5f}  {:>9.5f} {:>9.5f}  {:>10.6f} {:>9.6f}\n", f.positions,
-               f.mean(0), f.sd(0), f.mean(1), f.sd(1), f.mean(2), f.sd(2));
+    text += fmt::format("{:<30} {:>9.5f} {:>9.5f}  {:>9.5f} {:>9.5f}  {:>10.6f} {:>9.6f}\n",
+                        f.positions, f.mean(0), f.sd(0), f.mean(1), f.sd(1), f.mean(2), f.sd(2));
   }
   // Fig. 3's point, computed: omega after calibration against before and truth.
   const double before = fig3[0].mean(2), after = fig3[1].mean(2), true_w = fig3[3].mean(2);

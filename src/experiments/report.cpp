@@ -7,13 +7,13 @@
 #include <string>
 #include <vector>
 
+#include "moa/experiments/simulated_run.hpp"
 #include "moa/io/error.hpp"
 #include "moa/io/log.hpp"
+#include "moa/io/odometry_run.hpp"
 #include "moa/io/report.hpp"
 #include "moa/sim/log_writer.hpp"
 #include "moa/sim/scenario.hpp"
-#include "moa/experiments/simulated_run.hpp"
-#include "moa/io/odometry_run.hpp"
 
 namespace moa::experiments {
 namespace {

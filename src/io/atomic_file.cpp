@@ -44,12 +44,12 @@ bool sync_to_disk(const std::filesystem::path& file) {
 }  // namespace
 
 AtomicFile::AtomicFile(std::filesystem::path target)
-    : target_(std::move(target)), temp_(temporary_beside(target_)) {
+    : target_(std::move(target)), temp_(temporary_beside(target_)), registered_(temp_) {
   out_.open(temp_, std::ios::binary | std::ios::trunc);
   if (!out_) {
     const int error = errno;
-    throw Error(fmt::format("{}: cannot open for writing ({})", target_.string(),
-                            error != 0 ? std::strerror(error) : "unknown error"));
+    throw IoError(fmt::format("{}: cannot open for writing ({})", target_.string(),
+                              error != 0 ? std::strerror(error) : "unknown error"));
   }
 }
 
@@ -58,6 +58,7 @@ AtomicFile::~AtomicFile() {
   out_.close();
   std::error_code ignored;
   std::filesystem::remove(temp_, ignored);
+  registered_.release();
 }
 
 void AtomicFile::commit() {
@@ -65,13 +66,14 @@ void AtomicFile::commit() {
   out_.flush();
   const bool written = static_cast<bool>(out_);
   out_.close();
-  if (!written || !out_) throw Error(fmt::format("{}: cannot write", target_.string()));
+  if (!written || !out_) throw IoError(fmt::format("{}: cannot write", target_.string()));
   if (!sync_to_disk(temp_)) {
-    throw Error(fmt::format("{}: cannot write ({})", target_.string(), std::strerror(errno)));
+    throw IoError(fmt::format("{}: cannot write ({})", target_.string(), std::strerror(errno)));
   }
   std::error_code ec;
   std::filesystem::rename(temp_, target_, ec);
-  if (ec) throw Error(fmt::format("{}: cannot write ({})", target_.string(), ec.message()));
+  if (ec) throw IoError(fmt::format("{}: cannot write ({})", target_.string(), ec.message()));
+  registered_.release();
   committed_ = true;
 }
 

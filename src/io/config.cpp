@@ -17,19 +17,15 @@
 #include "moa/io/atomic_file.hpp"
 #include "moa/io/csv.hpp"
 #include "moa/io/error.hpp"
+#include "moa/io/yaml.hpp"
 
 namespace moa::io {
 namespace {
 
 constexpr int kConfigVersion = 1;
 
-constexpr std::array<std::string_view, 3> kTopKeys{"version", "sensors", "limits"};
-constexpr std::array<std::string_view, 2> kLimitKeys{"accel", "angular_accel"};
-constexpr std::array<std::string_view, 8> kSensorKeys{"name",  "position", "yaw",       "cpi",
-                                                      "scale", "mirrored", "max_speed", "noise"};
-constexpr std::array<std::string_view, 4> kRequiredSensorKeys{"name", "position", "yaw", "cpi"};
-
 // Prefixes every message with where it is: "FILE: " or "FILE: sensor 'm1': ".
+// For configs built in code (format_config); files are read by YamlFields.
 class Context {
  public:
   Context(std::string_view source, std::string where) : source_(source), where_(std::move(where)) {}
@@ -47,53 +43,6 @@ class Context {
   std::string where_;
 };
 
-std::string_view describe_kind(const YAML::Node& node) {
-  switch (node.Type()) {
-    case YAML::NodeType::Null:
-      return "nothing";
-    case YAML::NodeType::Sequence:
-      return "a list";
-    case YAML::NodeType::Map:
-      return "a map";
-    default:
-      return "a value";
-  }
-}
-
-// Numbers are parsed here rather than with yaml-cpp's as<double>() so that
-// the same text always gives the same double (round-trip) and ".nan" or
-// "1.5x" are reported rather than accepted.
-double to_number(const Context& context, std::string_view key, const YAML::Node& node) {
-  if (!node.IsScalar()) {
-    context.fail_key(key, fmt::format("expected a number, found {}", describe_kind(node)));
-  }
-  const auto parsed = parse_number(node.Scalar());
-  if (const auto* error = std::get_if<std::string>(&parsed)) context.fail_key(key, *error);
-  return std::get<double>(parsed);
-}
-
-Eigen::Vector2d to_pair(const Context& context, std::string_view key, const YAML::Node& node,
-                        std::string_view form) {
-  if (!node.IsSequence()) {
-    context.fail_key(key, fmt::format("expected {}, found {}", form, describe_kind(node)));
-  }
-  if (node.size() != 2) {
-    context.fail_key(key, fmt::format("expected {}, found {} elements", form, node.size()));
-  }
-  return {to_number(context, key, node[0]), to_number(context, key, node[1])};
-}
-
-bool to_bool(const Context& context, std::string_view key, const YAML::Node& node) {
-  if (!node.IsScalar()) {
-    context.fail_key(key, fmt::format("expected true or false, found {}", describe_kind(node)));
-  }
-  // YAML 1.2 core schema only: "yes", "on" and friends are not booleans.
-  const std::string& text = node.Scalar();
-  if (text == "true" || text == "True" || text == "TRUE") return true;
-  if (text == "false" || text == "False" || text == "FALSE") return false;
-  context.fail_key(key, fmt::format("'{}' is not true or false", text));
-}
-
 // Names are matched against the sensor column of mice.csv, which has no
 // quoting and trims spaces: a name with a comma, a space or a control
 // character could never match a row.
@@ -103,35 +52,6 @@ bool is_valid_name(std::string_view name) {
     const auto u = static_cast<unsigned char>(c);
     return c == ',' || c == ' ' || u < 0x20 || u == 0x7f;
   });
-}
-
-std::string to_name(const Context& context, const YAML::Node& node) {
-  if (!node.IsScalar()) {
-    context.fail_key("name", fmt::format("expected a name, found {}", describe_kind(node)));
-  }
-  const std::string& name = node.Scalar();
-  if (!is_valid_name(name)) {
-    context.fail_key("name", fmt::format("invalid name '{}' (empty, or a comma, space or control "
-                                         "character: it could not appear in mice.csv)",
-                                         name));
-  }
-  return name;
-}
-
-// The keys of a map, each once, all of them known; anything else is an error.
-std::map<std::string, YAML::Node, std::less<>> known_keys(
-    const Context& context, const YAML::Node& map, std::span<const std::string_view> allowed) {
-  std::map<std::string, YAML::Node, std::less<>> keys;
-  for (const auto& entry : map) {
-    if (!entry.first.IsScalar()) context.fail("a key is not a plain name");
-    const std::string& key = entry.first.Scalar();
-    if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
-      context.fail(fmt::format("unknown key '{}'", key));
-    }
-    if (!keys.emplace(key, entry.second).second)
-      context.fail(fmt::format("duplicate key '{}'", key));
-  }
-  return keys;
 }
 
 // Range checks on values, shared by parsing (bad input) and formatting (a
@@ -168,41 +88,51 @@ std::string sensor_label(std::size_t index, const std::string& name) {
   return name.empty() ? fmt::format("sensor {}", index + 1) : fmt::format("sensor '{}'", name);
 }
 
-SensorMount parse_sensor(const YAML::Node& node, std::size_t index, std::string_view source,
-                         std::string& name) {
-  const Context unnamed(source, sensor_label(index, {}));
-  if (!node.IsMap()) unnamed.fail(fmt::format("expected a map, found {}", describe_kind(node)));
-  // The name first, so that every later message can say which sensor it is.
+// The sensor's name, read first so that every later message can say which sensor it is.
+std::string sensor_name(const YamlSource& source, const YAML::Node& node, std::size_t index) {
+  const std::string unnamed = sensor_label(index, {});
+  if (!node.IsMap()) {
+    source.fail(node, fmt::format("{}: expected a map, found {}", unnamed, describe_kind(node)));
+  }
   for (const auto& entry : node) {
-    if (entry.first.IsScalar() && entry.first.Scalar() == "name") {
-      name = to_name(unnamed, entry.second);
-      break;
+    if (!entry.first.IsScalar() || entry.first.Scalar() != "name") continue;
+    const YAML::Node& value = entry.second;
+    if (!value.IsScalar()) {
+      source.fail(value, fmt::format("{}: key 'name': expected a name, found {}", unnamed,
+                                     describe_kind(value)));
     }
+    if (!is_valid_name(value.Scalar())) {
+      source.fail(value, fmt::format("{}: key 'name': invalid name '{}' (empty, or a comma, space "
+                                     "or control character: it could not appear in mice.csv)",
+                                     unnamed, value.Scalar()));
+    }
+    return value.Scalar();
   }
-  if (name.empty()) unnamed.fail("missing key 'name'");
-  const Context context(source, sensor_label(index, name));
-  const auto keys = known_keys(context, node, kSensorKeys);
-  for (const auto key : kRequiredSensorKeys) {
-    if (!keys.contains(key)) context.fail(fmt::format("missing key '{}'", key));
-  }
+  source.fail(node, fmt::format("{}: missing key 'name'", unnamed));
+}
 
+SensorMount parse_sensor(const YamlSource& source, const YAML::Node& node, std::size_t index,
+                         std::string& name) {
+  name = sensor_name(source, node, index);
+  const YamlFields f(source, node, "",
+                     {"name", "position", "yaw", "cpi", "scale", "mirrored", "max_speed", "noise"},
+                     sensor_label(index, name));
   SensorMount m;
-  m.position = to_pair(context, "position", keys.find("position")->second, "[x, y]");
-  m.yaw = to_number(context, "yaw", keys.find("yaw")->second);
-  m.cpi = to_number(context, "cpi", keys.find("cpi")->second);
-  if (auto it = keys.find("scale"); it != keys.end()) {
-    m.scale = to_pair(context, "scale", it->second, "[sx, sy]");
+  const auto position = f.numbers("position", 2);
+  m.position = {position[0], position[1]};
+  m.yaw = f.number("yaw");
+  m.cpi = f.positive("cpi");
+  if (f.has("scale")) {
+    const auto scale = f.numbers("scale", 2);
+    if (!(scale[0] > 0.0 && scale[1] > 0.0)) {
+      f.fail("scale", fmt::format("must be > 0 (found [{}, {}])", scale[0], scale[1]));
+    }
+    m.scale = {scale[0], scale[1]};
   }
-  if (auto it = keys.find("mirrored"); it != keys.end()) {
-    m.mirrored = to_bool(context, "mirrored", it->second);
-  }
-  if (auto it = keys.find("max_speed"); it != keys.end()) {
-    m.max_speed = to_number(context, "max_speed", it->second);
-  }
-  if (auto it = keys.find("noise"); it != keys.end()) {
-    m.noise = to_number(context, "noise", it->second);
-  }
-  check_mount(context, m);
+  m.mirrored = f.boolean("mirrored", m.mirrored);
+  if (f.has("max_speed")) m.max_speed = f.positive("max_speed");
+  if (f.has("noise")) m.noise = f.non_negative("noise", 0.0);
+  check_mount(Context(source.name(), sensor_label(index, name)), m);
   return m;
 }
 
@@ -229,19 +159,14 @@ std::string yaml_name(const std::string& name) {
   return quoted;
 }
 
-// `limits: {accel: m/s^2, angular_accel: rad/s^2}`, each optional.
-MotionLimits parse_limits(const Context& context, const YAML::Node& node) {
-  if (!node.IsMap()) {
-    context.fail_key("limits", fmt::format("expected a map, found {}", describe_kind(node)));
-  }
-  const Context inner(context.source(), "limits");
-  const auto keys = known_keys(inner, node, kLimitKeys);
-  MotionLimits limits;
-  if (auto it = keys.find("accel"); it != keys.end())
-    limits.accel = to_number(inner, "accel", it->second);
-  if (auto it = keys.find("angular_accel"); it != keys.end())
-    limits.angular_accel = to_number(inner, "angular_accel", it->second);
-  if (const char* e = limits.validate(); *e) context.fail(e);
+// `limits: {accel: m/s^2, angular_accel: rad/s^2}`, each optional (a key
+// left out keeps RobotLimits' default).
+RobotLimits parse_limits(const YamlSource& source, const YAML::Node& node) {
+  const YamlFields f(source, node, "limits", {"accel", "angular_accel"});
+  RobotLimits limits;
+  limits.accel = f.positive("accel", limits.accel);
+  limits.angular_accel = f.positive("angular_accel", limits.angular_accel);
+  if (const char* e = limits.validate(); *e) source.fail(node, e);
   return limits;
 }
 
@@ -253,68 +178,50 @@ std::optional<int> RobotConfig::index_of(std::string_view name) const {
   return static_cast<int>(it - names.begin());
 }
 
-RobotConfig parse_config(std::string_view yaml, std::string_view source) {
-  const Context context(source, {});
-  std::vector<YAML::Node> documents;
-  try {
-    documents = YAML::LoadAll(std::string(yaml));
-  } catch (const YAML::Exception& e) {
-    if (e.mark.is_null()) context.fail(fmt::format("invalid YAML: {}", e.msg));
-    throw Error(printable(fmt::format("{}:{}: invalid YAML: {}", source, e.mark.line + 1, e.msg)));
-  }
-  if (documents.empty() || documents.front().IsNull()) {
-    context.fail("empty config (expected keys 'version' and 'sensors')");
-  }
-  if (documents.size() > 1) {
-    context.fail(fmt::format("expected one YAML document, found {}", documents.size()));
-  }
-  const YAML::Node& root = documents.front();
-  if (!root.IsMap()) context.fail(fmt::format("expected a map, found {}", describe_kind(root)));
+RobotConfig parse_config(std::string_view yaml, std::string_view source_name) {
+  const YamlSource source(source_name);
+  const YAML::Node root = load_yaml(yaml, source_name);
+  if (root.IsNull()) source.fail("empty config (expected keys 'version' and 'sensors')");
+  if (!root.IsMap())
+    source.fail(root, fmt::format("expected a map, found {}", describe_kind(root)));
 
   // The version before anything else: a newer file may well have keys this
   // reader does not know, and "unsupported version" is the useful message.
-  std::optional<YAML::Node> found_version;
+  bool has_version = false;
   for (const auto& entry : root) {
-    if (entry.first.IsScalar() && entry.first.Scalar() == "version") found_version = entry.second;
+    if (!entry.first.IsScalar() || entry.first.Scalar() != "version") continue;
+    has_version = true;
+    const YAML::Node& v = entry.second;
+    if (!v.IsScalar()) {
+      source.fail(v, fmt::format("key 'version': expected an integer, found {}", describe_kind(v)));
+    }
+    if (v.Scalar() != std::to_string(kConfigVersion)) {
+      source.fail(
+          v, fmt::format("version {} is not supported (expected {})", v.Scalar(), kConfigVersion));
+    }
   }
-  if (!found_version) context.fail("missing key 'version'");
-  const YAML::Node& version_node = *found_version;
-  if (!version_node.IsScalar()) {
-    context.fail_key("version",
-                     fmt::format("expected an integer, found {}", describe_kind(version_node)));
-  }
-  const std::string& version_text = version_node.Scalar();
-  int version = 0;
-  const auto [end, ec] =
-      std::from_chars(version_text.data(), version_text.data() + version_text.size(), version);
-  if (ec != std::errc{} || end != version_text.data() + version_text.size()) {
-    context.fail_key("version", fmt::format("'{}' is not an integer", version_text));
-  }
-  if (version != kConfigVersion) {
-    context.fail(fmt::format("version {} is not supported (expected {})", version, kConfigVersion));
-  }
+  if (!has_version) source.fail(root, "missing key 'version'");
 
-  const auto keys = known_keys(context, root, kTopKeys);
-  const auto sensors = keys.find("sensors");
-  if (sensors == keys.end()) context.fail("missing key 'sensors'");
-  if (!sensors->second.IsSequence()) {
-    context.fail_key("sensors", fmt::format("expected a list of sensors, found {}",
-                                            describe_kind(sensors->second)));
+  const YamlFields top(source, root, "", {"version", "sensors", "limits"});
+  const YAML::Node sensors = top.required("sensors");
+  if (!sensors.IsSequence()) {
+    top.fail("sensors",
+             fmt::format("expected a list of sensors, found {}", describe_kind(sensors)));
   }
-  check_count(context, sensors->second.size());
+  check_count(Context(source_name, {}), sensors.size());
 
   RobotConfig config;
   std::vector<SensorMount> mounts;
-  for (std::size_t i = 0; i < sensors->second.size(); ++i) {
+  for (std::size_t i = 0; i < sensors.size(); ++i) {
     std::string name;
-    mounts.push_back(parse_sensor(sensors->second[i], i, source, name));
-    if (config.index_of(name)) context.fail(fmt::format("duplicate sensor name '{}'", name));
+    mounts.push_back(parse_sensor(source, sensors[i], i, name));
+    if (config.index_of(name)) {
+      source.fail(sensors[i], fmt::format("duplicate sensor name '{}'", name));
+    }
     config.names.push_back(std::move(name));
   }
   config.array = SensorArray(std::move(mounts));
-  if (const auto limits = keys.find("limits"); limits != keys.end()) {
-    config.limits = parse_limits(context, limits->second);
-  }
+  if (const auto limits = top.get("limits")) config.limits = parse_limits(source, *limits);
   return config;
 }
 

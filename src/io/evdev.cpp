@@ -27,14 +27,22 @@ static_assert(sizeof(input_event) <= sizeof(std::uint8_t[64]), "partial buffer t
 
 std::size_t EvdevDecoder::event_size() { return sizeof(input_event); }
 
+std::int64_t EvdevDecoder::event_time_us(std::int64_t sec, std::int64_t usec) {
+  // A kernel stamps events with a clock of this century; a stream from
+  // elsewhere (a file, a pipe) can hold anything. Clamped first, so that
+  // neither this sum nor a later difference of two times can overflow.
+  constexpr std::int64_t kMaxSec = kMaxEventTimeUs / 1'000'000 - 1;
+  sec = std::clamp<std::int64_t>(sec, -kMaxSec, kMaxSec);
+  usec = std::clamp<std::int64_t>(usec, -999'999, 999'999);
+  return sec * 1'000'000 + usec;
+}
+
 void EvdevDecoder::feed(std::span<const std::uint8_t> bytes, std::vector<EvdevFrame>& out) {
   constexpr std::size_t kSize = sizeof(input_event);
   const auto decode = [&](const std::uint8_t* record) {
     input_event ev;
     std::memcpy(&ev, record, kSize);
-    const std::int64_t time_us = static_cast<std::int64_t>(ev.input_event_sec) * 1'000'000 +
-                                 static_cast<std::int64_t>(ev.input_event_usec);
-    event(time_us, ev.type, ev.code, ev.value, out);
+    event(event_time_us(ev.input_event_sec, ev.input_event_usec), ev.type, ev.code, ev.value, out);
   };
   std::size_t at = 0;
   if (partial_size_ > 0) {
@@ -325,6 +333,11 @@ EvdevReader::EvdevReader(const std::vector<EvdevDevice>& devices, const EvdevOpt
     impl_->devices.back().fd = opened.fd;
     impl_->devices.back().status.alive = true;
     impl_->devices.back().status.device_name = opened.device_name;
+  }
+  constexpr double kMaxOrigin = static_cast<double>(EvdevDecoder::kMaxEventTimeUs) / 1e6;
+  if (options.origin && !(std::abs(*options.origin) <= kMaxOrigin)) {
+    throw Error(fmt::format("evdev: origin {} s is out of range (at most {:g} s)", *options.origin,
+                            kMaxOrigin));
   }
   impl_->origin_us = options.origin ? static_cast<std::int64_t>(std::llround(*options.origin * 1e6))
                                     : monotonic_us();

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <cmath>
 #include <cstdio>
 #include <iterator>
@@ -133,7 +134,9 @@ struct MiceReader::Impl {
         dx(csv.required_column("dx")),
         dy(csv.required_column("dy")),
         squal(csv.column("squal")),
-        flags(csv.column("flags")) {}
+        flags(csv.column("flags")),
+        rows(names.size(), 0),
+        last(names.size()) {}
 
   std::optional<SensorRow> read() {
     if (!csv.next()) return std::nullopt;
@@ -145,6 +148,17 @@ struct MiceReader::Impl {
     row.sensor = static_cast<int>(it - names.begin());
     row.counts = {static_cast<double>(csv.integer(dx, -kMaxExactCount, kMaxExactCount)),
                   static_cast<double>(csv.integer(dy, -kMaxExactCount, kMaxExactCount))};
+    // A second row of a sensor at the same time, both with counts, is a
+    // duplicated line (its counts would be counted twice), never a real
+    // report; a zero row at the same time adds nothing and is accepted.
+    const auto i = static_cast<std::size_t>(row.sensor);
+    const bool moved = row.counts.x() != 0.0 || row.counts.y() != 0.0;
+    if (moved && rows[i] > 0 && last[i].t == row.t && last[i].moved) {
+      csv.fail(fmt::format("duplicate row: sensor '{}' already has a row at t = {} (line {})", name,
+                           row.t, last[i].line));
+    }
+    ++rows[i];
+    if (!(rows[i] > 1 && last[i].t == row.t && !moved)) last[i] = {row.t, csv.line(), moved};
     // In optional columns an empty field means "not reported in this row".
     if (squal && !csv.is_empty(*squal)) {
       row.squal = static_cast<std::uint8_t>(csv.integer(*squal, 0, 255));
@@ -161,6 +175,13 @@ struct MiceReader::Impl {
   std::optional<std::size_t> squal, flags;
   std::optional<SensorRow> peeked;
   std::optional<double> start;
+  std::vector<std::size_t> rows;  // per sensor, read so far
+  struct Last {
+    double t = 0.0;
+    std::size_t line = 0;
+    bool moved = false;
+  };
+  std::vector<Last> last;  // per sensor: its last row with counts, or its last row
 };
 
 MiceReader::MiceReader(const std::filesystem::path& path, const RobotConfig& config)
@@ -176,6 +197,10 @@ double MiceReader::start_time() {
   }
   return *impl_->start;
 }
+
+const std::string& MiceReader::file() const { return impl_->csv.file(); }
+std::size_t MiceReader::line() const { return impl_->csv.line(); }
+const std::vector<std::size_t>& MiceReader::rows_per_sensor() const { return impl_->rows; }
 
 std::optional<SensorRow> MiceReader::next() {
   if (impl_->peeked) {
@@ -223,7 +248,10 @@ constexpr std::array<std::string_view, 7> kOdometryColumns{"t",  "x",  "y",    "
 
 // Text that would split a field or end the record early.
 bool breaks_csv(std::string_view text) {
-  return text.find_first_of(",\r\n") != std::string_view::npos;
+  for (const char c : text) {
+    if (c == ',' || c == '\n' || c == '\r') return true;
+  }
+  return false;
 }
 
 }  // namespace
@@ -234,23 +262,50 @@ struct OdometryWriter::Impl {
   Impl(std::FILE* out, std::vector<std::string> extra)
       : file_name("<stdout>"), extra_columns(std::move(extra)), stream(out) {}
 
-  void put(std::string_view text) {
-    if (file) {
-      file->stream().write(text.data(), static_cast<std::streamsize>(text.size()));
-    } else if (std::fwrite(text.data(), 1, text.size(), stream) != text.size()) {
-      fail("write failed");
+  // Rows are composed in `pending`; a file gets it in blocks (one stream
+  // write per row would cost more than formatting the row), a stream row by
+  // row.
+  char* reserve(std::size_t size) {
+    if (pending.size() - used < size) {
+      if (file && used > 0) drain();
+      if (pending.size() - used < size) pending.resize(used + std::max(size, kPendingBlock));
     }
+    return pending.data() + used;
+  }
+
+  void wrote(const char* end) {
+    used = static_cast<std::size_t>(end - pending.data());
+    if (!file) {
+      if (std::fwrite(pending.data(), 1, used, stream) != used) fail("write failed");
+      used = 0;
+    } else if (used >= kPendingBlock) {
+      drain();
+    }
+  }
+
+  void put(std::string_view text) {
+    char* out = reserve(text.size());
+    wrote(std::copy(text.begin(), text.end(), out));
+  }
+
+  void drain() {
+    file->stream().write(pending.data(), static_cast<std::streamsize>(used));
+    used = 0;
   }
 
   [[noreturn]] void fail(std::string_view what) const {
     throw Error(printable(fmt::format("{}: {}", file_name, what)));
   }
 
+  static constexpr std::size_t kPendingBlock = std::size_t{1} << 16;
+
   std::string file_name;
   std::vector<std::string> extra_columns;
   std::optional<AtomicFile> file;  ///< or, when writing a stream:
   std::FILE* stream = nullptr;
-  fmt::memory_buffer line;
+  std::vector<char> pending;  ///< [0, used): rows not yet handed to the file
+  std::size_t used = 0;
+  std::string joined;  ///< write()'s extra values, joined
   std::optional<double> last_t;
   bool committed = false;
 };
@@ -285,16 +340,18 @@ void OdometryWriter::header() {
 
 OdometryWriter::~OdometryWriter() = default;
 
-void OdometryWriter::write(double t, const Pose2& pose, const Twist2& twist,
-                           const std::vector<std::string>& extra) {
+namespace {
+
+std::array<double, 7> row_values(double t, const Pose2& pose, const Twist2& twist) {
+  return {t, pose.t.x(), pose.t.y(), pose.theta, twist.v.x(), twist.v.y(), twist.omega};
+}
+
+}  // namespace
+
+void OdometryWriter::check(const std::array<double, 7>& values) {
   Impl& impl = *impl_;
+  const double t = values[0];
   if (impl.committed) impl.fail("write after commit");
-  if (extra.size() != impl.extra_columns.size()) {
-    impl.fail(fmt::format("row at t={}: expected {} extra values, found {}", t,
-                          impl.extra_columns.size(), extra.size()));
-  }
-  const std::array<double, 7> values{t,           pose.t.x(),  pose.t.y(), pose.theta,
-                                     twist.v.x(), twist.v.y(), twist.omega};
   for (std::size_t i = 0; i < values.size(); ++i) {
     // The log format admits no NaN or infinity; writing one would make a
     // file that no reader of the format accepts.
@@ -306,21 +363,55 @@ void OdometryWriter::write(double t, const Pose2& pose, const Twist2& twist,
   if (impl.last_t && t < *impl.last_t) {
     impl.fail(fmt::format("time goes backwards ({} after {})", t, *impl.last_t));
   }
+}
+
+void OdometryWriter::put_row(const std::array<double, 7>& values, std::string_view extra) {
+  Impl& impl = *impl_;
+  impl.last_t = values[0];
+  // The shortest text that reads back as the same double: exact, and no
+  // longer than needed.
+  char* out = impl.reserve(values.size() * (kMaxNumberText + 1) + extra.size() + 1);
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (i > 0) *out++ = ',';
+    out = write_shortest(out, values[i]);
+  }
+  out = std::copy(extra.begin(), extra.end(), out);
+  *out++ = '\n';
+  impl.wrote(out);
+}
+
+void OdometryWriter::write(double t, const Pose2& pose, const Twist2& twist,
+                           const std::vector<std::string>& extra) {
+  Impl& impl = *impl_;
+  if (impl.committed) impl.fail("write after commit");
+  if (extra.size() != impl.extra_columns.size()) {
+    impl.fail(fmt::format("row at t={}: expected {} extra values, found {}", t,
+                          impl.extra_columns.size(), extra.size()));
+  }
+  const auto values = row_values(t, pose, twist);
+  check(values);
   for (std::size_t i = 0; i < extra.size(); ++i) {
     if (breaks_csv(extra[i])) {
       impl.fail(fmt::format("row at t={}: value of column '{}' contains a comma or a line break", t,
                             impl.extra_columns[i]));
     }
   }
-  impl.last_t = t;
+  impl.joined.clear();
+  for (const auto& value : extra) {
+    impl.joined += ',';
+    impl.joined += value;
+  }
+  put_row(values, impl.joined);
+}
 
-  // "{}" is the shortest text that reads back as the same double: exact,
-  // and no longer than needed.
-  impl.line.clear();
-  fmt::format_to(std::back_inserter(impl.line), "{}", fmt::join(values, ","));
-  for (const auto& value : extra) fmt::format_to(std::back_inserter(impl.line), ",{}", value);
-  impl.line.push_back('\n');
-  impl.put(std::string_view(impl.line.data(), impl.line.size()));
+void OdometryWriter::write_joined(double t, const Pose2& pose, const Twist2& twist,
+                                  std::string_view extra) {
+  assert(static_cast<std::size_t>(std::count(extra.begin(), extra.end(), ',')) ==
+         impl_->extra_columns.size());
+  assert(extra.find_first_of("\r\n") == std::string_view::npos);
+  const auto values = row_values(t, pose, twist);
+  check(values);
+  put_row(values, extra);
 }
 
 void OdometryWriter::flush() {
@@ -330,6 +421,7 @@ void OdometryWriter::flush() {
 void OdometryWriter::commit() {
   if (impl_->committed) impl_->fail("already committed");
   if (impl_->file) {
+    impl_->drain();
     impl_->file->commit();
   } else {
     std::fflush(impl_->stream);

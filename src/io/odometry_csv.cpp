@@ -18,8 +18,14 @@ constexpr std::array<std::pair<std::uint8_t, std::string_view>, 3> kNoiseFlagNam
     {kNoiseOverflow, "overflow"},
 }};
 
-std::string sd(double variance) {
-  return fmt::format("{:.6g}", std::sqrt(std::max(variance, 0.0)));
+void append_exclusion(std::string& out, Exclusion reason, std::uint8_t noise_flags) {
+  out += describe(reason);
+  for (const auto& [bit, name] : kNoiseFlagNames) {
+    if (noise_flags & bit) {
+      out += '/';
+      out += name;
+    }
+  }
 }
 
 std::vector<std::string> extra_columns(bool fused) {
@@ -37,13 +43,8 @@ std::string joined(const std::vector<std::string>& names) {
 }  // namespace
 
 std::string describe_exclusion(Exclusion reason, std::uint8_t noise_flags) {
-  std::string out = describe(reason);
-  for (const auto& [bit, name] : kNoiseFlagNames) {
-    if (noise_flags & bit) {
-      out += '/';
-      out += name;
-    }
-  }
+  std::string out;
+  append_exclusion(out, reason, noise_flags);
   return out;
 }
 
@@ -53,12 +54,65 @@ struct OdometryCsvWriter::Impl {
   template <class Target>
   Impl(const Target& target, std::vector<std::string> sensor_names, bool with_cov)
       : names(std::move(sensor_names)), fused(with_cov), writer(target, extra_columns(with_cov)) {
-    extra.resize(fused ? 10 : 6);
+    for (const auto& name : names) {
+      if (name.find_first_of(",\r\n") != std::string::npos) names_break_csv = true;
+    }
   }
+
+  // The selection of an estimate: what the source, used and excluded fields
+  // are written from.
+  struct Selection {
+    Source source = Source::kMice;
+    SensorMask used = 0;
+    std::array<Exclusion, kMaxSensors> excluded{};
+    std::array<std::uint8_t, kMaxSensors> noise_flags{};
+    bool operator==(const Selection&) const = default;
+  };
+
+  // ",source,used,excluded" of `e`. It rarely changes from one epoch to the
+  // next, so it is composed only when it does.
+  std::string_view selection_text(const RobustEstimate& e) {
+    Selection now{e.source, e.estimate.used, e.excluded, e.noise_flags};
+    for (std::size_t i = 0; i < kMaxSensors; ++i) {
+      if (i >= names.size() || contains(now.used, static_cast<int>(i))) {
+        now.excluded[i] = Exclusion::kNone;
+        now.noise_flags[i] = 0;
+      }
+    }
+    if (selection && *selection == now) return text;
+    selection = now;
+    // fmt, not operator+= of a const char*: GCC 12 at -O3 misreads the
+    // latter's length (-Wstringop-overflow, a false positive).
+    text = fmt::format(",{},", describe(e.source));
+    bool first = true;
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      if (!contains(now.used, static_cast<int>(i))) continue;
+      if (!first) text += '+';
+      text += names[i];
+      first = false;
+    }
+    text += ',';
+    first = true;
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      if (contains(now.used, static_cast<int>(i))) continue;
+      if (!first) text += ';';
+      text += names[i];
+      text += ':';
+      append_exclusion(text, now.excluded[i], now.noise_flags[i]);
+      first = false;
+    }
+    return text;
+  }
+
   std::vector<std::string> names;
   bool fused;
   OdometryWriter writer;
-  std::vector<std::string> extra;
+  /// A name with a comma or a line break: the rows go through the writer's
+  /// checks, which name the column it would break.
+  bool names_break_csv = false;
+  std::optional<Selection> selection;  ///< of `text`
+  std::string text;
+  std::string extra;  ///< the row's extra fields, joined
 };
 
 OdometryCsvWriter::OdometryCsvWriter(const std::filesystem::path& file,
@@ -74,31 +128,56 @@ void OdometryCsvWriter::flush() { impl_->writer.flush(); }
 
 void OdometryCsvWriter::write(const OdometryStep& step) {
   Impl& s = *impl_;
-  auto& out = s.extra;
   const RobustEstimate& e = step.estimate;
+  if (s.names_break_csv) {
+    // The fields one by one, as the writer's generic checks want them.
+    const auto number = [](double v) {
+      char buffer[kMaxNumberText];
+      return std::string(buffer, write_shortest(buffer, v));
+    };
+    std::vector<std::string> fields;
+    for (int i = 0; i < 3; ++i) {
+      fields.push_back(number(std::sqrt(std::max(e.estimate.covariance(i, i), 0.0))));
+    }
+    fields.emplace_back(describe(e.source));
+    fields.emplace_back();
+    fields.emplace_back();
+    for (std::size_t i = 0; i < s.names.size(); ++i) {
+      if (contains(e.estimate.used, static_cast<int>(i))) {
+        if (!fields[4].empty()) fields[4] += '+';
+        fields[4] += s.names[i];
+      } else {
+        if (!fields[5].empty()) fields[5] += ';';
+        fields[5] += s.names[i] + ':';
+        append_exclusion(fields[5], e.excluded[i], e.noise_flags[i]);
+      }
+    }
+    if (s.fused) {
+      const Eigen::Matrix3d& p = step.pose_covariance;
+      for (const double v : {p(0, 0), p(0, 1), p(1, 1), p(2, 2)}) fields.push_back(number(v));
+    }
+    s.writer.write(step.t(), step.pose, e.estimate.twist, fields);
+    return;
+  }
+  // sd_vx, sd_vy, sd_omega, then the selection, then pxx, pxy, pyy, ptt.
+  char numbers[4 * (kMaxNumberText + 1)];
+  char* end = numbers;
+  for (int i = 0; i < 3; ++i) {
+    *end++ = ',';
+    end = write_shortest(end, std::sqrt(std::max(e.estimate.covariance(i, i), 0.0)));
+  }
+  s.extra.assign(numbers, end);
+  s.extra += s.selection_text(e);
   if (s.fused) {
     const Eigen::Matrix3d& p = step.pose_covariance;
-    out[6] = fmt::format("{:.6g}", p(0, 0));
-    out[7] = fmt::format("{:.6g}", p(0, 1));
-    out[8] = fmt::format("{:.6g}", p(1, 1));
-    out[9] = fmt::format("{:.6g}", p(2, 2));
-  }
-  out[0] = sd(e.estimate.covariance(0, 0));
-  out[1] = sd(e.estimate.covariance(1, 1));
-  out[2] = sd(e.estimate.covariance(2, 2));
-  out[3] = describe(e.source);
-  out[4].clear();
-  out[5].clear();
-  for (std::size_t i = 0; i < s.names.size(); ++i) {
-    if (contains(e.estimate.used, static_cast<int>(i))) {
-      if (!out[4].empty()) out[4] += '+';
-      out[4] += s.names[i];
-    } else {
-      if (!out[5].empty()) out[5] += ';';
-      out[5] += s.names[i] + ':' + describe_exclusion(e.excluded[i], e.noise_flags[i]);
+    end = numbers;
+    for (const double v : {p(0, 0), p(0, 1), p(1, 1), p(2, 2)}) {
+      *end++ = ',';
+      end = write_shortest(end, v);
     }
+    s.extra.append(numbers, end);
   }
-  s.writer.write(step.t(), step.pose, e.estimate.twist, out);
+  s.writer.write_joined(step.t(), step.pose, e.estimate.twist, s.extra);
 }
 
 void OdometryCsvWriter::commit() { impl_->writer.commit(); }

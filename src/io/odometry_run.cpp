@@ -12,6 +12,37 @@
 namespace moa::io {
 namespace fs = std::filesystem;
 
+OdometryOptions resolve_odometry_options(OdometryOptions o, std::string_view estimator,
+                                         const std::vector<std::string>& sensors, bool no_wheels,
+                                         const RobotConfig& config,
+                                         const std::string& config_path) {
+  const auto kind = estimator_from_name(estimator);
+  if (!kind) throw Error(fmt::format("--estimator: unknown estimator '{}'", estimator));
+  o.estimator = *kind;
+  o.use_wheels = !no_wheels;
+  if (o.estimator == EstimatorKind::kWheels && no_wheels) {
+    throw Error("--estimator wheels and --no-wheels exclude each other");
+  }
+  if (!sensors.empty()) {
+    o.sensors = 0;
+    for (const auto& name : sensors) {
+      const auto i = config.index_of(name);
+      if (!i) {
+        std::string names;
+        for (const auto& n : config.names) names += (names.empty() ? "" : ", ") + n;
+        throw Error(
+            fmt::format("--sensors: unknown sensor '{}' ({} has {})", name, config_path, names));
+      }
+      if (contains(o.sensors, *i)) {
+        throw Error(fmt::format("--sensors: sensor '{}' named twice", name));
+      }
+      o.sensors |= SensorMask{1} << *i;
+    }
+  }
+  if (const char* e = o.validate(); *e) throw Error(fmt::format("invalid option: {}", e));
+  return o;
+}
+
 LogFiles resolve_log(const fs::path& log) {
   std::error_code ec;
   LogFiles files;
@@ -146,7 +177,9 @@ OdometryRun run_odometry(const RobotConfig& config, const std::string& config_pa
   while (auto row = mice.next()) {
     if (faults) row->faults = faults->next(*row);
     feed_until(row->t);
-    if (const auto e = odometry->push(*row, sink)) fail(where, row->t, *e);
+    if (const auto e = odometry->push(*row, sink)) {
+      fail(fmt::format("{}:{}", where, mice.line()), row->t, *e);
+    }
     run.t_end = row->t;
     ++run.rows;
     if (progress && (run.rows & 0xfff) == 0) progress(run.rows, row->t);
@@ -154,6 +187,24 @@ OdometryRun run_odometry(const RobotConfig& config, const std::string& config_pa
   // The stream ends with the last mice row: the last epochs use the wheel
   // rows and fixes up to its time.
   feed_until(run.t_end);
+  // Sensors of the config that never reported: a silent sensor reads as
+  // still, which least squares averages in (metres off on a moving robot).
+  const auto& rows = mice.rows_per_sensor();
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    if (rows[i] != 0 || !contains(options.sensors, static_cast<int>(i))) continue;
+    const std::string& name = config.names[i];
+    if (options.estimator == EstimatorKind::kLs || options.estimator == EstimatorKind::kOracle) {
+      throw Error(fmt::format(
+          "{}: sensor '{}' of {} never reports: {} would take it as still; leave it out "
+          "(--sensors) or use a robust estimator (consensus, sekimori)",
+          where, name, config_path, describe(options.estimator)));
+    }
+    if (options.estimator != EstimatorKind::kWheels) {
+      run.warnings.push_back(fmt::format(
+          "{}: sensor '{}' of {} never reports: the {} estimator saw it as a still sensor", where,
+          name, config_path, describe(options.estimator)));
+    }
+  }
   odometry->finish(run.t_end, sink);
   run.steps = odometry->steps();
   run.fixes = odometry->fixes();

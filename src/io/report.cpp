@@ -3,6 +3,8 @@
 // and finds its time span, which fixes the bins the second pass fills.
 #include "moa/io/report.hpp"
 
+#include "moa/io/odometry_csv.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -57,90 +59,41 @@ struct OdometryRecord {
   std::array<int, kMaxSensors> state{};  ///< per sensor; -1 when not listed
 };
 
-/// Streams odometry.csv; names in `used` and `excluded` must be the config's.
+/// odometry.csv through the typed reader (io/odometry_csv.hpp), each
+/// sensor's state and the source as timeline state ids.
 class OdometryFile {
  public:
   OdometryFile(const fs::path& file, const RobotConfig& config, std::string config_path,
                StateTable& states)
-      : csv_(file), config_(config), config_path_(std::move(config_path)), states_(states) {
-    for (const char* name : {"t", "x", "y", "theta", "vx", "vy", "omega"}) {
-      columns_.push_back(csv_.required_column(name));
-    }
-    used_ = csv_.column("used");
-    excluded_ = csv_.column("excluded");
-    source_ = csv_.column("source");
-  }
+      : reader_(file, config, std::move(config_path)), n_(config.array.size()), states_(states) {}
 
-  bool has_selection() const { return used_ && excluded_; }
-  const std::string& file() const { return csv_.file(); }
+  bool has_selection() const { return reader_.has_selection(); }
+  const std::string& file() const { return reader_.file(); }
 
   bool next() {
-    if (!csv_.next()) return false;
-    r_.t = csv_.time(columns_[0]);
-    r_.pose = Pose2{{csv_.number(columns_[1]), csv_.number(columns_[2])}, csv_.number(columns_[3])};
-    r_.twist =
-        Twist2{{csv_.number(columns_[4]), csv_.number(columns_[5])}, csv_.number(columns_[6])};
+    const auto row = reader_.next();
+    if (!row) return false;
+    r_.t = row->t;
+    r_.pose = row->pose;
+    r_.twist = row->twist;
     r_.state.fill(-1);
-    if (used_) parse_used(*used_);
-    if (excluded_) parse_excluded(*excluded_);
-    r_.source = source_ ? states_.intern(csv_.field(*source_)) : -1;
+    for (int i = 0; i < n_; ++i) {
+      const auto u = static_cast<std::size_t>(i);
+      if (contains(row->used, i)) {
+        r_.state[u] = kUsed;
+      } else if (contains(row->listed, i)) {
+        r_.state[u] = states_.intern(describe_exclusion(row->excluded[u], row->noise_flags[u]));
+      }
+    }
+    r_.source = row->source ? states_.intern(describe(*row->source)) : -1;
     return true;
   }
   const OdometryRecord& record() const { return r_; }
 
  private:
-  int sensor(std::size_t column, std::string_view name) const {
-    const auto index = config_.index_of(name);
-    if (!index) {
-      csv_.fail_field(column, fmt::format("unknown sensor '{}' ({} has {})", printable(name),
-                                          config_path_, joined_names(config_)));
-    }
-    if (r_.state[static_cast<std::size_t>(*index)] != -1) {
-      csv_.fail_field(column, fmt::format("sensor '{}' is listed twice", name));
-    }
-    return *index;
-  }
-
-  void parse_used(std::size_t column) {
-    const std::string_view text = csv_.field(column);
-    if (text.empty()) return;
-    std::size_t start = 0;
-    while (true) {
-      const std::size_t end = std::min(text.find('+', start), text.size());
-      r_.state[static_cast<std::size_t>(sensor(column, text.substr(start, end - start)))] = kUsed;
-      if (end == text.size()) return;
-      start = end + 1;
-    }
-  }
-
-  void parse_excluded(std::size_t column) {
-    const std::string_view text = csv_.field(column);
-    if (text.empty()) return;
-    std::size_t start = 0;
-    while (true) {
-      const std::size_t end = std::min(text.find(';', start), text.size());
-      const std::string_view entry = text.substr(start, end - start);
-      const std::size_t colon = entry.rfind(':');
-      if (colon == std::string_view::npos || colon == 0 || colon + 1 == entry.size()) {
-        csv_.fail_field(column, fmt::format("'{}' is not name:reason", printable(entry)));
-      }
-      const int i = sensor(column, entry.substr(0, colon));
-      const std::string_view reason = entry.substr(colon + 1);
-      if (reason == "used") {
-        csv_.fail_field(column, fmt::format("'{}': 'used' is not a reason", printable(entry)));
-      }
-      r_.state[static_cast<std::size_t>(i)] = states_.intern(reason);
-      if (end == text.size()) return;
-      start = end + 1;
-    }
-  }
-
-  CsvReader csv_;
-  const RobotConfig& config_;
-  std::string config_path_;
+  OdometryCsvReader reader_;
+  int n_;
   StateTable& states_;
-  std::vector<std::size_t> columns_;
-  std::optional<std::size_t> used_, excluded_, source_;
   OdometryRecord r_;
 };
 
@@ -434,6 +387,7 @@ ReportModel build_report(const ReportInputs& inputs, const ReportOptions& option
       throw Error(fmt::format("{}: no row lies within the time span of {}",
                               inputs.odometry.string(), inputs.truth->string()));
     }
+    m.floor = quantisation_floor(m.config.array, truth);
     m.truth = decimated(truth, options.max_points);
   }
   return m;

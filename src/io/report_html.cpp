@@ -4,40 +4,17 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <numbers>
 #include <string_view>
 
+#include "moa/io/html.hpp"
 #include "moa/io/report.hpp"
 #include "report_assets.hpp"
 
 namespace moa::io {
 namespace {
 
-/// Text for HTML element content and attribute values.
-std::string html(std::string_view text) {
-  std::string out;
-  for (const char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      case '\'':
-        out += "&#39;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
+constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 /// Builds JSON text. Strings are escaped so that they cannot end the
 /// <script> element they sit in ('<', '>' and '&' as \u escapes).
@@ -253,7 +230,7 @@ std::string summary_table(const ReportModel& m) {
   row("time span",
       fmt::format("{:.6g} s to {:.6g} s ({:.6g} s)", m.t_first, m.t_last, m.t_last - m.t_first));
   row("epochs", fmt::format("{}", m.epochs));
-  row("path length", fmt::format("{:.4f} m", m.distance));
+  row("path length", fmt::format("{:.4f} m (estimate)", m.distance));
   row("final pose", fmt::format("x {:.4f} m, y {:.4f} m, theta {:.4f} rad", m.final_pose.t.x(),
                                 m.final_pose.t.y(), m.final_pose.theta));
   std::string sources;
@@ -266,10 +243,14 @@ std::string summary_table(const ReportModel& m) {
   if (m.camera_rows > 0) row("camera fixes", fmt::format("{}", m.camera_rows));
   if (m.errors) {
     const TrajectoryError& e = *m.errors;
-    row("translation error",
-        fmt::format("max {:.6g} m, rms {:.6g} m", e.max_translation, e.rms_translation));
-    row("heading error",
-        fmt::format("max {:.6g} rad, rms {:.6g} rad", e.max_heading, e.rms_heading));
+    row("translation error", describe_translation(e));
+    row("heading error", fmt::format("max {:.3g} deg, rms {:.3g} deg", e.max_heading * kDegPerRad,
+                                     e.rms_heading * kDegPerRad));
+    if (m.floor) {
+      t +=
+          fmt::format("<tr class=\"verdict\"><th>verdict</th><td>{}</td></tr>\n",
+                      html(verdict(e, {m.floor->max_translation, "the quantisation floor", true})));
+    }
     row("compared with truth",
         fmt::format("{} epochs{}", e.samples,
                     e.outside > 0 ? fmt::format(" ({} outside the truth's time span)", e.outside)
@@ -374,15 +355,17 @@ std::string render_report(const ReportModel& m) {
 
   page += "<section id=\"trajectory\">\n<h2>Trajectory</h2>\n";
   page +=
-      "<p>World frame, metres. The robot is drawn at a few times along the estimate with its "
-      "sensors (dots) and heading (line).</p>\n";
+      "<p>World frame, metres. The estimate is the wide grey band with a dot every few points, "
+      "the truth the dashed black line over it. The robot is drawn at a few times along the "
+      "estimate with its sensors (dots, one colour per sensor on the whole page) and heading "
+      "(line).</p>\n";
   page += chart("chart-trajectory", "square") + std::string(kHint) + "</section>\n";
 
   page += "<section id=\"errors\">\n<h2>Error against truth</h2>\n";
   if (m.errors) {
     page +=
-        "<p>Translation error |p<sub>est</sub> &minus; p<sub>truth</sub>| (m, left axis) and "
-        "heading error |wrap(&theta;<sub>est</sub> &minus; &theta;<sub>truth</sub>)| (rad, right "
+        "<p>Translation error |p<sub>est</sub> &minus; p<sub>truth</sub>| (mm, left axis) and "
+        "heading error |wrap(&theta;<sub>est</sub> &minus; &theta;<sub>truth</sub>)| (deg, right "
         "axis), truth interpolated at each epoch; the largest value in each time bin.</p>\n";
     page += chart("chart-errors", "wide") + std::string(kHint);
   } else {

@@ -2,6 +2,11 @@
 //
 // Zoom: drag a box on a chart, double-click to reset. The time charts zoom
 // together. The x-y charts keep one metre the same length on both axes.
+// Colours: each sensor has one colour (sensorColor), used for it in every
+// chart, its legend and the tables, and for nothing else; everything that
+// is not a sensor is black or grey. The truth is a thin dashed black line
+// drawn over the estimate, a wide grey band with a marker every few
+// points, so the two stay apart where they overlap.
 // When done, each canvas carries data-painted ("1" when anything is drawn
 // on it) and data-points (data elements drawn), and the body carries
 // data-moa-status="ready": the browser test reads them.
@@ -9,9 +14,11 @@
   'use strict';
 
   var data = JSON.parse(document.getElementById('moa-data').textContent);
-  var palette = ['#1f77b4', '#ff7f0e', '#2ca02c', '#d62728', '#9467bd', '#8c564b', '#e377c2',
-                 '#7f7f7f', '#bcbd22', '#17becf', '#393b79', '#637939', '#8c6d31', '#843c39',
-                 '#7b4173', '#3182bd'];
+  // Okabe & Ito's colour-blind-safe set first, then Tol's muted set.
+  var palette = ['#0072b2', '#e69f00', '#009e73', '#cc79a7', '#56b4e9', '#d55e00', '#f0e442',
+                 '#882255', '#44aa99', '#999933', '#aa4499', '#117733', '#332288', '#ddcc77',
+                 '#88ccee', '#661100'];
+  var ink = '#111', grey = '#888';
   var charts = [];
   var timeCharts = [];
 
@@ -170,6 +177,17 @@
           y: {type: 'linear', title: {display: true, text: title[1]}, ticks: {includeBounds: false}}
         },
         plugins: {
+          // A dataset whose points have the sensors' colours shows moaLegendColor
+          // in the legend, not its first point's colour.
+          legend: {labels: {sort: function (a, b) { return a.datasetIndex - b.datasetIndex; },
+                            generateLabels: function (c) {
+            var items = Chart.defaults.plugins.legend.labels.generateLabels(c);
+            items.forEach(function (item) {
+              var color = c.data.datasets[item.datasetIndex].moaLegendColor;
+              if (color) item.fillStyle = item.strokeStyle = color;
+            });
+            return items;
+          }}},
           tooltip: {
             filter: function (item) { return !item.dataset.moaQuiet && item.raw && item.raw.x !== null; },
             callbacks: {
@@ -242,66 +260,74 @@
 
   function drawTrajectory() {
     var b = data.bins;
+    var every = Math.max(1, Math.round(b.t.length / 40));
     var datasets = [{
-      label: 'estimate', data: points(b.x, b.y, b.t), showLine: true, pointRadius: 0,
-      borderColor: '#1565c0', backgroundColor: '#1565c0', borderWidth: 1.8
+      label: 'estimate', data: points(b.x, b.y, b.t), showLine: true, order: 2,
+      pointRadius: function (ctx) { return ctx.dataIndex % every === 0 ? 2.5 : 0; },
+      pointBackgroundColor: '#555', pointBorderColor: '#555',
+      borderColor: 'rgba(0, 0, 0, 0.22)', backgroundColor: 'rgba(0, 0, 0, 0.22)', borderWidth: 6
     }];
     if (data.truth) {
       datasets.push({label: 'truth', data: points(data.truth.x, data.truth.y, data.truth.t),
-                     showLine: true, pointRadius: 0, borderColor: '#222', backgroundColor: '#222',
-                     borderWidth: 1.2, borderDash: [6, 4]});
+                     showLine: true, pointRadius: 0, borderColor: ink, backgroundColor: ink,
+                     borderWidth: 1.5, borderDash: [6, 4], order: 0});
     }
     if (data.camera) {
       datasets.push({label: 'camera fixes', data: points(data.camera.x, data.camera.y),
-                     pointRadius: 2.5, borderColor: '#8e44ad', backgroundColor: '#8e44ad'});
+                     pointRadius: 4, pointStyle: 'crossRot', borderColor: '#555',
+                     backgroundColor: '#555', order: 1});
     }
     var n = b.t.length, radius = robotRadius(data.sensors);
-    var outline = [], sensors = [];
+    var outline = [], sensors = data.sensors.map(function () { return []; });
     var shown = Math.min(n, 8);
     for (var k = 0; k < shown; ++k) {
       var i = shown === 1 ? 0 : Math.round(k * (n - 1) / (shown - 1));
       var shape = robotShape(data.sensors, {x: b.x[i], y: b.y[i], theta: b.theta[i], t: b.t[i]}, radius);
       outline = outline.concat(shape.outline);
-      sensors = sensors.concat(shape.sensors);
+      shape.sensors.forEach(function (p, s) { sensors[s].push(p); });
     }
     datasets.push({label: 'robot', data: outline, showLine: true, pointRadius: 0, spanGaps: false,
-                   borderColor: '#888', backgroundColor: '#888', borderWidth: 1, moaQuiet: true,
-                   moaBounds: true});
-    datasets.push({label: 'sensors', data: sensors, pointRadius: 3,
-                   pointBackgroundColor: sensors.map(function (p) { return p.color; }),
-                   pointBorderColor: sensors.map(function (p) { return p.color; }),
-                   borderColor: '#666', backgroundColor: '#666'});
+                   borderColor: grey, backgroundColor: grey, borderWidth: 1, moaQuiet: true,
+                   moaBounds: true, order: 3});
+    data.sensors.forEach(function (m, s) {
+      datasets.push({label: m.name, data: sensors[s], pointRadius: 3.5, order: 1,
+                     borderColor: sensorColor(s), backgroundColor: sensorColor(s)});
+    });
     datasets.push({label: 'start', data: [points(b.x, b.y, b.t)[0]], pointRadius: 6,
-                   pointStyle: 'triangle', borderColor: '#2ca02c', backgroundColor: '#2ca02c'});
+                   pointStyle: 'triangle', borderColor: ink, backgroundColor: ink, order: 0});
     datasets.push({label: 'end', data: [points(b.x, b.y, b.t)[n - 1]], pointRadius: 6,
-                   pointStyle: 'rectRot', borderColor: '#d62728', backgroundColor: '#d62728'});
+                   pointStyle: 'rect', borderColor: ink, backgroundColor: ink, order: 0});
     xyChart('chart-trajectory', datasets, ['x (m)', 'y (m)']);
   }
 
   function drawErrors() {
     if (!data.errors) return;
     var t = data.bins.t;
+    function scaled(xs, k) { return xs.map(function (x) { return x === null ? null : x * k; }); }
     timeChart('chart-errors', [
-      {label: 'translation error (m)', data: points(t, data.errors.translation), yAxisID: 'y',
-       pointRadius: 0, borderWidth: 1.5, borderColor: '#1f77b4', backgroundColor: '#1f77b4',
+      {label: 'translation error (mm)', data: points(t, scaled(data.errors.translation, 1e3)),
+       yAxisID: 'y', pointRadius: 0, borderWidth: 1.8, borderColor: ink, backgroundColor: ink,
        spanGaps: false},
-      {label: 'heading error (rad)', data: points(t, data.errors.heading), yAxisID: 'y1',
-       pointRadius: 0, borderWidth: 1.5, borderColor: '#ff7f0e', backgroundColor: '#ff7f0e',
-       spanGaps: false}
+      {label: 'heading error (deg)', data: points(t, scaled(data.errors.heading, 180 / Math.PI)),
+       yAxisID: 'y1', pointRadius: 0, borderWidth: 1.5, borderDash: [5, 3], borderColor: grey,
+       backgroundColor: grey, spanGaps: false}
     ], {
-      y: {type: 'linear', position: 'left', beginAtZero: true, title: {display: true, text: 'translation error (m)'}},
+      y: {type: 'linear', position: 'left', beginAtZero: true, title: {display: true, text: 'translation error (mm)'}},
       y1: {type: 'linear', position: 'right', beginAtZero: true, grid: {drawOnChartArea: false},
-           title: {display: true, text: 'heading error (rad)'}}
+           title: {display: true, text: 'heading error (deg)'}}
     });
   }
 
+  // States are shades of grey (colours belong to the sensors): light for
+  // the normal case, dark for what the estimate left out or fell back to.
   var stateColors = {
-    used: '#2ca02c', mice: '#1f77b4', wheels: '#ff7f0e', hold: '#d62728', absent: '#cccccc',
-    inconsistent: '#d62728', unreliable: '#9467bd', lift: '#8c564b', fallback: '#7f7f7f'
+    used: '#d4d4d4', mice: '#d4d4d4', wheels: '#8a8a8a', hold: '#111111', absent: '#f2f2f2',
+    inconsistent: '#111111', unreliable: '#5a5a5a', lift: '#a8a8a8', fallback: '#707070'
   };
+  var otherStates = ['#3a3a3a', '#9a9a9a', '#4a4a4a', '#bababa'];
   function stateColor(name, k) {
     var base = name.split('/')[0];
-    var color = stateColors[base] || palette[(k + 4) % palette.length];
+    var color = stateColors[base] || otherStates[k % otherStates.length];
     if (name.indexOf('/') >= 0) color += 'aa';  // a flagged variant: lighter
     return color;
   }
@@ -315,8 +341,8 @@
     });
     var datasets = Object.keys(byState).map(Number).sort(function (a, b) { return a - b; }).map(function (k) {
       var c = stateColor(tl.states[k], k);
-      return {label: tl.states[k], data: byState[k], backgroundColor: c, borderColor: c,
-              borderWidth: 0, grouped: false, barPercentage: 0.75, categoryPercentage: 1.0,
+      return {label: tl.states[k], data: byState[k], backgroundColor: c, borderColor: '#999',
+              borderWidth: tl.states[k] === 'absent' ? 1 : 0, grouped: false, barPercentage: 0.75, categoryPercentage: 1.0,
               borderSkipped: false};
     });
     var chart = new Chart(document.getElementById('chart-timeline'), {
@@ -328,7 +354,10 @@
         scales: {
           x: {type: 'linear', min: data.t0, max: data.t1, title: {display: true, text: 'time (s)'},
               ticks: {includeBounds: false}},
-          y: {type: 'category', labels: tl.rows, offset: true, grid: {offset: true}}
+          y: {type: 'category', labels: tl.rows, offset: true, grid: {offset: true},
+              ticks: {font: {weight: 'bold'}, color: function (ctx) {
+                return ctx.index < data.sensors.length ? sensorColor(ctx.index) : ink;
+              }}}
         },
         plugins: {
           tooltip: {
@@ -363,7 +392,7 @@
     keys.forEach(function (key) {
       var members = groups[key];
       var all = keys.length === 1 && members.length === data.sensors.length;
-      var color = all ? '#d62728' : sensorColor(members[0]);
+      var color = all ? ink : sensorColor(members[0]);
       var v = Number(key);
       datasets.push({
         label: 'rated max_speed ' + num(v) + ' m/s' + (all ? '' : ' (' + members.map(function (i) {
@@ -377,7 +406,9 @@
   }
 
   // `drawn` holds the positions and yaws to draw (calibrated ones magnified);
-  // the tooltips give the mounts' own values.
+  // the tooltips give the mounts' own values. Without `dash` (the nominal
+  // mounts) each sensor is a dataset of its own, so the legend names it in
+  // its colour; the x axes are drawn in the sensors' colours.
   function mountShapes(mounts, drawn, label, length, hollow, dash) {
     var axes = [];
     var pts = mounts.map(function (m, i) {
@@ -389,14 +420,21 @@
                     (m.max_speed !== null ? ', max_speed ' + num(m.max_speed) + ' m/s' : '')};
     });
     var colors = pts.map(function (p) { return p.color; });
-    return [
-      {label: label, data: pts, pointRadius: hollow ? 7 : 4, pointBorderWidth: 2, moaLabels: !dash,
-       pointBorderColor: colors, pointBackgroundColor: hollow ? 'rgba(0,0,0,0)' : colors,
-       borderColor: '#444', backgroundColor: hollow ? 'rgba(0,0,0,0)' : '#444'},
+    var fill = function (c) { return hollow ? 'rgba(0,0,0,0)' : c; };
+    var marks = dash ? [{label: label, data: pts, pointRadius: 4, pointBorderWidth: 2, moaLegendColor: ink,
+                         pointBorderColor: colors, pointBackgroundColor: colors,
+                         borderColor: ink, backgroundColor: ink}]
+                     : pts.map(function (p, i) {
+                         return {label: (hollow ? label + ' ' : '') + p.name, data: [p],
+                                 pointRadius: hollow ? 7 : 4, pointBorderWidth: 2, moaLabels: true,
+                                 borderColor: p.color, backgroundColor: fill(p.color)};
+                       });
+    return marks.concat([
       {label: label.split(' (')[0] + ' x axes', data: axes, showLine: true, pointRadius: 0, spanGaps: false,
-       borderColor: dash ? '#d62728' : '#444', backgroundColor: dash ? '#d62728' : '#444',
-       borderWidth: 1.5, borderDash: dash || [], moaQuiet: true, moaBounds: true}
-    ];
+       borderColor: ink, backgroundColor: ink, borderWidth: 1.5, borderDash: dash || [],
+       segment: {borderColor: function (ctx) { return sensorColor(Math.floor(ctx.p0DataIndex / 3)); }},
+       moaQuiet: true, moaBounds: true}
+    ]);
   }
 
   // The largest of 1, 2, 5 times a power of ten not above x (at least 1).
@@ -412,7 +450,7 @@
     var outline = robotShape([], {x: 0, y: 0, theta: 0}, radius).outline;
     var length = 0.35 * radius;
     var datasets = [{label: 'robot outline and x axis', data: outline, showLine: true, pointRadius: 0,
-                     spanGaps: false, borderColor: '#aaa', backgroundColor: '#aaa', borderWidth: 1,
+                     spanGaps: false, borderColor: grey, backgroundColor: grey, borderWidth: 1,
                      moaQuiet: true, moaBounds: true}];
     datasets = datasets.concat(mountShapes(data.sensors, data.sensors,
                                            data.calibrated ? 'nominal' : 'sensors', length,
@@ -439,9 +477,23 @@
       var shifts = [];
       data.sensors.forEach(function (m, i) { shifts.push({x: m.x, y: m.y}, drawn[i], gap()); });
       datasets.push({label: 'shift', data: shifts, showLine: true, pointRadius: 0, spanGaps: false,
-                     borderColor: '#d62728', backgroundColor: '#d62728', borderWidth: 2, moaQuiet: true});
+                     borderColor: ink, backgroundColor: ink, borderWidth: 2, moaQuiet: true});
     }
     xyChart('chart-layout', datasets, ['x (m), robot frame', 'y (m), robot frame']);
+  }
+
+  // A swatch of the sensor's colour before its name in the tables.
+  function colourTables() {
+    var index = {};
+    data.sensors.forEach(function (m, i) { index[m.name] = i; });
+    document.querySelectorAll('table.grid td:first-child').forEach(function (td) {
+      var i = index[td.textContent];
+      if (i === undefined) return;
+      var swatch = document.createElement('span');
+      swatch.className = 'swatch';
+      swatch.style.background = sensorColor(i);
+      td.insertBefore(swatch, td.firstChild);
+    });
   }
 
   function painted(canvas) {
@@ -453,7 +505,7 @@
   }
 
   [['trajectory', drawTrajectory], ['errors', drawErrors], ['timeline', drawTimeline],
-   ['speed', drawSpeed], ['layout', drawLayout]].forEach(function (step) {
+   ['speed', drawSpeed], ['layout', drawLayout], ['tables', colourTables]].forEach(function (step) {
     try {
       step[1]();
     } catch (e) {

@@ -2,11 +2,23 @@
 
 #include <fmt/format.h>
 
+#include <fcntl.h>
+#include <stdio.h>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cstring>
+#include <fstream>
 #include <memory>
 #include <optional>
+#include <random>
+#include <string_view>
 #include <system_error>
+#include <vector>
 
 #include "moa/io/atomic_file.hpp"
+#include "moa/io/cleanup.hpp"
 #include "moa/io/config.hpp"
 #include "moa/io/error.hpp"
 
@@ -115,23 +127,124 @@ class FileSink : public LogSink {
   std::int64_t faulty_rows_ = 0;
 };
 
+// The files a run writes; a directory holding only these, with a mice.csv
+// that says it was simulated, is a previous run that may be replaced.
+constexpr std::array<std::string_view, 7> kLogFiles{"mice.csv",       "wheels.csv", "camera.csv",
+                                                    "truth.csv",      "faults.csv", "robot.yaml",
+                                                    "robot.true.yaml"};
+
+bool is_previous_run(const std::filesystem::path& dir, std::string& foreign) {
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (std::find(kLogFiles.begin(), kLogFiles.end(), name) == kLogFiles.end() ||
+        !entry.is_regular_file()) {
+      foreign = name;
+      return false;
+    }
+  }
+  if (ec) {
+    foreign = ec.message();
+    return false;
+  }
+  std::ifstream mice(dir / "mice.csv");
+  std::string first;
+  std::getline(mice, first);
+  foreign = "mice.csv";
+  return first.starts_with("# moa simulate:");
+}
+
+// Where a run is written before it is moved into place, beside the target.
+std::filesystem::path temporary_dir_beside(const std::filesystem::path& dir) {
+  std::random_device random;
+  const auto tag = (static_cast<std::uint64_t>(random()) << 32) ^ random();
+  return dir.parent_path() / fmt::format(".{}.{:016x}.tmp", dir.filename().string(), tag);
+}
+
 }  // namespace
 
-LogSummary write_log(const Scenario& scenario, std::uint64_t seed, const std::filesystem::path& dir,
+LogSummary write_log(const Scenario& scenario, std::uint64_t seed, const std::filesystem::path& out,
                      const Progress& progress) {
   std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec || !std::filesystem::is_directory(dir)) {
+  // Absolute, so that "run/", "." or ".." have a name and a parent to write beside.
+  std::filesystem::path dir = std::filesystem::absolute(out, ec).lexically_normal();
+  if (ec) throw io::Error(fmt::format("{}: {}", out.string(), ec.message()));
+  if (!dir.has_filename()) dir = dir.parent_path();
+  if (dir == dir.root_path()) {
+    throw io::Error(fmt::format("{}: cannot write a log over the root directory", out.string()));
+  }
+  // Refused before the run, not after it: an empty or new directory, or a
+  // previous run to be replaced whole (never a mix of two runs' files).
+  bool replace = false;
+  if (std::filesystem::exists(dir, ec)) {
+    if (!std::filesystem::is_directory(dir, ec)) {
+      throw io::Error(fmt::format("{}: exists and is not a directory", dir.string()));
+    }
+    if (!std::filesystem::is_empty(dir, ec)) {
+      std::string foreign;
+      if (!is_previous_run(dir, foreign)) {
+        throw io::Error(fmt::format(
+            "{}: not empty and not a log written by moa simulate ('{}'); give an empty or new "
+            "directory",
+            dir.string(), foreign));
+      }
+      replace = true;
+    }
+  }
+  if (dir.has_parent_path()) std::filesystem::create_directories(dir.parent_path(), ec);
+  const std::filesystem::path temp = temporary_dir_beside(dir);
+  if (!std::filesystem::create_directory(temp, ec) || ec) {
     throw io::Error(fmt::format("{}: cannot create the output directory{}", dir.string(),
                                 ec ? ": " + ec.message() : ""));
   }
-  FileSink sink(scenario, seed, dir);
-  simulate(scenario, seed, sink, progress);
-  // The configs are written first among the commits' files: a reader that
-  // finds a log directory finds its config in it.
-  io::write_config(scenario.nominal, dir / "robot.yaml");
-  io::write_config(scenario.truth, dir / "robot.true.yaml");
-  LogSummary summary = sink.commit();
+  // Removed on an error (below) and on SIGINT/SIGTERM (its files first).
+  std::vector<io::TemporaryPath> registered;
+  registered.emplace_back(temp);
+  for (const auto name : kLogFiles) registered.emplace_back(temp / name);
+  bool placed = false;
+  struct RemoveUnlessPlaced {
+    const std::filesystem::path& temp;
+    const bool& placed;
+    ~RemoveUnlessPlaced() {
+      std::error_code ignored;
+      if (!placed) std::filesystem::remove_all(temp, ignored);
+    }
+  } cleanup{temp, placed};
+
+  LogSummary summary;
+  {
+    FileSink sink(scenario, seed, temp);
+    simulate(scenario, seed, sink, progress);
+    // The configs are written first among the commits' files: a reader that
+    // finds a log directory finds its config in it.
+    io::write_config(scenario.nominal, temp / "robot.yaml");
+    io::write_config(scenario.truth, temp / "robot.true.yaml");
+    summary = sink.commit();
+  }
+  if (!std::filesystem::exists(dir, ec)) {
+    std::filesystem::rename(temp, dir, ec);
+    if (ec) throw io::Error(fmt::format("{}: cannot write ({})", dir.string(), ec.message()));
+    placed = true;
+  } else if (!replace) {
+    // Into the empty directory file by file (it stays the same directory,
+    // which a shell may be in), mice.csv first: a run stopped half way in
+    // is recognised as a previous run, and replaced by the next.
+    for (const auto name : kLogFiles) {
+      if (!std::filesystem::exists(temp / name, ec)) continue;
+      std::filesystem::rename(temp / name, dir / name, ec);
+      if (ec) {
+        throw io::Error(fmt::format("{}: cannot write ({})", (dir / name).string(), ec.message()));
+      }
+    }
+  } else {
+    // The new run and the old swap places at once; the old is then removed.
+    if (::renameat2(AT_FDCWD, temp.c_str(), AT_FDCWD, dir.c_str(), RENAME_EXCHANGE) != 0) {
+      throw io::Error(fmt::format("{}: cannot replace the previous run ({})", dir.string(),
+                                  std::strerror(errno)));
+    }
+    std::filesystem::remove_all(temp, ec);
+    placed = true;
+  }
   summary.frames = scenario.frame_count();
   summary.duration = static_cast<double>(summary.frames) / scenario.sensor_model.frame_rate;
   return summary;

@@ -36,6 +36,8 @@ OpticalSensor::OpticalSensor(const SensorMount& mount, const SensorModel& model,
       noise_rng_(seed, Stream::kSensorNoise, index),
       fault_rng_(seed, Stream::kSensorFaults, index),
       squal_rng_(seed, Stream::kSensorSqual, index),
+      frame_limit_(model.delta_limit > 0 ? model.delta_limit
+                                         : INT_MAX / std::max(1, model.packets_per_row)),
       counts_(model.packets_per_row) {
   const Eigen::Matrix<double, 2, 3> h = mount.twist_jacobian();
   for (int r = 0; r < 2; ++r) {
@@ -75,8 +77,8 @@ std::optional<SensorRowOut> OpticalSensor::frame(const Twist2& twist, double t, 
     }
   }
   bool ignored = false;
-  clean_sum_[0] += clean_quantiser_.x().push(c[0], model_.delta_limit, ignored);
-  clean_sum_[1] += clean_quantiser_.y().push(c[1], model_.delta_limit, ignored);
+  clean_sum_[0] += clean_quantiser_.x().push(c[0], frame_limit_, ignored);
+  clean_sum_[1] += clean_quantiser_.y().push(c[1], frame_limit_, ignored);
 
   std::uint8_t bits = 0;
   double gain = 1.0;  // fraction of the counts the sensor sees this frame
@@ -153,10 +155,8 @@ std::optional<SensorRowOut> OpticalSensor::frame(const Twist2& twist, double t, 
     quantiser_.y().force(out[1]);
   } else {
     bool clipped = false;
-    out[0] =
-        quantiser_.x().push(gain * c[0] + (lifted ? 0.0 : spike[0]), model_.delta_limit, clipped);
-    out[1] =
-        quantiser_.y().push(gain * c[1] + (lifted ? 0.0 : spike[1]), model_.delta_limit, clipped);
+    out[0] = quantiser_.x().push(gain * c[0] + (lifted ? 0.0 : spike[0]), frame_limit_, clipped);
+    out[1] = quantiser_.y().push(gain * c[1] + (lifted ? 0.0 : spike[1]), frame_limit_, clipped);
     if (clipped) row_flags_ |= kFlagOverflow;
   }
   stuck_ = stuck_now;

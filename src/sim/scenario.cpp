@@ -5,12 +5,11 @@
 
 #include <Eigen/LU>
 #include <algorithm>
-#include <charconv>
+#include <climits>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
-#include <map>
 #include <numbers>
 #include <optional>
 #include <sstream>
@@ -19,215 +18,60 @@
 #include "builtin_scenarios.hpp"
 #include "moa/io/csv.hpp"
 #include "moa/io/error.hpp"
+#include "moa/io/yaml.hpp"
 
 namespace moa::sim {
 namespace {
 
-std::string describe_kind(const YAML::Node& node) {
-  switch (node.Type()) {
-    case YAML::NodeType::Null:
-      return "nothing";
-    case YAML::NodeType::Sequence:
-      return "a list";
-    case YAML::NodeType::Map:
-      return "a map";
-    default:
-      return fmt::format("'{}'", node.Scalar());
-  }
-}
-
-// Where a node is, for messages: "SOURCE:LINE: ".
-class Source {
- public:
-  explicit Source(std::string_view name) : name_(name) {}
-  [[noreturn]] void fail(const YAML::Node& at, std::string_view what) const {
-    const YAML::Mark mark = at.Mark();
-    if (mark.is_null()) throw io::Error(io::printable(fmt::format("{}: {}", name_, what)));
-    throw io::Error(io::printable(fmt::format("{}:{}: {}", name_, mark.line + 1, what)));
-  }
-  [[noreturn]] void fail(std::string_view what) const {
-    throw io::Error(io::printable(fmt::format("{}: {}", name_, what)));
-  }
-
- private:
-  std::string name_;
-};
-
-// A YAML map whose keys are all known and each present once. Values are
-// read by key; messages name the key by its dotted path ("motion.max_speed").
-class Fields {
- public:
-  Fields(const Source& source, const YAML::Node& map, std::string path,
-         std::initializer_list<std::string_view> allowed)
-      : source_(source), map_(map), path_(std::move(path)) {
-    if (!map.IsMap()) {
-      source.fail(map, fmt::format("{}expected a map, found {}", where(), describe_kind(map)));
-    }
-    for (const auto& entry : map) {
-      if (!entry.first.IsScalar()) source.fail(entry.first, where() + "a key is not a plain name");
-      const std::string& key = entry.first.Scalar();
-      if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
-        std::string known;
-        for (const auto k : allowed) known += (known.empty() ? "" : ", ") + std::string(k);
-        source.fail(entry.first,
-                    fmt::format("unknown key '{}' (known here: {})", full(key), known));
-      }
-      if (!values_.emplace(key, entry).second) {
-        source.fail(entry.first, fmt::format("duplicate key '{}'", full(key)));
-      }
-    }
-  }
-
-  bool has(std::string_view key) const { return values_.contains(key); }
-  std::optional<YAML::Node> get(std::string_view key) const {
-    const auto it = values_.find(key);
-    if (it == values_.end()) return std::nullopt;
-    return it->second.second;
-  }
-  YAML::Node required(std::string_view key) const {
-    const auto node = get(key);
-    if (!node) source_.fail(map_, fmt::format("missing key '{}'", full(key)));
-    return *node;
-  }
-  /// The key node itself (for messages about the key, not its value).
-  YAML::Node key_node(std::string_view key) const { return values_.find(key)->second.first; }
-
-  [[noreturn]] void fail(std::string_view key, std::string_view what) const {
-    const auto it = values_.find(key);
-    const YAML::Node at = it == values_.end() ? map_ : it->second.second;
-    source_.fail(at, fmt::format("key '{}': {}", full(key), what));
-  }
-  [[noreturn]] void fail_at(const YAML::Node& at, std::string_view key,
-                            std::string_view what) const {
-    source_.fail(at, fmt::format("key '{}': {}", full(key), what));
-  }
-
-  std::string full(std::string_view key) const {
-    return path_.empty() ? std::string(key) : path_ + "." + std::string(key);
-  }
-  const Source& source() const { return source_; }
-  const YAML::Node& node() const { return map_; }
-
-  // Typed values.
-  double number(std::string_view key) const { return to_number(key, required(key)); }
-  double number(std::string_view key, double fallback) const {
-    return has(key) ? number(key) : fallback;
-  }
-  double positive(std::string_view key) const { return check_positive(key, number(key)); }
-  double positive(std::string_view key, double fallback) const {
-    return has(key) ? positive(key) : fallback;
-  }
-  double non_negative(std::string_view key, double fallback) const {
-    if (!has(key)) return fallback;
-    const double v = number(key);
-    if (v < 0.0) fail(key, fmt::format("must be >= 0 (found {})", v));
-    return v;
-  }
-  double fraction(std::string_view key, double fallback) const {
-    if (!has(key)) return fallback;
-    const double v = number(key);
-    if (v < 0.0 || v > 1.0) fail(key, fmt::format("must be within [0, 1] (found {})", v));
-    return v;
-  }
-  long integer(std::string_view key, long min, long max) const {
-    const YAML::Node node = required(key);
-    if (!node.IsScalar())
-      fail(key, fmt::format("expected an integer, found {}", describe_kind(node)));
-    const std::string& text = node.Scalar();
-    long value = 0;
-    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
-    if (ec != std::errc{} || end != text.data() + text.size()) {
-      fail(key, fmt::format("'{}' is not an integer", text));
-    }
-    if (value < min || value > max) {
-      fail(key, fmt::format("must be within [{}, {}] (found {})", min, max, value));
-    }
-    return value;
-  }
-  std::string text(std::string_view key) const {
-    const YAML::Node node = required(key);
-    if (!node.IsScalar()) fail(key, fmt::format("expected text, found {}", describe_kind(node)));
-    return node.Scalar();
-  }
-  bool boolean(std::string_view key, bool fallback) const {
-    if (!has(key)) return fallback;
-    const YAML::Node node = required(key);
-    if (node.IsScalar()) {
-      const std::string& t = node.Scalar();
-      if (t == "true" || t == "True" || t == "TRUE") return true;
-      if (t == "false" || t == "False" || t == "FALSE") return false;
-    }
-    fail(key, fmt::format("expected true or false, found {}", describe_kind(node)));
-  }
-  /// A list of numbers, of `size` elements when size > 0.
-  std::vector<double> numbers(std::string_view key, std::size_t size = 0) const {
-    return to_numbers(key, required(key), size);
-  }
-  std::vector<double> to_numbers(std::string_view key, const YAML::Node& node,
-                                 std::size_t size) const {
-    if (!node.IsSequence()) {
-      fail_at(node, key, fmt::format("expected a list of numbers, found {}", describe_kind(node)));
-    }
-    if (size > 0 && node.size() != size) {
-      fail_at(node, key, fmt::format("expected {} numbers, found {}", size, node.size()));
-    }
-    std::vector<double> out;
-    for (const auto& item : node) out.push_back(to_number(key, item));
-    return out;
-  }
-  /// One of `choices`.
-  std::string choice(std::string_view key, std::initializer_list<std::string_view> choices) const {
-    const std::string value = text(key);
-    if (std::find(choices.begin(), choices.end(), value) == choices.end()) {
-      std::string list;
-      for (const auto c : choices) list += (list.empty() ? "" : ", ") + std::string(c);
-      fail(key, fmt::format("'{}' is not one of: {}", value, list));
-    }
-    return value;
-  }
-
-  double to_number(std::string_view key, const YAML::Node& node) const {
-    if (!node.IsScalar()) {
-      fail_at(node, key, fmt::format("expected a number, found {}", describe_kind(node)));
-    }
-    const auto parsed = io::parse_number(node.Scalar());
-    if (const auto* error = std::get_if<std::string>(&parsed)) fail_at(node, key, *error);
-    return std::get<double>(parsed);
-  }
-
- private:
-  std::string where() const { return path_.empty() ? "" : fmt::format("key '{}': ", path_); }
-  double check_positive(std::string_view key, double v) const {
-    if (!(v > 0.0)) fail(key, fmt::format("must be > 0 (found {})", v));
-    return v;
-  }
-
-  const Source& source_;
-  YAML::Node map_;
-  std::string path_;
-  std::map<std::string, std::pair<YAML::Node, YAML::Node>, std::less<>> values_;
-};
+using Source = io::YamlSource;
+using Fields = io::YamlFields;
+using io::describe_kind;
 
 constexpr double kDegree = std::numbers::pi / 180.0;
+
+// Physical bounds on a scenario's numbers (docs/simulator.md). Real sensors
+// run at 1 500 to 12 000 frames/s and 400 to 25 600 cpi; the bounds are
+// wide around that, and narrow enough that every count, frame number and
+// rate ratio of the simulator fits the integer it is cast to.
+constexpr double kMaxFrameRate = 1e6;    // frames/s
+constexpr double kMaxCpi = 1e5;          // counts per inch
+constexpr double kMaxSensorSpeed = 1e3;  // m/s, rated speed
+constexpr double kMinRate = 1e-3;        // Hz: truth, wheel and camera rates
+constexpr long kMaxPacketsPerRow = 100000;
+
+// A duration (s) within (0, kMaxScenarioDuration].
+double duration_of(const Fields& f, std::string_view key) {
+  const double d = f.positive(key);
+  if (d > kMaxScenarioDuration) {
+    f.fail(key, fmt::format("must be at most {} s (found {})", kMaxScenarioDuration, d));
+  }
+  return d;
+}
 
 SensorModel parse_sensor_model(const Fields& f) {
   SensorModel m;
   const std::string preset = f.choice("preset", {kHdns2051.name, kAdns3080.name});
   const SensorPreset& p = preset == kHdns2051.name ? kHdns2051 : kAdns3080;
   m.preset = p.name;
-  m.cpi = f.positive("cpi", p.cpi);
+  m.cpi = f.bounded("cpi", 1.0, kMaxCpi, p.cpi);
   m.max_speed = f.positive("max_speed", p.max_speed);
-  m.frame_rate = f.positive("frame_rate", p.frame_rate);
+  if (m.max_speed > kMaxSensorSpeed) {
+    f.fail("max_speed",
+           fmt::format("must be within (0, {}] (found {})", kMaxSensorSpeed, m.max_speed));
+  }
+  m.frame_rate = f.bounded("frame_rate", 1.0, kMaxFrameRate, p.frame_rate);
+  // Within [1, 10^4] by the frame rate's bounds.
   m.packets_per_row = f.has("packets_per_row")
-                          ? static_cast<int>(f.integer("packets_per_row", 1, 1000000))
+                          ? static_cast<int>(f.integer("packets_per_row", 1, kMaxPacketsPerRow))
                           : static_cast<int>(std::max(1.0, std::round(m.frame_rate / 100.0)));
   m.frame_noise = f.non_negative("frame_noise", 0.0);
   m.relative_noise = f.non_negative("relative_noise", 0.0);
-  m.delta_limit =
-      f.has("delta_limit") ? static_cast<int>(f.integer("delta_limit", 0, 1 << 30)) : m.delta_limit;
-  m.squal = f.non_negative("squal", m.squal);
-  if (m.squal > 255.0) f.fail("squal", fmt::format("must be within [0, 255] (found {})", m.squal));
-  m.squal_jitter = f.non_negative("squal_jitter", 0.0);
+  // A row sums K frames of at most delta_limit counts into mice.csv's 32-bit counts.
+  const long max_delta = INT_MAX / m.packets_per_row;
+  m.delta_limit = f.has("delta_limit") ? static_cast<int>(f.integer("delta_limit", 0, max_delta))
+                                       : std::min(m.delta_limit, static_cast<int>(max_delta));
+  m.squal = f.bounded("squal", 0.0, 255.0, m.squal);
+  m.squal_jitter = f.bounded("squal_jitter", 0.0, 255.0, 0.0);
   return m;
 }
 
@@ -384,7 +228,7 @@ io::RobotConfig parse_true_sensors(const Source& source, const YAML::Node& node,
 // row of K frames, as a velocity over the row's duration:
 //   sigma_v = sqrt(K (sigma_f^2 + (rho v_max k h)^2)) / (k K h),  k = cpi / 0.0254.
 // Three significant digits: it is a figure a user would write down.
-std::optional<double> config_noise(const SensorModel& m) {
+std::optional<double> config_noise(const SensorModel& m, const Fields& f) {
   if (m.frame_noise <= 0.0 && m.relative_noise <= 0.0) return std::nullopt;
   const double k = m.cpi / kMetresPerInch;
   const double h = 1.0 / m.frame_rate;
@@ -392,7 +236,14 @@ std::optional<double> config_noise(const SensorModel& m) {
   const double per_frame = m.frame_noise * m.frame_noise + rel * rel;
   const double kk = static_cast<double>(m.packets_per_row);
   const double sigma = std::sqrt(kk * per_frame) / (k * kk * h);
-  return std::stod(fmt::format("{:.3g}", sigma));
+  // Read back as config v1 will: a figure too small or too large for a
+  // double there is refused here, naming the key that made it.
+  const auto parsed = io::parse_number(fmt::format("{:.3g}", sigma));
+  if (const auto* error = std::get_if<std::string>(&parsed)) {
+    f.fail(m.frame_noise > 0.0 ? "frame_noise" : "relative_noise",
+           fmt::format("the sensor noise it implies cannot be written to robot.yaml ({})", *error));
+  }
+  return std::get<double>(parsed);
 }
 
 DriveModel parse_drive(const Source& source, const YAML::Node& node, const SensorModel& sensor) {
@@ -409,7 +260,7 @@ DriveModel parse_drive(const Source& source, const YAML::Node& node, const Senso
     }
     return d;
   }
-  d.rate = probe.positive("rate", d.rate);
+  d.rate = probe.bounded("rate", kMinRate, kMaxFrameRate, d.rate);
   d.noise_speed = probe.non_negative("noise_speed", 0.0);
   d.noise_rate = probe.non_negative("noise_rate", 0.0);
   if (type == "reference") {
@@ -528,7 +379,7 @@ Motion parse_twists(const Source& source, const Fields& f, bool differential) {
     if (differential && std::abs(x[1]) > 0.0) {
       s.fail("twist", "a differential drive cannot move sideways (vy must be 0)");
     }
-    program.segments.push_back({{{x[0], x[1]}, x[2]}, s.positive("duration")});
+    program.segments.push_back({{{x[0], x[1]}, x[2]}, duration_of(s, "duration")});
   }
   program.max_accel = f.non_negative("max_accel", 0.0);
   program.max_angular_accel = f.non_negative("max_angular_accel", 0.0);
@@ -563,7 +414,7 @@ Motion parse_sines_motion(const Fields& f, bool differential) {
   if (differential && (!e.vy.empty() || e.offset.v.y() != 0.0)) {
     f.fail(f.has("vy") ? "vy" : "offset", "a differential drive cannot move sideways");
   }
-  e.duration = f.positive("duration");
+  e.duration = duration_of(f, "duration");
   e.fade = f.non_negative("fade", 0.0);
   if (2.0 * e.fade > e.duration) f.fail("fade", "longer than half the duration");
   return e;
@@ -687,7 +538,7 @@ CameraModel parse_camera(const Source& source, const YAML::Node& node) {
   const Fields f(source, node, "camera", {"rate", "noise", "latency", "outliers"});
   CameraModel c;
   c.enabled = true;
-  c.rate = f.positive("rate");
+  c.rate = f.bounded("rate", kMinRate, kMaxFrameRate);
   f.required("noise");
   c.noise = f.non_negative("noise", 0.0);
   c.latency = f.non_negative("latency", 0.0);
@@ -704,6 +555,11 @@ CameraModel parse_camera(const Source& source, const YAML::Node& node) {
 
 std::int64_t Scenario::frame_count() const {
   const double frames = duration * sensor_model.frame_rate;
+  // Checked before the casts; parse_scenario refuses such scenarios with the key named.
+  if (!(frames <= kMaxScenarioFrames) || sensor_model.packets_per_row < 1) {
+    throw io::Error(fmt::format("scenario '{}': {} s at {} frames/s: more than {:.3g} frames", name,
+                                duration, sensor_model.frame_rate, kMaxScenarioFrames));
+  }
   const auto k = static_cast<std::int64_t>(sensor_model.packets_per_row);
   // Whole rows; the 1e-9 keeps a duration that is a whole number of rows
   // from gaining one through rounding.
@@ -713,19 +569,8 @@ std::int64_t Scenario::frame_count() const {
 
 Scenario parse_scenario(std::string_view yaml, std::string_view source_name) {
   const Source source(source_name);
-  std::vector<YAML::Node> documents;
-  try {
-    documents = YAML::LoadAll(std::string(yaml));
-  } catch (const YAML::Exception& e) {
-    if (e.mark.is_null()) source.fail(fmt::format("invalid YAML: {}", e.msg));
-    throw io::Error(
-        io::printable(fmt::format("{}:{}: invalid YAML: {}", source_name, e.mark.line + 1, e.msg)));
-  }
-  if (documents.empty() || documents.front().IsNull()) source.fail("empty scenario");
-  if (documents.size() > 1) {
-    source.fail(fmt::format("expected one YAML document, found {}", documents.size()));
-  }
-  const YAML::Node root = documents.front();
+  const YAML::Node root = io::load_yaml(yaml, source_name);
+  if (root.IsNull()) source.fail("empty scenario");
   if (!root.IsMap())
     source.fail(root, fmt::format("expected a map, found {}", describe_kind(root)));
 
@@ -747,27 +592,36 @@ Scenario parse_scenario(std::string_view yaml, std::string_view source_name) {
   Scenario s;
   s.name = top.text("name");
   if (top.has("description")) s.description = top.text("description");
-  s.sensor_model = parse_sensor_model(
-      Fields(source, top.required("sensor_model"), "sensor_model",
-             {"preset", "cpi", "frame_rate", "max_speed", "packets_per_row", "frame_noise",
-              "relative_noise", "delta_limit", "squal", "squal_jitter"}));
+  const Fields model_fields(
+      source, top.required("sensor_model"), "sensor_model",
+      {"preset", "cpi", "frame_rate", "max_speed", "packets_per_row", "frame_noise",
+       "relative_noise", "delta_limit", "squal", "squal_jitter"});
+  s.sensor_model = parse_sensor_model(model_fields);
   s.nominal = parse_sensors(source, top.required("sensors"), s.sensor_model);
-  const auto noise = config_noise(s.sensor_model);
+  const auto noise = config_noise(s.sensor_model, model_fields);
   for (int i = 0; i < s.nominal.array.size(); ++i) s.nominal.array[i].noise = noise;
   s.truth = s.nominal;
   if (const auto t = top.get("true_sensors")) s.truth = parse_true_sensors(source, *t, s.nominal);
   if (const auto d = top.get("drive")) s.drive = parse_drive(source, *d, s.sensor_model);
   if (const auto c = top.get("camera")) s.camera = parse_camera(source, *c);
   s.motion = parse_motion(source, top.required("motion"), s.drive.type == DriveType::kDifferential);
-  s.truth_rate = top.positive("truth_rate", 100.0);
+  s.truth_rate = top.bounded("truth_rate", kMinRate, kMaxFrameRate, 100.0);
   const double motion_time = sim::duration(s.motion);
+  if (!(motion_time <= kMaxScenarioDuration)) {
+    top.fail("motion", fmt::format("lasts {} s, at most {} s", motion_time, kMaxScenarioDuration));
+  }
   s.duration = motion_time;
   if (top.has("duration")) {
-    s.duration = top.positive("duration");
+    s.duration = duration_of(top, "duration");
     if (s.duration < motion_time) {
       top.fail("duration",
                fmt::format("shorter than the motion ({} s < {} s)", s.duration, motion_time));
     }
+  }
+  if (const double frames = s.duration * s.sensor_model.frame_rate; frames > kMaxScenarioFrames) {
+    top.fail(top.has("duration") ? "duration" : "motion",
+             fmt::format("{} s at {} frames/s is {:.3g} frames, at most {:.3g}", s.duration,
+                         s.sensor_model.frame_rate, frames, kMaxScenarioFrames));
   }
   s.faults.assign(static_cast<std::size_t>(s.nominal.array.size()), {});
   if (const auto f = top.get("faults")) parse_faults(source, *f, s.nominal, s.duration, s.faults);

@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "moa/core/array.hpp"
 #include "moa/analysis/evaluate.hpp"
+#include "moa/core/array.hpp"
 #include "moa/core/se2.hpp"
 
 namespace moa::test {

@@ -17,9 +17,9 @@
 #include <string>
 #include <vector>
 
+#include "moa/analysis/evaluate.hpp"
 #include "moa/core/dead_reckoner.hpp"
 #include "moa/core/estimate.hpp"
-#include "moa/analysis/evaluate.hpp"
 #include "moa/sim/scenario.hpp"
 #include "moa/sim/simulate.hpp"
 

@@ -8,7 +8,7 @@
 //   dv_m2 = -P^-1 dP   v_m      (its effect on the normal matrix)
 //   dv_m3 =  P^-1 A^T dv_s      (the perturbation of the measurements) (30)
 // where v_m = P^-1 A^T v_s is the estimate with the nominal positions
-// (the erratum of reference/papers.md: the third term is the measurement
+// (an erratum of Kim & Lee eq. (30) as printed: the third term is the measurement
 // perturbation). The exact counterpart is the LS estimate with the
 // perturbed positions on the perturbed measurements minus v_m.
 // Velocities here are the sensor points' robot-frame velocities (m/s), as

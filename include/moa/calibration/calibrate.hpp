@@ -2,7 +2,7 @@
 // methods (Kim & Lee, exact, guided) and the pairing of mice counts with a
 // reference twist.
 //
-// What calibration estimates, per sensor i (spec/config.md):
+// What calibration estimates, per sensor i (docs/formats/config.md):
 //   counts_i / dt = M_i v + omega q_i,          v, omega: robot twist (robot frame)
 //   M_i = k_i diag(sx_i, f_i sy_i) R(yaw_i)^T   2x2, counts per metre,
 //   q_i = M_i J p_i                             counts per radian,

@@ -52,7 +52,7 @@ struct ConsensusOptions {
   /// Test candidates against the motion prior and judge a minority with the
   /// references' covariances alone (step 2 above).
   bool motion_prior = true;
-  MotionLimits limits;
+  RobotLimits limits;
   /// Faults over time (health.hpp): frozen, zero and drifting sensors are
   /// kept out of the search.
   HealthOptions health;

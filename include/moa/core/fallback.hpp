@@ -10,7 +10,6 @@
 
 namespace moa {
 
-
 /// Covariance of a wheel-odometry twist: wheels slip, more when fast.
 ///   sd(v) = base_v + rel * |v|,  sd(omega) = base_omega + rel * |omega|.
 struct WheelNoise {

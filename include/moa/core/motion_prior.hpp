@@ -19,7 +19,7 @@
 namespace moa {
 
 /// Robot limits (config key `limits`, docs/guide.md).
-struct MotionLimits {
+struct RobotLimits {
   double accel = 2.0;           ///< m/s^2, linear acceleration
   double angular_accel = 20.0;  ///< rad/s^2, angular acceleration
   /// Empty when usable, else what is wrong, naming the field.
@@ -28,7 +28,7 @@ struct MotionLimits {
 
 class MotionPrior {
  public:
-  explicit MotionPrior(MotionLimits limits = {}) : limits_(limits) {}
+  explicit MotionPrior(RobotLimits limits = {}) : limits_(limits) {}
 
   /// Records a trusted twist at time t (s).
   void trust(const Twist2& twist, const Eigen::Matrix3d& covariance, double t) {
@@ -41,10 +41,10 @@ class MotionPrior {
   const Twist2& twist() const { return twist_; }
   /// P(e) at time t, e = max(t - t_trusted, min_elapsed).
   Eigen::Matrix3d covariance(double t, double min_elapsed) const;
-  const MotionLimits& limits() const { return limits_; }
+  const RobotLimits& limits() const { return limits_; }
 
  private:
-  MotionLimits limits_;
+  RobotLimits limits_;
   Twist2 twist_;
   Eigen::Matrix3d covariance_ = Eigen::Matrix3d::Zero();
   double t_ = 0.0;

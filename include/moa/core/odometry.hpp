@@ -117,12 +117,19 @@ struct OdometryStep {
 };
 
 enum class OdometryError : std::uint8_t {
-  kRow,              ///< the mice row is invalid (row_error says why)
-  kNoInterval,       ///< an epoch with no positive, finite interval
-  kWheelsFull,       ///< wheel rows fed too far ahead of the mice rows
-  kFixesFull,        ///< camera fixes fed too far ahead of the mice rows
-  kWheelsBackwards,  ///< a wheel row earlier than the previous one, or not finite
+  kRow,               ///< the mice row is invalid (row_error says why)
+  kNoInterval,        ///< an epoch with no positive, finite interval
+  kWheelsFull,        ///< wheel rows fed too far ahead of the mice rows
+  kFixesFull,         ///< camera fixes fed too far ahead of the mice rows
+  kWheelsBackwards,   ///< a wheel row earlier than the previous one, or not finite
+  kImpossibleCounts,  ///< counts implying a speed far beyond what the sensor can track
 };
+
+/// A row whose counts imply a sensor-point speed above this is refused: ten
+/// times the rated max_speed, or 50 m/s for an unrated sensor (optical mouse
+/// sensors track at most a few m/s; a count far beyond is a corrupt value).
+inline constexpr double kImpossibleSpeedFactor = 10.0;
+inline constexpr double kImpossibleUnratedSpeed = 50.0;  ///< m/s
 const char* describe(OdometryError error);
 
 /// A non-owning reference to a callable, as std::function without the heap:
@@ -218,6 +225,9 @@ class Odometry {
   RowError row_error_ = RowError::kTimeNotFinite;
   std::optional<OdometryError> deferred_error_;
   std::optional<GeometryError> geometry_error_;
+  /// Per configured sensor: m/s per count (G_i^-1), the speed refused.
+  std::array<Eigen::Matrix2d, kMaxSensors> velocity_from_counts_ = zeros<Eigen::Matrix2d>();
+  std::array<double, kMaxSensors> impossible_speed_{};
 };
 
 }  // namespace moa

@@ -19,8 +19,8 @@
 //   faulty sensor cannot vote out a good one (good ones keep N - 2 votes).
 #pragma once
 
-#include <optional>
 #include <array>
+#include <optional>
 
 #include "moa/core/fallback.hpp"
 #include "moa/core/noise_model.hpp"

@@ -1,6 +1,6 @@
 // One optical mouse sensor: where it sits, how it is turned, how it counts.
 //
-// The measurement model of spec/config.md, used by every part of moa. For a
+// The measurement model of docs/formats/config.md, used by every part of moa. For a
 // robot twist (v, omega) in the robot frame and J = [[0,-1],[1,0]]:
 //   u_i = v + omega J p_i                 velocity of the sensor point (robot frame)
 //   w_i = R(yaw_i)^T u_i                  the same in the sensor frame
@@ -57,7 +57,7 @@ struct SensorMount {
   Eigen::Matrix<double, 2, 5> parameter_jacobian(const Twist2& twist) const;
 };
 
-/// A sensor's rated figures (datasheets, as quoted in reference/papers.md).
+/// A sensor's rated figures (from the manufacturers' datasheets).
 struct SensorPreset {
   const char* name;
   double cpi;         ///< counts per inch (the default setting)

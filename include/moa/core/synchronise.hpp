@@ -117,6 +117,8 @@ class Synchroniser {
   }
 
   double t0() const { return t0_; }
+  /// End of sensor i's last row (t0 before its first).
+  double last_time(int sensor) const { return last_t_[static_cast<std::size_t>(sensor)]; }
   const SynchroniserOptions& options() const { return options_; }
 
  private:

@@ -18,8 +18,10 @@
 namespace moa::experiments {
 
 struct Options {
-  std::uint64_t seed = 1;  ///< first seed; run k uses seed + k
-  int runs = 0;            ///< repetitions; 0: the experiment's default
+  /// First seed; run k uses seed + k. The thresholds were tuned on seeds
+  /// 1-100 (core/noise_model.hpp), the tests use 101-200, the docs 201 on.
+  std::uint64_t seed = 201;
+  int runs = 0;  ///< repetitions; 0: the experiment's default
   /// Called with a short status ("table 4, speed (b): run 3/10").
   std::function<void(const std::string&)> progress;
 };

@@ -1,10 +1,13 @@
 // An output file that appears whole or not at all: written to a temporary
 // file beside the target and renamed over it by commit(). Destroyed
-// without commit() (an error, an exception), the temporary is removed.
+// without commit() (an error, an exception), the temporary is removed; so
+// it is on SIGINT or SIGTERM in `moa` (io/cleanup.hpp).
 #pragma once
 
 #include <filesystem>
 #include <fstream>
+
+#include "moa/io/cleanup.hpp"
 
 namespace moa::io {
 
@@ -23,6 +26,7 @@ class AtomicFile {
  private:
   std::filesystem::path target_;
   std::filesystem::path temp_;
+  TemporaryPath registered_;
   std::ofstream out_;
   bool committed_ = false;
 };

@@ -1,4 +1,4 @@
-// Robot configuration v1 (spec/config.md): YAML in, YAML out, same schema.
+// Robot configuration v1 (docs/formats/config.md): YAML in, YAML out, same schema.
 //
 //   version: 1
 //   sensors:
@@ -14,9 +14,10 @@
 //     accel: 2.0                 # m/s^2, default 2
 //     angular_accel: 20.0        # rad/s^2, default 20
 //
-// Unknown keys and missing required keys are errors that name the key and
-// the sensor; so are wrong types, non-finite numbers, cpi or scale <= 0,
-// duplicate names and an unsupported version.
+// Unknown keys and missing required keys are errors that name the line,
+// the key and the sensor; so are wrong types, non-finite numbers, cpi or
+// scale <= 0, duplicate names and an unsupported version. The YAML is read
+// by the strict reader shared with the simulator's scenarios (io/yaml.hpp).
 #pragma once
 
 #include <filesystem>
@@ -34,8 +35,9 @@ struct RobotConfig {
   std::vector<std::string> names;  ///< one per sensor, in array order
   SensorArray array;
   /// The robot's acceleration limits (key `limits`); unset: the defaults of
-  /// MotionLimits. make_odometry gives them to the consensus's motion prior.
-  std::optional<MotionLimits> limits;
+  /// RobotLimits. io::resolve_odometry_options gives them to the consensus's
+  /// motion prior.
+  std::optional<RobotLimits> limits = std::nullopt;
 
   /// Index of the sensor called `name`, nullopt if there is none.
   std::optional<int> index_of(std::string_view name) const;

@@ -1,5 +1,5 @@
 // Internal to moa's I/O: the line reader under every log-format CSV reader
-// (spec/log-format.md), so that all of them apply the same rules and word
+// (docs/formats/log.md), so that all of them apply the same rules and word
 // their errors the same way ("FILE:LINE: what is wrong").
 //
 // Rules it enforces: a header row first (comment lines before it are fine),
@@ -11,8 +11,9 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
-#include <fstream>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -31,6 +32,19 @@ std::string printable(std::string_view text);
 /// .nan, .inf spellings). The one number parser of moa's readers: CSV
 /// fields, the robot config and the simulator's scenarios.
 std::variant<double, std::string> parse_number(std::string_view text);
+
+/// Room for any text of the two writers below.
+inline constexpr std::size_t kMaxNumberText = 32;
+
+/// Writes at `out` the shortest text that reads back as exactly `value`,
+/// laid out as fmt's "{}" lays it out (fixed notation for decimal exponents
+/// -4..15, else d.ddde+XX), and returns the end. The digits are
+/// std::to_chars's, several times faster than fmt's general path. At most
+/// kMaxNumberText chars.
+char* write_shortest(char* out, double value);
+/// Writes `value` as fmt's "{:.6g}" (printf's %.6g): six significant digits,
+/// trailing zeros dropped. At most kMaxNumberText chars.
+char* write_6g(char* out, double value);
 
 class CsvReader {
  public:
@@ -68,13 +82,24 @@ class CsvReader {
 
  private:
   bool read_record();
+  bool next_line(std::string_view& line);
+  void refill();
   [[noreturn]] void fail_at(std::size_t line, std::string_view what) const;
 
+  struct Close {
+    void operator()(std::FILE* f) const { std::fclose(f); }
+  };
+
   std::string file_;
-  std::ifstream in_;
+  std::unique_ptr<std::FILE, Close> in_;
+  // Bytes read from the file; [begin_, end_) not yet split into lines. The
+  // current line, and so fields_, point into it until the next read_record().
+  std::vector<char> block_;
+  std::size_t begin_ = 0;
+  std::size_t end_ = 0;
+  bool eof_ = false;
   std::vector<std::string> header_;
   std::size_t header_line_ = 0;
-  std::string buffer_;  // the current line; fields_ point into it
   std::vector<std::string_view> fields_;
   std::size_t line_ = 0;
   std::size_t blank_line_ = 0;  // first blank line not yet followed by content, 0 if none

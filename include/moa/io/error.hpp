@@ -12,4 +12,20 @@ class Error : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// A file that cannot be opened, written or renamed (as opposed to one whose
+/// content is wrong): `moa` exits with kExitIo for it.
+class IoError : public Error {
+ public:
+  using Error::Error;
+};
+
+/// The exit codes of `moa` (docs/formats/cli.md).
+enum ExitCode : int {
+  kExitOk = 0,
+  kExitBadInput = 1,  ///< malformed file, invalid value, refused data
+  kExitUsage = 2,     ///< unknown command or option, missing or malformed argument
+  kExitIo = 3,        ///< a file that cannot be opened, written or renamed
+  kExitInternal = 4,  ///< a bug: an unexpected exception
+};
+
 }  // namespace moa::io

@@ -60,6 +60,12 @@ class EvdevDecoder {
 
   /// Size of one struct input_event on this platform.
   static std::size_t event_size();
+  /// Bound of |EvdevFrame::time_us|: 2^62 us, about 146 000 years.
+  static constexpr std::int64_t kMaxEventTimeUs = std::int64_t{1} << 62;
+  /// An event's time in microseconds, its seconds clamped to
+  /// +-(kMaxEventTimeUs / 10^6 - 1) and its microseconds to +-999 999:
+  /// never overflows, whatever the bytes held.
+  static std::int64_t event_time_us(std::int64_t sec, std::int64_t usec);
 
   /// Consumes `bytes`; appends each completed frame with motion to `out`.
   /// A record split across calls is completed by the next call.

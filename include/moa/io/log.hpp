@@ -1,4 +1,4 @@
-// Log format v1 (spec/log-format.md): a directory of CSV files.
+// Log format v1 (docs/formats/log.md): a directory of CSV files.
 //
 // Every reader finds columns by header name, skips '#' comment lines
 // anywhere, ignores unknown extra columns, and throws io::Error as
@@ -8,12 +8,14 @@
 // sensor name, squal outside 0..255, an empty file (no header).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "moa/core/se2.hpp"
@@ -44,6 +46,12 @@ class MiceReader : public FrameSource {
   ~MiceReader() override;
   double start_time() override;
   std::optional<SensorRow> next() override;
+  /// mice.csv as named in errors, and the line of the last row read.
+  const std::string& file() const;
+  std::size_t line() const;
+  /// Rows read so far per sensor, in config order (a sensor with none by the
+  /// end never reported).
+  const std::vector<std::size_t>& rows_per_sensor() const;
 
  private:
   struct Impl;
@@ -101,12 +109,19 @@ class OdometryWriter {
   /// One row; `extra` must hold one value per extra column (already text).
   void write(double t, const Pose2& pose, const Twist2& twist,
              const std::vector<std::string>& extra = {});
+  /// One row whose extra values come already joined, each after a comma:
+  /// ",v1,v2,...", one per extra column. The caller vouches that no value
+  /// holds a comma or a line break (OdometryCsvWriter, from numbers, fixed
+  /// words and checked names); the other checks are write()'s.
+  void write_joined(double t, const Pose2& pose, const Twist2& twist, std::string_view extra);
   void commit();
   /// Flushes a stream (no-op for a file, which appears on commit()).
   void flush();
 
  private:
   void header();
+  void check(const std::array<double, 7>& values);
+  void put_row(const std::array<double, 7>& values, std::string_view extra);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -1,4 +1,4 @@
-// Writes mice.csv of log format v1 (spec/log-format.md) row by row: the
+// Writes mice.csv of log format v1 (docs/formats/log.md) row by row: the
 // output of `moa import-evemu` and of `moa live --record`.
 //
 // Columns t,sensor,dx,dy, then squal,flags when asked for (an empty squal

@@ -9,6 +9,8 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include "moa/core/odometry.hpp"
 #include "moa/io/config.hpp"
@@ -25,11 +27,24 @@ struct LogFiles {
 /// Throws io::Error when `log` is neither a directory with mice.csv nor a file.
 LogFiles resolve_log(const std::filesystem::path& log);
 
+/// The pipeline's options as a front end names them: `estimator` by name,
+/// `sensors` by config name (empty: all), wheels off with `no_wheels`;
+/// then validated (OdometryOptions::validate). `moa odometry`, `moa live`
+/// and the Python bindings resolve their options with this. Throws io::Error
+/// in the command line's words ("--sensors: unknown sensor 'x' (robot.yaml
+/// has m1, m2)", "invalid option: rate: must be positive and finite (Hz)").
+OdometryOptions resolve_odometry_options(OdometryOptions options, std::string_view estimator,
+                                         const std::vector<std::string>& sensors, bool no_wheels,
+                                         const RobotConfig& config, const std::string& config_path);
+
 struct OdometryRun {
   std::size_t rows = 0;          ///< mice rows read
   std::size_t steps = 0;         ///< epochs written
   double t0 = 0.0, t_end = 0.0;  ///< s, first epoch's start, last row's time
   FixCounts fixes;
+  /// What the caller should tell the user (a configured sensor that never
+  /// reported, used as still by a robust estimator).
+  std::vector<std::string> warnings;
 };
 
 using StepCallback = std::function<void(const OdometryStep&)>;
@@ -39,7 +54,9 @@ using ProgressCallback = std::function<void(std::size_t rows, double t)>;
 /// Runs the pipeline: wheels.csv is fed when options.use_wheels and it
 /// exists, camera.csv when options.fuse_camera (required then), faults.csv
 /// (or `faults`) when the estimator is the oracle (required then). Throws
-/// io::Error naming the file, line or option on anything wrong.
+/// io::Error naming the file, line or option on anything wrong. A selected
+/// sensor that never reports is refused for least squares and the oracle
+/// (they would take it as still) and a warning for the robust estimators.
 OdometryRun run_odometry(const RobotConfig& config, const std::string& config_path,
                          const LogFiles& log, const OdometryOptions& options,
                          const StepCallback& on_step, const ProgressCallback& progress = {});

@@ -11,7 +11,7 @@
 //   translation error   |p_est(t) - p_truth(t)|                            m
 //   heading error       |wrap(theta_est(t) - theta_truth(t))|              rad
 //                       truth interpolated at the estimate's time (evaluate.hpp)
-//   point speed         s_i = |v + omega J p_i|  (spec/config.md model,     m/s
+//   point speed         s_i = |v + omega J p_i|  (docs/formats/config.md model,     m/s
 //                       Kim & Lee eq. (6)) from the odometry twist (v, omega)_R
 //                       and the mount p_i of the config, against max_speed_i
 //   selection           per sensor and epoch: "used", or the reason written in
@@ -27,8 +27,8 @@
 #include <string>
 #include <vector>
 
-#include "moa/core/array.hpp"
 #include "moa/analysis/evaluate.hpp"
+#include "moa/core/array.hpp"
 #include "moa/io/config.hpp"
 
 namespace moa::io {
@@ -94,6 +94,8 @@ struct ReportModel {
 
   std::vector<StampedPose> truth;  ///< decimated to at most max_points
   std::optional<TrajectoryError> errors;
+  /// quantisation_floor() of the config on the truth's path: the summary's verdict.
+  std::optional<TrajectoryError> floor;
   std::vector<Eigen::Vector2d> camera;  ///< fixes (decimated)
   std::size_t camera_rows = 0;
 

@@ -1,4 +1,4 @@
-// Writes a simulated run as a log directory (spec/log-format.md, version 1)
+// Writes a simulated run as a log directory (docs/formats/log.md, version 1)
 // with its configs:
 //   mice.csv         t,sensor,dx,dy,squal,flags
 //   wheels.csv       t,vx,vy,omega                      (when the scenario has a drive)
@@ -9,8 +9,11 @@
 //                    sensor would have reported without its faults)
 //   robot.yaml       the nominal robot (what the user believes)
 //   robot.true.yaml  the simulated robot
-// Every file appears whole or not at all (io::AtomicFile); the same
-// scenario and seed give the same bytes.
+// The run is written into a hidden directory beside the target and moved
+// into place at the end: the target must be absent, empty, or a previous
+// run (only these files, mice.csv from moa simulate), which is replaced
+// whole; never a mix of two runs. The same scenario and seed give the same
+// bytes.
 #pragma once
 
 #include <cstdint>
@@ -32,7 +35,8 @@ struct LogSummary {
 };
 
 /// Simulates and writes the log into `dir` (created if needed). Throws
-/// io::Error naming the file on failure, leaving no partial file.
+/// io::Error naming the file or directory on failure (a directory holding
+/// anything else is refused before the run), leaving no partial file.
 LogSummary write_log(const Scenario& scenario, std::uint64_t seed, const std::filesystem::path& dir,
                      const Progress& progress = {});
 

@@ -1,5 +1,5 @@
 // The simulated optical mouse sensor: the measurement model of
-// spec/config.md (SensorMount::counts, the same code the estimators invert),
+// docs/formats/config.md (SensorMount::counts, the same code the estimators invert),
 // frame by frame, with noise, integer counts that carry their remainder, the
 // microcontroller's downsampler of K frames, SQUAL, flags, and faults.
 //
@@ -35,6 +35,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <climits>
 #include <cmath>
 #include <cstdint>
 #include <optional>
@@ -108,14 +109,16 @@ struct SensorFaults {
 class AxisQuantiser {
  public:
   /// Adds real counts, returns the integer counts to emit. Beyond +-limit
-  /// (limit > 0) the output is clipped, the excess dropped, `clipped` set.
+  /// (+-INT_MAX when limit is 0) the output is clipped, the excess dropped,
+  /// `clipped` set; counts that are not finite are dropped the same way.
   int push(double counts, int limit, bool& clipped) {
+    const double bound = limit > 0 ? static_cast<double>(limit) : double{INT_MAX};
     total_ += counts;
     double q = std::round(total_) - emitted_;
-    if (limit > 0 && std::abs(q) > limit) {
-      const double kept = std::copysign(static_cast<double>(limit), q);
+    if (!(std::abs(q) <= bound)) {
+      const double kept = std::isnan(q) ? 0.0 : std::copysign(bound, q);
       // The counts past the register's range are lost, not delivered later.
-      total_ -= q - kept;
+      total_ = std::isfinite(q) ? total_ - (q - kept) : emitted_ + kept;
       q = kept;
       clipped = true;
     }
@@ -188,6 +191,9 @@ class OpticalSensor {
   Rng noise_rng_;
   Rng fault_rng_;
   Rng squal_rng_;
+  /// |counts| per axis per frame: delta_limit, or (0, no register limit)
+  /// as many as K frames can sum into a 32-bit row.
+  int frame_limit_ = 0;
   CountQuantiser quantiser_;
   CountQuantiser clean_quantiser_;
   Downsampler counts_;              ///< the microcontroller's sum of K frames

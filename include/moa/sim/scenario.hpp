@@ -21,6 +21,10 @@
 namespace moa::sim {
 
 inline constexpr int kScenarioVersion = 1;
+/// s: the longest run, motion segment or duration a scenario may ask for (a day).
+inline constexpr double kMaxScenarioDuration = 86400.0;
+/// The most sensor frames a run may take (duration x frame_rate).
+inline constexpr double kMaxScenarioFrames = 1e9;
 
 struct Scenario {
   std::string name;
@@ -36,6 +40,7 @@ struct Scenario {
   std::vector<SensorFaults> faults;  ///< one per sensor, config order
 
   /// Frames simulated: the duration in whole rows of K frames, rounded up.
+  /// Throws io::Error beyond kMaxScenarioFrames.
   std::int64_t frame_count() const;
 };
 

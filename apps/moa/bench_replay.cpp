@@ -1,0 +1,239 @@
+#include "bench_replay.hpp"
+
+#include <fmt/core.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <memory>
+#include <numbers>
+#include <random>
+#include <stdexcept>
+#include <string_view>
+#include <vector>
+
+#include "moa/core/odometry.hpp"
+#include "moa/core/sensor.hpp"
+#include "moa/io/config.hpp"
+#include "moa/io/mice_writer.hpp"
+#include "moa/io/odometry_run.hpp"
+
+namespace moa::cli {
+namespace fs = std::filesystem;
+namespace {
+
+/// A directory that is removed with everything in it when this goes away.
+class ScratchDir {
+ public:
+  explicit ScratchDir(const fs::path& parent) {
+    std::random_device random;
+    path_ = parent / fmt::format("moa-bench-replay-{}-{:08x}", ::getpid(), random());
+    fs::create_directories(path_);
+  }
+  ~ScratchDir() {
+    std::error_code ignored;
+    fs::remove_all(path_, ignored);
+  }
+  ScratchDir(const ScratchDir&) = delete;
+  ScratchDir& operator=(const ScratchDir&) = delete;
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+/// Four HDNS-2051 at 45/135/225/315 deg, 0.1 m from the centre, x axis
+/// radial (Sekimori & Miyazaki's layout).
+io::RobotConfig four_sensors() {
+  io::RobotConfig config;
+  std::vector<SensorMount> mounts(4);
+  for (int i = 0; i < 4; ++i) {
+    const double phi = std::numbers::pi / 4.0 + i * std::numbers::pi / 2.0;
+    auto& m = mounts[static_cast<std::size_t>(i)];
+    m.position = 0.1 * Eigen::Vector2d(std::cos(phi), std::sin(phi));
+    m.yaw = phi;
+    m.cpi = kHdns2051.cpi;
+    m.max_speed = kHdns2051.max_speed;
+    config.names.push_back(fmt::format("m{}", i + 1));
+  }
+  config.array = SensorArray(mounts);
+  return config;
+}
+
+/// A smooth drive in every direction at once, below the sensors' rated
+/// speed (at most 0.25 m/s + 0.8 rad/s x 0.1 m = 0.33 m/s at a sensor).
+Twist2 drive(double t) {
+  const double two_pi = 2.0 * std::numbers::pi;
+  return Twist2{{0.2 * std::sin(two_pi * t / 7.0), 0.15 * std::sin(two_pi * t / 11.0 + 1.0)},
+                0.8 * std::sin(two_pi * t / 5.0)};
+}
+
+/// mice.csv (t,sensor,dx,dy,squal,flags) with a row per sensor every
+/// 1/row_rate s from t = 0: each row holds the counts of the twist at the
+/// middle of its interval (the measurement model), the fraction carried to
+/// the next row so that the counts never drift from the motion.
+std::size_t write_log(const io::RobotConfig& config, double duration, double row_rate,
+                      const fs::path& dir) {
+  io::write_config(config, dir / "robot.yaml");
+  io::MiceWriter writer(dir / "mice.csv", config.names, true,
+                        io::MiceWriter::Durability::kWholeOrNothing,
+                        {"moa bench --replay: synthetic drive, noise-free counts"});
+  const int n = config.array.size();
+  std::vector<Eigen::Vector2d> carried(static_cast<std::size_t>(n), Eigen::Vector2d::Zero());
+  const auto rows = static_cast<std::int64_t>(std::llround(duration * row_rate));
+  const double dt = 1.0 / row_rate;
+  SensorRow row;
+  row.squal = 100;
+  for (std::int64_t k = 0; k <= rows; ++k) {
+    row.t = static_cast<double>(k) / row_rate;
+    const Twist2 x = drive(row.t - 0.5 * dt);
+    for (int i = 0; i < n; ++i) {
+      auto& c = carried[static_cast<std::size_t>(i)];
+      if (k > 0) c += config.array[i].counts(x, dt);
+      row.sensor = i;
+      row.counts = c.array().round();
+      c -= row.counts;
+      writer.write(row);
+    }
+  }
+  writer.commit();
+  return writer.rows();
+}
+
+/// The floor any reader of mice.csv has to pay: the file read in 1 MiB
+/// blocks, cut into lines and fields, t parsed with std::from_chars, the
+/// integers too, the sensor name looked up; no checks. Returns a checksum
+/// so that the work cannot be optimised away.
+double parse_only(const fs::path& file, const std::vector<std::string>& names) {
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> in(std::fopen(file.c_str(), "rb"), std::fclose);
+  if (!in) throw std::runtime_error(fmt::format("{}: cannot open", file.string()));
+  std::vector<char> block(std::size_t{1} << 20);
+  std::size_t begin = 0, end = 0;
+  bool header = true;
+  double sum = 0.0;
+  std::string_view fields[6];
+  while (true) {
+    const std::size_t n = std::fread(block.data() + end, 1, block.size() - end, in.get());
+    end += n;
+    const bool last = n == 0;
+    while (true) {
+      const char* start = block.data() + begin;
+      const auto* nl = static_cast<const char*>(std::memchr(start, '\n', end - begin));
+      if (!nl && !(last && begin < end)) break;
+      const char* stop = nl ? nl : block.data() + end;
+      begin = static_cast<std::size_t>(stop - block.data()) + (nl ? 1 : 0);
+      const std::string_view line(start, static_cast<std::size_t>(stop - start));
+      if (line.empty() || line[0] == '#') continue;
+      if (header) {
+        header = false;
+        continue;
+      }
+      std::size_t count = 0, from = 0;
+      while (count < 6) {
+        const std::size_t comma = std::min(line.find(',', from), line.size());
+        fields[count++] = line.substr(from, comma - from);
+        if (comma == line.size()) break;
+        from = comma + 1;
+      }
+      double t = 0.0;
+      std::from_chars(fields[0].data(), fields[0].data() + fields[0].size(), t);
+      const auto sensor = std::find(names.begin(), names.end(), fields[1]) - names.begin();
+      sum += t + static_cast<double>(sensor);
+      for (std::size_t f = 2; f < count; ++f) {
+        std::int64_t v = 0;
+        std::from_chars(fields[f].data(), fields[f].data() + fields[f].size(), v);
+        sum += static_cast<double>(v);
+      }
+    }
+    if (last) break;
+    // Keep the partial line at the front of the block.
+    std::memmove(block.data(), block.data() + begin, end - begin);
+    end -= begin;
+    begin = 0;
+    if (end == block.size()) block.resize(2 * block.size());
+  }
+  return sum;
+}
+
+struct Timing {
+  double wall = 1e300;  ///< s, best
+  double cpu = 1e300;   ///< s of process CPU time, best
+};
+
+template <class F>
+void time_once(Timing& best, F&& run) {
+  const auto wall0 = std::chrono::steady_clock::now();
+  const std::clock_t cpu0 = std::clock();
+  run();
+  const std::clock_t cpu1 = std::clock();
+  const auto wall1 = std::chrono::steady_clock::now();
+  best.wall = std::min(best.wall, std::chrono::duration<double>(wall1 - wall0).count());
+  best.cpu = std::min(best.cpu, static_cast<double>(cpu1 - cpu0) / CLOCKS_PER_SEC);
+}
+
+volatile double g_checksum = 0.0;
+
+}  // namespace
+
+int run_replay_bench(const ReplayBenchArgs& args) {
+  const auto estimator = estimator_from_name(args.estimator);
+  // The log has mice.csv only: no wheels, no faults.
+  if (!estimator || *estimator == EstimatorKind::kOracle || *estimator == EstimatorKind::kWheels) {
+    throw std::runtime_error(
+        fmt::format("--estimator: '{}' is not ls, sekimori or consensus", args.estimator));
+  }
+  const ScratchDir scratch(args.dir.empty() ? fs::temp_directory_path() : args.dir);
+  const io::RobotConfig config = four_sensors();
+  if (!args.json) fmt::print(stderr, "moa bench --replay: writing a {} s log ...\n", args.duration);
+  const std::size_t rows = write_log(config, args.duration, args.row_rate, scratch.path());
+  const io::LogFiles log = io::resolve_log(scratch.path());
+  const auto mice_bytes = fs::file_size(log.mice);
+  const std::string config_path = (scratch.path() / "robot.yaml").string();
+  const fs::path out = scratch.path() / "odometry.csv";
+
+  OdometryOptions options;
+  options.estimator = *estimator;
+  options.rate = args.epoch_rate;
+  Timing parse, replay;
+  std::size_t steps = 0;
+  for (int r = 0; r < args.repeats; ++r) {
+    if (!args.json)
+      fmt::print(stderr, "moa bench --replay: run {} of {} ...\n", r + 1, args.repeats);
+    time_once(parse, [&] { g_checksum = parse_only(log.mice, config.names); });
+    time_once(replay,
+              [&] { steps = io::write_odometry(config, config_path, log, options, out).steps; });
+  }
+  const auto out_bytes = fs::file_size(out);
+  const double real_time = args.duration / replay.wall;
+  const double ratio = replay.wall / parse.wall;
+  const double cpu_ratio = replay.cpu / parse.cpu;
+  if (args.json) {
+    fmt::print(
+        "{{\"duration_s\": {}, \"mice_rows\": {}, \"mice_bytes\": {}, \"epochs\": {}, "
+        "\"odometry_bytes\": {}, \"estimator\": \"{}\", \"rate_hz\": {}, \"repeats\": {}, "
+        "\"parse_only_s\": {:.4f}, \"parse_only_cpu_s\": {:.4f}, \"replay_s\": {:.4f}, "
+        "\"replay_cpu_s\": {:.4f}, \"real_time_factor\": {:.1f}, \"replay_over_parse\": {:.2f}, "
+        "\"replay_over_parse_cpu\": {:.2f}}}\n",
+        args.duration, rows, mice_bytes, steps, out_bytes, args.estimator, args.epoch_rate,
+        args.repeats, parse.wall, parse.cpu, replay.wall, replay.cpu, real_time, ratio, cpu_ratio);
+    return 0;
+  }
+  fmt::print("log: {} s, {} mice rows ({:.1f} MB), 4 sensors at {} Hz\n", args.duration, rows,
+             static_cast<double>(mice_bytes) / 1e6, args.row_rate);
+  fmt::print(
+      "replay: moa odometry --estimator {} --rate {}: {} epochs, {:.1f} MB of odometry.csv\n",
+      args.estimator, args.epoch_rate, steps, static_cast<double>(out_bytes) / 1e6);
+  fmt::print("best of {}        wall s    CPU s\n", args.repeats);
+  fmt::print("parse-only      {:8.3f} {:8.3f}\n", parse.wall, parse.cpu);
+  fmt::print("replay          {:8.3f} {:8.3f}\n", replay.wall, replay.cpu);
+  fmt::print("real-time factor {:.0f}x; replay / parse-only {:.2f} (wall), {:.2f} (CPU)\n",
+             real_time, ratio, cpu_ratio);
+  return 0;
+}
+
+}  // namespace moa::cli

@@ -1,0 +1,291 @@
+"""The Python module against the `moa` command: same numbers, same selection,
+same calibrated config, same error messages (the command is run here, on
+logs it simulates)."""
+import ast
+import csv
+import json
+import os
+import pathlib
+import subprocess
+
+import numpy as np
+import pytest
+
+import moa  # a missing module fails the collection: pytest exits non-zero
+
+MOA = os.environ.get("MOA_CLI", "moa")
+NUMERIC = ["t", "x", "y", "theta", "vx", "vy", "omega", "sd_vx", "sd_vy", "sd_omega"]
+
+
+def run(*args):
+    """Runs the command; returns (exit code, stdout, stderr)."""
+    r = subprocess.run([MOA, *map(str, args)], capture_output=True, text=True)
+    return r.returncode, r.stdout, r.stderr
+
+
+def cli_error(subcommand, *args):
+    code, _, err = run(subcommand, *args)
+    assert code != 0
+    prefix = f"moa {subcommand}: error: "
+    assert err.startswith(prefix), err
+    return err[len(prefix):].rstrip("\n")
+
+
+@pytest.fixture(scope="module")
+def logs(tmp_path_factory):
+    root = tmp_path_factory.mktemp("logs")
+    out = {}
+    for scenario, seed in [("calibration", 4), ("faults-liftoff", 2)]:
+        d = root / scenario
+        code, _, err = run("simulate", "--scenario", scenario, "--seed", seed, "--out", d,
+                           "--quiet")
+        assert code == 0, err
+        out[scenario] = d
+    return out
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        rows = [r for r in csv.reader(line for line in f if not line.startswith("#"))]
+    header, rows = rows[0], rows[1:]
+    return {name: [r[i] for r in rows] for i, name in enumerate(header)}
+
+
+def assert_equals_cli(py, csv_path):
+    """moa.odometry's dict equals the CSV: numbers to 1e-9, selection exactly."""
+    f = read_csv(csv_path)
+    assert len(py["t"]) == len(f["t"]) > 0
+    columns = NUMERIC + [c for c in ("pxx", "pxy", "pyy", "ptt") if c in f]
+    for c in columns:
+        np.testing.assert_allclose(py[c], np.array(f[c], dtype=float), rtol=0, atol=1e-9,
+                                   err_msg=c)
+    assert list(py["source"]) == f["source"]
+    names = py["names"]
+    used = ["+".join(n for n, u in zip(names, row) if u) for row in py["used"]]
+    excluded = [";".join(f"{n}:{e}" for n, u, e in zip(names, urow, erow) if not u)
+                for urow, erow in zip(py["used"], py["excluded"])]
+    assert used == f["used"]
+    assert excluded == f["excluded"]
+
+
+@pytest.mark.parametrize("scenario,estimator,flags,options", [
+    ("calibration", "consensus", [], {}),
+    ("calibration", "ls", ["--rate", "50", "--no-wheels"], {"rate": 50, "no_wheels": True}),
+    ("faults-liftoff", "consensus", [], {}),
+    ("faults-liftoff", "sekimori", ["--e-th", "1e-7", "--r-th", "1"], {"e_th": 1e-7, "r_th": 1}),
+    ("faults-liftoff", "consensus", ["--sensors", "m1,m3", "--alpha", "0.01"],
+     {"sensors": ["m1", "m3"], "alpha": 0.01}),
+    ("faults-liftoff", "consensus",
+     ["--fuse-camera", "--camera-latency", "0.02", "--camera-sigma", "0.01",
+      "--initial-pose", "0.1,-0.2,0.3"],
+     {"fuse_camera": True, "camera_latency": 0.02, "camera_sigma": 0.01,
+      "initial_pose": (0.1, -0.2, 0.3)}),
+    ("faults-liftoff", "oracle", ["--max-row-interval", "0.04", "--max-gap", "10"],
+     {"max_row_interval": 0.04, "max_gap": 10}),
+])
+def test_odometry_equals_the_command(logs, tmp_path, scenario, estimator, flags, options):
+    d = logs[scenario]
+    out = tmp_path / "odometry.csv"
+    code, _, err = run("odometry", "--config", d / "robot.yaml", "--log", d, "--estimator",
+                       estimator, *flags, "--out", out)
+    assert code == 0, err
+    py = moa.odometry(d / "robot.yaml", d, estimator, **options)
+    assert_equals_cli(py, out)
+
+
+def test_faults_scenario_exercises_the_selection_columns(logs):
+    py = moa.odometry(logs["faults-liftoff"] / "robot.yaml", logs["faults-liftoff"])
+    assert not py["used"].all()
+    assert (py["excluded"] != "").any()
+
+
+def test_odometry_object_in_bulk_and_row_by_row_equals_the_file_pipeline(logs):
+    d = logs["calibration"]
+    expected = moa.odometry(d / "robot.yaml", d, "ls", no_wheels=True)
+    rows = moa.read_log(d / "robot.yaml", d)["mice"]
+    bulk = moa.Odometry(d / "robot.yaml", t0=rows["t"][0], estimator="ls", no_wheels=True)
+    steps = [bulk.push_rows(rows["t"], rows["sensor"], rows["dx"], rows["dy"], rows["squal"],
+                            rows["flags"])]
+    steps.append(bulk.finish(rows["t"][-1]))
+    for c in NUMERIC:
+        np.testing.assert_array_equal(np.concatenate([s[c] for s in steps]), expected[c])
+    assert bulk.steps == len(expected["t"])
+
+    one = moa.Odometry(moa.Config(d / "robot.yaml"), t0=rows["t"][0], estimator="ls",
+                       no_wheels=True)
+    names = one.names
+    got = []
+    for k in range(2000):
+        s = one.push(rows["t"][k], names[rows["sensor"][k]], rows["dx"][k], rows["dy"][k])
+        got.extend(s["x"])
+    n = len(got)
+    assert n > 100
+    np.testing.assert_array_equal(got, expected["x"][:n])
+
+
+def test_odometry_object_fed_mice_wheels_and_fixes_in_time_order_equals_the_file_pipeline(logs):
+    d = logs["faults-liftoff"]
+    expected = moa.odometry(d / "robot.yaml", d, fuse_camera=True)
+    log = moa.read_log(d / "robot.yaml", d)
+    mice, wheels, camera = log["mice"], log["wheels"], log["camera"]
+    odo = moa.Odometry(d / "robot.yaml", t0=mice["t"][0], fuse_camera=True)
+    steps = []
+    w = c = 0
+
+    def feed_until(t):
+        nonlocal w, c
+        while c < len(camera["t"]) and camera["t"][c] <= t:
+            theta, sx, sy = (None if np.isnan(v) else v
+                             for v in (camera["theta"][c], camera["sx"][c], camera["sy"][c]))
+            odo.push_fix(camera["t"][c], camera["x"][c], camera["y"][c], theta, sx, sy)
+            c += 1
+        while w < len(wheels["t"]) and wheels["t"][w] <= t:
+            steps.append(odo.push_wheels(wheels["t"][w], wheels["vx"][w], wheels["vy"][w],
+                                         wheels["omega"][w]))
+            w += 1
+
+    for k in range(len(mice["t"])):
+        feed_until(mice["t"][k])
+        squal = int(mice["squal"][k])
+        steps.append(odo.push(mice["t"][k], int(mice["sensor"][k]), mice["dx"][k],
+                              mice["dy"][k], squal if squal >= 0 else None,
+                              int(mice["flags"][k])))
+    feed_until(mice["t"][-1])
+    steps.append(odo.finish(mice["t"][-1]))
+    steps = [s for s in steps if len(s["t"])]
+    for col in NUMERIC + ["pxx", "pxy", "pyy", "ptt"]:
+        np.testing.assert_array_equal(np.concatenate([s[col] for s in steps]), expected[col],
+                                      err_msg=col)
+    np.testing.assert_array_equal(np.concatenate([s["excluded"] for s in steps]),
+                                  expected["excluded"])
+
+
+def test_odometry_object_reports_a_bad_row():
+    cfg = pathlib.Path(__file__).resolve().parents[2] / "examples/logs/mixed-motion/robot.yaml"
+    o = moa.Odometry(cfg, t0=0.0)
+    o.push(0.01, 0, 1.0, 2.0)
+    with pytest.raises(moa.Error, match="row at t = 0.005 s"):
+        o.push(0.005, 0, 1.0, 2.0)
+
+
+def test_calibrate_equals_the_written_config(logs, tmp_path):
+    d = logs["calibration"]
+    for method in ["exact", "kimlee"]:
+        out = tmp_path / f"{method}.yaml"
+        code, stdout, err = run("calibrate", "--method", method, "--config", d / "robot.yaml",
+                                "--log", d, "--out", out)
+        assert code == 0, err
+        cal = moa.calibrate(d / "robot.yaml", d, method=method)
+        written = moa.read_config(out)
+        assert [s["name"] for s in cal.sensors] == written["names"]
+        for i, s in enumerate(cal.sensors):
+            np.testing.assert_allclose(s["position"], written["position"][i], rtol=0, atol=1e-9)
+            np.testing.assert_allclose(s["scale"], written["scale"][i], rtol=0, atol=1e-9)
+            assert abs(s["yaw"] - written["yaw"][i]) < 1e-9
+            assert s["mirrored"] == written["mirrored"][i]
+        assert cal.to_yaml() == out.read_text()
+        assert cal.full_report() + f"calibrated config written to {out}\n" == stdout
+        code, stdout, err = run("calibrate", "--method", method, "--config", d / "robot.yaml",
+                                "--log", d, "--out", out, "--json")
+        cli = json.loads(stdout)
+        del cli["out"]
+        assert json.loads(cal.to_json()) == cli
+
+
+def test_calibrate_reports_observability_and_sigma(logs):
+    d = logs["calibration"]
+    cal = moa.calibrate(d / "robot.yaml", d, method="exact")
+    for s in cal.sensors:
+        assert all(s["estimated"].values())
+        assert (s["sd_position"] > 0).all() and s["sd_yaw"] > 0
+        assert s["information_eigenvalues"].shape == (5,)
+    assert [o["name"] for o in cal.observability] == [s["name"] for s in cal.sensors]
+    assert all((o["information_eigenvalues"] >= 1).all() for o in cal.observability)
+    kimlee = moa.calibrate(d / "robot.yaml", d, method="kimlee")
+    assert not kimlee.sensors[0]["estimated"]["yaw"]
+    assert kimlee.sensors[0]["sd_yaw"] == 0
+
+
+def test_errors_carry_the_command_lines_message(logs, tmp_path):
+    d = logs["calibration"]
+    cfg = d / "robot.yaml"
+    out = tmp_path / "o.csv"
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    no_wheels = tmp_path / "no-wheels"
+    no_wheels.mkdir()
+    (no_wheels / "mice.csv").write_text("t,sensor,dx,dy\n0,m1,0,0\n")
+    cases = [
+        (("odometry", "--config", cfg, "--log", d, "--sensors", "m1,zz", "--out", out),
+         lambda: moa.odometry(cfg, d, sensors=["m1", "zz"])),
+        (("odometry", "--config", cfg, "--log", d, "--estimator", "wheels", "--no-wheels",
+          "--out", out),
+         lambda: moa.odometry(cfg, d, "wheels", no_wheels=True)),
+        (("odometry", "--config", cfg, "--log", empty, "--out", out),
+         lambda: moa.odometry(cfg, empty)),
+        (("calibrate", "--method", "exact", "--config", cfg, "--log", no_wheels, "--out",
+          tmp_path / "c.yaml"),
+         lambda: moa.calibrate(cfg, no_wheels, method="exact")),
+        (("calibrate", "--method", "guided", "--config", cfg, "--push-x", d, "--distance", "1",
+          "--turns", "5", "--out", tmp_path / "c.yaml"),
+         lambda: moa.calibrate(cfg, None, method="guided", push_x=d, distance=1, turns=5)),
+    ]
+    for args, call in cases:
+        message = cli_error(*args)
+        with pytest.raises(moa.Error) as e:
+            call()
+        assert str(e.value) == message
+    with pytest.raises(moa.Error, match="invalid option: rate"):
+        moa.odometry(cfg, d, rate=float("nan"))
+    with pytest.raises(TypeError, match="unknown option 'speed'"):
+        moa.odometry(cfg, d, speed=3)
+
+
+def test_simulate_in_memory_equals_the_written_log(logs, tmp_path):
+    sim = moa.simulate("calibration", 4, out=tmp_path / "sim")
+    files = moa.read_log(logs["calibration"] / "robot.yaml", logs["calibration"])
+    for c in ["t", "sensor", "dx", "dy", "flags"]:
+        np.testing.assert_array_equal(sim["mice"][c], files["mice"][c])
+    # wheels.csv holds 9 significant digits.
+    for c in ["t", "vx", "vy", "omega"]:
+        np.testing.assert_allclose(sim["wheels"][c], files["wheels"][c], rtol=1e-8, atol=1e-12)
+    for c in ["t", "x", "y", "theta"]:
+        np.testing.assert_allclose(sim["truth"][c], files["truth"][c], rtol=0, atol=1e-9)
+    assert sim["config"].to_yaml() == (logs["calibration"] / "robot.yaml").read_text()
+    assert (tmp_path / "sim" / "mice.csv").read_text() == \
+        (logs["calibration"] / "mice.csv").read_text()
+    assert "calibration" in moa.scenarios()
+
+
+def test_read_config_gives_the_configs_arrays(logs):
+    c = moa.read_config(logs["calibration"] / "robot.yaml")
+    cfg = moa.Config(logs["calibration"] / "robot.yaml")
+    assert c["names"] == cfg.names and len(cfg) == len(c["names"])
+    assert c["position"].shape == (len(cfg), 2)
+    again = moa.Config.from_yaml(cfg.to_yaml()).to_dict()
+    for k in ["position", "yaw", "cpi", "scale", "mirrored"]:
+        np.testing.assert_array_equal(again[k], c[k])
+
+
+def test_evaluate_equals_the_command(logs, tmp_path):
+    d = logs["faults-liftoff"]
+    out = tmp_path / "odometry.csv"
+    assert run("odometry", "--config", d / "robot.yaml", "--log", d, "--out", out)[0] == 0
+    code, stdout, err = run("evaluate", "--truth", d / "truth.csv", "--odometry", out, "--json")
+    assert code == 0, err
+    cli = json.loads(stdout)
+    assert moa.evaluate(d / "truth.csv", out) == cli
+    truth = moa.read_log(d / "robot.yaml", d)["truth"]
+    arrays = moa.evaluate(truth, moa.odometry(d / "robot.yaml", d))
+    for k, v in cli.items():
+        assert arrays[k] == pytest.approx(v, rel=1e-12, abs=1e-15), k
+
+
+def test_stubs_declare_every_public_name():
+    stub = pathlib.Path(__file__).resolve().parents[1] / "moa.pyi"
+    tree = ast.parse(stub.read_text())
+    declared = {n.name for n in tree.body if isinstance(n, (ast.FunctionDef, ast.ClassDef))}
+    public = {n for n in dir(moa) if not n.startswith("_")}
+    assert public <= declared, public - declared
+    assert "estimator" in moa.odometry.__doc__
+    assert "bulk" in moa.Odometry.push_rows.__doc__

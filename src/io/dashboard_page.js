@@ -1,0 +1,224 @@
+// The live dashboard's script: reads the robot from #moa-config, listens to
+// /events (Server-Sent Events, one JSON object per event) and redraws the
+// trajectory with the robot and its sensors, per-sensor health and the
+// twist over the last seconds. Chart.js 3 is inlined before this script.
+// For tests: <body data-moa-status> is loading | live | ended, each canvas
+// carries data-updates (times redrawn) and data-points, <body data-events>
+// the events received; errors go to #moa-errors (not the console).
+(function () {
+  'use strict';
+  const config = JSON.parse(document.getElementById('moa-config').textContent);
+  const body = document.body;
+  const errors = document.getElementById('moa-errors');
+  function fail(text) {
+    errors.hidden = false;
+    errors.textContent += text + '\n';
+  }
+  window.addEventListener('error', function (e) { fail(String(e.message)); });
+
+  const colours = ['#1e88e5', '#e53935', '#43a047', '#fb8c00', '#8e24aa', '#00acc1', '#6d4c41',
+                   '#3949ab'];
+  const colour = (i) => colours[i % colours.length];
+  const sensors = config.sensors;
+  const window_s = 10;        // twist plot: the last seconds
+  const max_path = 20000;     // trajectory points drawn
+  const reach = Math.max(0.05, ...sensors.map((s) => Math.hypot(s.x, s.y))) * 1.3;
+
+  Chart.defaults.animation = false;
+  Chart.defaults.maintainAspectRatio = false;
+  Chart.defaults.plugins.legend.labels.boxWidth = 12;
+
+  function counted(chart) {
+    const canvas = chart.canvas;
+    let points = 0;
+    for (const d of chart.data.datasets) points += d.data.length;
+    canvas.dataset.points = String(points);
+    canvas.dataset.updates = String(Number(canvas.dataset.updates || 0) + 1);
+  }
+
+  // ------------------------------------------------------------- trajectory
+  const path = [];
+  const trajectory = new Chart(document.getElementById('chart-trajectory'), {
+    type: 'scatter',
+    data: {
+      datasets: [
+        { label: 'path', data: path, showLine: true, pointRadius: 0, borderColor: '#546e7a',
+          borderWidth: 1.5 },
+        { label: 'robot', data: [], showLine: true, pointRadius: 0, borderColor: '#263238',
+          borderWidth: 2 },
+        { label: 'sensors', data: [], pointRadius: 5, pointBackgroundColor: [],
+          pointBorderColor: [], showLine: false },
+      ],
+    },
+    options: {
+      parsing: false,
+      normalized: true,
+      scales: { x: { type: 'linear', title: { display: true, text: 'x (m)' } },
+                y: { type: 'linear', title: { display: true, text: 'y (m)' } } },
+      plugins: { legend: { display: false } },
+    },
+  });
+
+  // Equal scales on both axes, the whole path and the robot in view.
+  function fit_axes(chart, points) {
+    let x0 = Infinity, x1 = -Infinity, y0 = Infinity, y1 = -Infinity;
+    for (const p of points) {
+      x0 = Math.min(x0, p.x); x1 = Math.max(x1, p.x);
+      y0 = Math.min(y0, p.y); y1 = Math.max(y1, p.y);
+    }
+    if (!isFinite(x0)) { x0 = -reach; x1 = reach; y0 = -reach; y1 = reach; }
+    const area = chart.chartArea || { width: 1, height: 1 };
+    const aspect = area.width > 0 && area.height > 0 ? area.width / area.height : 1;
+    let w = Math.max(x1 - x0, 2 * reach) * 1.1, h = Math.max(y1 - y0, 2 * reach) * 1.1;
+    if (w / h < aspect) w = h * aspect; else h = w / aspect;
+    const cx = (x0 + x1) / 2, cy = (y0 + y1) / 2;
+    chart.options.scales.x.min = cx - w / 2; chart.options.scales.x.max = cx + w / 2;
+    chart.options.scales.y.min = cy - h / 2; chart.options.scales.y.max = cy + h / 2;
+  }
+
+  function draw_robot(e) {
+    const c = Math.cos(e.theta), s = Math.sin(e.theta);
+    const world = (px, py) => ({ x: e.x + c * px - s * py, y: e.y + s * px + c * py });
+    const outline = [];
+    for (let k = 0; k <= 24; ++k) {
+      const a = (2 * Math.PI * k) / 24;
+      outline.push(world(reach * Math.cos(a), reach * Math.sin(a)));
+    }
+    outline.push(world(0, 0), world(reach, 0));  // heading
+    trajectory.data.datasets[1].data = outline;
+    const dots = trajectory.data.datasets[2];
+    dots.data = sensors.map((m) => world(m.x, m.y));
+    dots.pointBackgroundColor = e.sensors.map((m, i) => (m.used ? colour(i) : '#ffffff'));
+    dots.pointBorderColor = e.sensors.map((m, i) => colour(i));
+    fit_axes(trajectory, path.concat(outline));
+    trajectory.update('none');
+    counted(trajectory);
+  }
+
+  // ----------------------------------------------------------------- health
+  const health = new Chart(document.getElementById('chart-health'), {
+    type: 'bar',
+    data: {
+      labels: sensors.map((s) => s.name),
+      datasets: [
+        { label: 'used (share of epochs)', data: sensors.map(() => 0),
+          backgroundColor: sensors.map((s, i) => colour(i)), xAxisID: 'x' },
+        { label: 'SQUAL / 255', data: sensors.map(() => 0), backgroundColor: '#b0bec5',
+          xAxisID: 'x' },
+      ],
+    },
+    options: {
+      indexAxis: 'y',
+      scales: { x: { min: 0, max: 1 } },
+    },
+  });
+
+  const table = document.querySelector('#sensor-table tbody');
+  const rows = sensors.map((s, i) => {
+    const tr = document.createElement('tr');
+    for (let k = 0; k < 6; ++k) tr.appendChild(document.createElement('td'));
+    tr.cells[0].textContent = s.name;
+    tr.cells[0].style.color = colour(i);
+    table.appendChild(tr);
+    return tr;
+  });
+
+  function draw_health(e) {
+    health.data.datasets[0].data = e.sensors.map((m) => m.used_share);
+    health.data.datasets[1].data = e.sensors.map((m) => (m.squal === null ? 0 : m.squal / 255));
+    health.update('none');
+    counted(health);
+    e.sensors.forEach((m, i) => {
+      const cells = rows[i].cells;
+      cells[1].textContent = m.dx.toFixed(0);
+      cells[2].textContent = m.dy.toFixed(0);
+      cells[3].textContent = m.squal === null ? '-' : String(m.squal);
+      cells[4].textContent = (100 * m.used_share).toFixed(0) + ' %';
+      cells[5].textContent = m.excluded === null ? '' : m.excluded;
+      rows[i].className = m.used ? '' : 'excluded';
+    });
+  }
+
+  // ------------------------------------------------------------------ twist
+  const twist_sets = [['vx (m/s)', 'vx', '#1e88e5', 'v'], ['vy (m/s)', 'vy', '#43a047', 'v'],
+                      ['omega (rad/s)', 'omega', '#e53935', 'w']];
+  const twist = new Chart(document.getElementById('chart-twist'), {
+    type: 'line',
+    data: {
+      datasets: twist_sets.map(([label, , c, axis]) => ({
+        label: label, data: [], borderColor: c, backgroundColor: c, pointRadius: 0,
+        borderWidth: 1.5, yAxisID: axis })),
+    },
+    options: {
+      parsing: false,
+      normalized: true,
+      scales: {
+        x: { type: 'linear', title: { display: true, text: 't (s)' } },
+        v: { type: 'linear', position: 'left', title: { display: true, text: 'm/s' } },
+        w: { type: 'linear', position: 'right', title: { display: true, text: 'rad/s' },
+             grid: { drawOnChartArea: false } },
+      },
+    },
+  });
+
+  function draw_twist(e) {
+    twist_sets.forEach(([, key], k) => {
+      const data = twist.data.datasets[k].data;
+      data.push({ x: e.t, y: e[key] });
+      while (data.length > 0 && data[0].x < e.t - window_s) data.shift();
+    });
+    twist.options.scales.x.min = e.t - window_s;
+    twist.options.scales.x.max = e.t;
+    twist.update('none');
+    counted(twist);
+  }
+
+  // ----------------------------------------------------------------- stream
+  const status = document.getElementById('status');
+  let events = 0;
+  const arrivals = [];
+  function show_status(e, state) {
+    const now = performance.now();
+    arrivals.push(now);
+    while (arrivals.length > 0 && arrivals[0] < now - 3000) arrivals.shift();
+    const span = now - arrivals[0];
+    const rate = span >= 500 ? (1000 * (arrivals.length - 1)) / span : null;
+    status.textContent = 't ' + e.t.toFixed(2) + ' s   x ' + e.x.toFixed(3) + ' m   y ' +
+      e.y.toFixed(3) + ' m   theta ' + ((e.theta * 180) / Math.PI).toFixed(1) + ' deg   ' +
+      'twist from ' + e.source + '   ' + (rate === null ? '-' : rate.toFixed(1)) + ' events/s   ' +
+      state;
+  }
+
+  function on_event(e) {
+    ++events;
+    body.dataset.events = String(events);
+    if (path.length >= max_path) path.splice(0, path.length / 2);
+    path.push({ x: e.x, y: e.y });
+    draw_robot(e);
+    draw_health(e);
+    draw_twist(e);
+    show_status(e, 'live');
+  }
+
+  const source = new EventSource('events');
+  body.dataset.events = '0';
+  source.addEventListener('history', (m) => {
+    for (const [, x, y] of JSON.parse(m.data).points) path.push({ x: x, y: y });
+    body.dataset.moaStatus = 'live';
+  });
+  source.onmessage = (m) => {
+    try {
+      on_event(JSON.parse(m.data));
+    } catch (err) {
+      fail('event: ' + err);
+    }
+  };
+  source.addEventListener('end', () => {
+    source.close();
+    body.dataset.moaStatus = 'ended';
+    status.textContent = status.textContent.replace(/ live$/, '') + ' (run ended)';
+  });
+  source.onerror = () => {
+    if (body.dataset.moaStatus !== 'ended') status.textContent = 'connection lost, retrying';
+  };
+})();

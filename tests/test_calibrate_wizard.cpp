@@ -1,0 +1,275 @@
+// moa calibrate --guided --live in a pseudo-terminal, driven like a user
+// with a scripted replay (the 'guided' scenario: a push that turns, then
+// good pushes along x and y and three turns), and the motion checks of
+// calibration/guided_steps.hpp on synthetic epochs.
+#include <fcntl.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <poll.h>
+#include <pty.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <numbers>
+#include <string>
+
+#include "moa/calibration/guided_steps.hpp"
+#include "moa/core/array.hpp"
+#include "moa/io/config.hpp"
+#include "support/run.hpp"
+#include "support/synth.hpp"
+
+namespace moa {
+namespace {
+
+using ::testing::HasSubstr;
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+/// `moa ARGS` with its terminal on a pty that the test reads and types into.
+class PtyMoa {
+ public:
+  explicit PtyMoa(const std::vector<std::string>& args) {
+    pid_ = forkpty(&master_, nullptr, nullptr, nullptr);
+    if (pid_ == 0) {
+      std::vector<char*> argv;
+      static const std::string cli = MOA_CLI_PATH;
+      argv.push_back(const_cast<char*>(cli.c_str()));
+      for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+      argv.push_back(nullptr);
+      execv(argv[0], argv.data());
+      _exit(127);
+    }
+  }
+  ~PtyMoa() {
+    if (pid_ > 0 && status_ < 0) {
+      kill(pid_, SIGKILL);
+      waitpid(pid_, nullptr, 0);
+    }
+    if (master_ >= 0) close(master_);
+  }
+  /// Reads until `text` has appeared `count` times in all output, or the
+  /// deadline; true if it did.
+  bool wait_for(const std::string& text, int count, Clock::time_point deadline) {
+    for (;;) {
+      if (occurrences(text) >= count) return true;
+      const auto left =
+          std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
+      if (left <= 0) return false;
+      pollfd p{master_, POLLIN, 0};
+      if (poll(&p, 1, static_cast<int>(left)) <= 0) return false;
+      char buffer[4096];
+      const ssize_t n = read(master_, buffer, sizeof buffer);
+      if (n <= 0) return occurrences(text) >= count;  // the child is gone
+      output_.append(buffer, static_cast<std::size_t>(n));
+    }
+  }
+  void type(const std::string& keys) {
+    ASSERT_EQ(write(master_, keys.data(), keys.size()), static_cast<ssize_t>(keys.size()));
+  }
+  int exit_code(double seconds) {
+    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                             std::chrono::duration<double>(seconds));
+    while (status_ < 0 && Clock::now() < deadline) {
+      wait_for("\x01never\x01", 1,
+               std::min(deadline, Clock::now() + std::chrono::milliseconds(50)));
+      int status = 0;
+      if (waitpid(pid_, &status, WNOHANG) == pid_) {
+        status_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+      }
+    }
+    return status_;
+  }
+  int occurrences(const std::string& text) const {
+    int n = 0;
+    for (auto at = output_.find(text); at != std::string::npos; at = output_.find(text, at + 1)) {
+      ++n;
+    }
+    return n;
+  }
+  const std::string& output() const { return output_; }
+
+ private:
+  int master_ = -1;
+  pid_t pid_ = -1;
+  int status_ = -1;
+  std::string output_;
+};
+
+TEST(CalibrateWizard, WalksThroughEveryStepWithARedoAndWritesTheCalibration) {
+  const fs::path dir = test::scratch_dir("calibrate-wizard");
+  const auto sim =
+      test::run_moa("simulate --scenario guided --seed 2 --out " + (dir / "log").string());
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  // 31 s of log at 4x: ~8 s. Every answer is typed within milliseconds of
+  // its question, well inside the 3 s (0.75 s at 4x) the robot rests.
+  PtyMoa moa({"calibrate", "--guided", "--live", "--config", (dir / "log" / "robot.yaml").string(),
+              "--replay", (dir / "log").string(), "--speed", "4", "--distance", "1", "--turns", "3",
+              "--out", (dir / "cal.yaml").string()});
+  const auto deadline = Clock::now() + std::chrono::seconds(40);
+
+  ASSERT_TRUE(moa.wait_for("Step 1 of 3: push along x", 1, deadline)) << moa.output();
+  ASSERT_TRUE(moa.wait_for("Not good enough", 1, deadline)) << moa.output();
+  // The reason follows on its own line: wait for it rather than race it.
+  EXPECT_TRUE(moa.wait_for("turned while pushing", 1, deadline)) << moa.output();
+  moa.type("r");
+  ASSERT_TRUE(moa.wait_for("Again.", 1, deadline)) << moa.output();
+  ASSERT_TRUE(moa.wait_for("Good enough.", 1, deadline)) << moa.output();
+  moa.type("\r");
+  ASSERT_TRUE(moa.wait_for("Step 2 of 3: push along y", 1, deadline)) << moa.output();
+  ASSERT_TRUE(moa.wait_for("Good enough.", 2, deadline)) << moa.output();
+  moa.type("\r");
+  ASSERT_TRUE(moa.wait_for("Step 3 of 3: spin", 1, deadline)) << moa.output();
+  ASSERT_TRUE(moa.wait_for("Good enough.", 3, deadline)) << moa.output();
+  // The nominal mounts see 2.96 turns: within 0.1 of the 3 asked for.
+  EXPECT_THAT(moa.output(), HasSubstr(" turns counter-clockwise in "));
+  moa.type("\r");
+  ASSERT_TRUE(moa.wait_for("calibrated config written to", 1, deadline)) << moa.output();
+  EXPECT_EQ(moa.exit_code(10.0), 0) << moa.output();
+  EXPECT_EQ(moa.occurrences("Kept."), 3);
+  EXPECT_EQ(moa.occurrences("Not good enough"), 1) << moa.output();
+  EXPECT_THAT(moa.output(), HasSubstr("1-sigma"));
+
+  // What the wizard wrote is the simulated robot: positions to 0.2 mm,
+  // yaws to 0.05 deg, scales to 0.2 %, m2's mirroring found.
+  const io::RobotConfig cal = io::read_config(dir / "cal.yaml");
+  const io::RobotConfig truth = io::read_config(dir / "log" / "robot.true.yaml");
+  ASSERT_EQ(cal.array.size(), truth.array.size());
+  for (int i = 0; i < truth.array.size(); ++i) {
+    EXPECT_LT((cal.array[i].position - truth.array[i].position).norm(), 2e-4) << i;
+    EXPECT_NEAR(cal.array[i].yaw, truth.array[i].yaw, 0.05 * std::numbers::pi / 180) << i;
+    EXPECT_NEAR(cal.array[i].scale.x(), truth.array[i].scale.x(), 2e-3) << i;
+    EXPECT_NEAR(cal.array[i].scale.y(), truth.array[i].scale.y(), 2e-3) << i;
+    EXPECT_EQ(cal.array[i].mirrored, truth.array[i].mirrored) << i;
+  }
+  if (!HasFailure()) fs::remove_all(dir);
+}
+
+TEST(CalibrateWizard, QuitWritesNothing) {
+  const fs::path dir = test::scratch_dir("calibrate-wizard-quit");
+  const auto sim =
+      test::run_moa("simulate --scenario guided --seed 1 --out " + (dir / "log").string());
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  PtyMoa moa({"calibrate", "--guided", "--live", "--config", (dir / "log" / "robot.yaml").string(),
+              "--replay", (dir / "log").string(), "--speed", "4", "--out",
+              (dir / "cal.yaml").string()});
+  const auto deadline = Clock::now() + std::chrono::seconds(20);
+  ASSERT_TRUE(moa.wait_for("Hold the robot still", 1, deadline)) << moa.output();
+  moa.type("q");
+  EXPECT_EQ(moa.exit_code(10.0), 1) << moa.output();
+  EXPECT_THAT(moa.output(), HasSubstr("nothing written"));
+  EXPECT_FALSE(fs::exists(dir / "cal.yaml"));
+  fs::remove_all(dir);
+}
+
+// ------------------------------------------------ the checks on synthetic epochs
+
+/// Epochs of 10 ms at a constant twist, counts from the measurement model.
+class Epochs {
+ public:
+  explicit Epochs(const SensorArray& array) : array_(array) { sample_.size = array.size(); }
+  std::optional<MotionSummary> run(MotionWatcher& watcher, const Twist2& twist, double seconds,
+                                   std::uint8_t flags = 0) {
+    std::optional<MotionSummary> out;
+    const double dt = 0.01;
+    for (int k = 0; k < static_cast<int>(std::lround(seconds / dt)); ++k) {
+      sample_.t += dt;
+      sample_.dt = dt;
+      for (int i = 0; i < array_.size(); ++i) {
+        const auto s = static_cast<std::size_t>(i);
+        sample_.counts[s] = array_[i].counts(twist, dt);
+        sample_.flags[s] = flags;
+      }
+      pose_ = integrate_exact(pose_, twist, dt);
+      OdometryStep step;
+      step.sample = &sample_;
+      step.estimate.estimate.twist = twist;
+      step.pose = pose_;
+      if (auto s = watcher.feed(step)) out = s;
+    }
+    return out;
+  }
+
+ private:
+  SensorArray array_;
+  ArraySample sample_;
+  Pose2 pose_;
+};
+
+SensorArray square_array() {
+  SensorArray array = regular_polygon(4, 0.1, std::numbers::pi / 4);
+  for (int i = 0; i < 4; ++i) array[i].max_speed = 0.5;
+  return array;
+}
+
+std::vector<MotionProblem> problems_of(GuidedStep step, const Twist2& twist, double seconds,
+                                       std::uint8_t flags = 0) {
+  const SensorArray array = square_array();
+  MotionWatcher watcher(array, MotionLimits{});
+  Epochs epochs(array);
+  watcher.arm(step);
+  EXPECT_FALSE(epochs.run(watcher, Twist2{}, 1.0));
+  EXPECT_EQ(watcher.state(), MotionWatcher::State::kReady);
+  EXPECT_FALSE(epochs.run(watcher, twist, seconds, flags));
+  EXPECT_EQ(watcher.state(), MotionWatcher::State::kMoving);
+  const auto summary = epochs.run(watcher, Twist2{}, 1.0);
+  EXPECT_TRUE(summary);
+  return summary ? summary->problems : std::vector<MotionProblem>{};
+}
+
+TEST(MotionWatcher, AGoodPushAndSpinPassAndGiveTheModelsTotals) {
+  EXPECT_TRUE(problems_of(GuidedStep::kPushX, {{0.25, 0.0}, 0.0}, 4.0).empty());
+  EXPECT_TRUE(problems_of(GuidedStep::kPushY, {{0.0, 0.2}, 0.0}, 5.0).empty());
+  EXPECT_TRUE(problems_of(GuidedStep::kSpin, {{0.0, 0.0}, std::numbers::pi}, 6.0).empty());
+
+  const SensorArray array = square_array();
+  MotionWatcher watcher(array, MotionLimits{});
+  Epochs epochs(array);
+  watcher.arm(GuidedStep::kPushX);
+  epochs.run(watcher, Twist2{}, 1.0);
+  epochs.run(watcher, {{0.25, 0.0}, 0.0}, 4.0);
+  const auto s = epochs.run(watcher, Twist2{}, 1.0);
+  ASSERT_TRUE(s);
+  EXPECT_NEAR(s->displacement.x(), 1.0, 1e-9);
+  ASSERT_EQ(s->totals.size(), 4u);
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Vector2d expected = array[i].counts({{1.0, 0.0}, 0.0}, 1.0);
+    EXPECT_LT((s->totals[static_cast<std::size_t>(i)] - expected).norm(), 1e-6) << i;
+  }
+}
+
+TEST(MotionWatcher, SaysWhatIsWrongWithABadMotion) {
+  using P = MotionProblem;
+  using ::testing::Contains;
+  EXPECT_THAT(problems_of(GuidedStep::kPushX, {{0.25, 0.0}, 0.0}, 2.0), Contains(P::kTooShort));
+  EXPECT_THAT(problems_of(GuidedStep::kPushX, {{0.25, 0.0}, 0.0}, 6.0), Contains(P::kTooLong));
+  EXPECT_THAT(problems_of(GuidedStep::kPushX, {{0.25, 0.05}, 0.0}, 4.0), Contains(P::kOffAxis));
+  EXPECT_THAT(problems_of(GuidedStep::kPushX, {{0.25, 0.0}, 0.2}, 4.0), Contains(P::kTurned));
+  EXPECT_THAT(problems_of(GuidedStep::kPushX, {{0.45, 0.0}, 0.0}, 2.2), Contains(P::kTooFast));
+  EXPECT_THAT(problems_of(GuidedStep::kPushX, {{0.25, 0.0}, 0.0}, 4.0, kFlagLift),
+              Contains(P::kLifted));
+  EXPECT_THAT(problems_of(GuidedStep::kSpin, {{0.0, 0.0}, std::numbers::pi}, 5.0),
+              Contains(P::kTooFewTurns));
+  EXPECT_THAT(problems_of(GuidedStep::kSpin, {{0.0, 0.0}, std::numbers::pi}, 7.0),
+              Contains(P::kTooManyTurns));
+  // About a point 5 cm ahead of the centre: v = -omega J c.
+  EXPECT_THAT(
+      problems_of(GuidedStep::kSpin, {{0.0, -std::numbers::pi * 0.05}, std::numbers::pi}, 6.0),
+      Contains(P::kOffCentre));
+}
+
+TEST(MotionWatcher, LimitsValidateNamingTheField) {
+  MotionLimits limits;
+  EXPECT_STREQ(limits.validate(), "");
+  limits.distance = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_STREQ(limits.validate(), "distance: must be positive and finite (m)");
+  limits = {};
+  limits.turns = 0.0;
+  EXPECT_STREQ(limits.validate(), "turns: must be finite and not 0");
+}
+
+}  // namespace
+}  // namespace moa

@@ -1,0 +1,335 @@
+// moa live --replay and --serve: a log played at its own pace through the
+// live path, the dashboard's page and event stream over loopback HTTP, the
+// page in headless Chromium while a replay runs, and the server's bounds
+// (clients, a client that reads nothing).
+#include <arpa/inet.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <thread>
+
+#include "moa/io/config.hpp"
+#include "moa/io/dashboard.hpp"
+#include "moa/io/error.hpp"
+#include "moa/io/log.hpp"
+#include "moa/io/replay_reader.hpp"
+#include "support/http.hpp"
+#include "support/run.hpp"
+#include "support/synth.hpp"
+
+namespace moa {
+namespace {
+
+using ::testing::HasSubstr;
+using ::testing::Not;
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+std::string slurp(const fs::path& file) {
+  std::ifstream in(file);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+/// A 40 s simulated log (the calibration scenario: four sensors, mixed
+/// motion), made once and removed at exit.
+const fs::path& simulated_log() {
+  struct Log {
+    fs::path dir = test::scratch_dir("live-dashboard-log");
+    Log() {
+      const auto r =
+          test::run_moa("simulate --scenario calibration --seed 1 --out " + dir.string());
+      EXPECT_EQ(r.exit_code, 0) << r.err;
+    }
+    ~Log() { fs::remove_all(dir); }
+  };
+  static const Log log;
+  return log.dir;
+}
+
+/// The data lines of an event stream's default ("message") events.
+std::vector<std::string> events_of(const std::string& stream) {
+  std::vector<std::string> out;
+  std::istringstream in(stream);
+  std::string line;
+  bool named = false;
+  while (std::getline(in, line)) {
+    if (line.empty()) {
+      named = false;
+    } else if (line.rfind("event:", 0) == 0) {
+      named = true;
+    } else if (line.rfind("data: ", 0) == 0 && !named) {
+      out.push_back(line.substr(6));
+    }
+  }
+  return out;
+}
+
+TEST(ReplayReader, GivesTheLogsRowsAtItsPaceTimesTheSpeed) {
+  const fs::path& log = simulated_log();
+  const io::RobotConfig config = io::read_config(log / "robot.yaml");
+  io::MiceReader plain(log, config);
+  int ticks = 0;
+  io::LiveHooks hooks;
+  hooks.tick = [&] { ++ticks; };
+  io::ReplayOptions options;
+  options.speed = 20.0;
+  io::ReplayReader replay(log, config, options, hooks);
+  ASSERT_EQ(replay.start_time(), plain.start_time());
+  const auto started = Clock::now();
+  double t_last = 0.0;
+  std::size_t rows = 0;
+  while (const auto row = replay.next()) {
+    const auto expected = plain.next();
+    ASSERT_TRUE(expected);
+    ASSERT_EQ(row->t, expected->t);
+    ASSERT_EQ(row->sensor, expected->sensor);
+    ASSERT_EQ(row->counts, expected->counts);
+    // Never early: row k comes no sooner than (t_k - t0) / speed after the start.
+    ASSERT_GE(std::chrono::duration<double>(Clock::now() - started).count(),
+              (row->t - replay.start_time()) / options.speed - 1e-3);
+    t_last = row->t;
+    ++rows;
+  }
+  EXPECT_FALSE(plain.next());
+  EXPECT_EQ(replay.rows(), rows);
+  const double wall = std::chrono::duration<double>(Clock::now() - started).count();
+  const double span = (t_last - replay.start_time()) / options.speed;  // 2 s
+  EXPECT_GE(wall, span - 1e-3);
+  EXPECT_LT(wall, span + 1.0);
+  EXPECT_GE(ticks, 10);  // the status hook runs while it waits (every 0.1 s)
+}
+
+TEST(ReplayReader, StopsWhenTheStopHookSaysSo) {
+  const fs::path& log = simulated_log();
+  const io::RobotConfig config = io::read_config(log / "robot.yaml");
+  const auto started = Clock::now();
+  io::LiveHooks hooks;
+  hooks.stop = [&] { return Clock::now() - started > std::chrono::milliseconds(300); };
+  io::ReplayReader replay(log, config, {}, hooks);
+  while (replay.next()) {
+  }
+  EXPECT_LT(std::chrono::duration<double>(Clock::now() - started).count(), 1.0);
+}
+
+TEST(ReplayReader, SpeedMustBePositiveAndFinite) {
+  const fs::path& log = simulated_log();
+  for (const char* speed : {"nan", "inf", "0", "-1"}) {
+    const auto r = test::run_moa("live --config " + (log / "robot.yaml").string() + " --replay " +
+                                 log.string() + " --speed " + speed + " --duration 1");
+    EXPECT_NE(r.exit_code, 0) << speed;
+    EXPECT_THAT(r.err, HasSubstr("--speed")) << speed;
+  }
+  io::ReplayOptions options;
+  options.speed = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_STREQ(options.validate(), "speed: must be positive and finite");
+}
+
+TEST(LiveDashboard, ServesThePageAndAtLeastTwentyEventsInTwoSeconds) {
+  const fs::path& log = simulated_log();
+  const int port = test::free_port();
+  test::BackgroundMoa moa("live --config " + (log / "robot.yaml").string() + " --replay " +
+                          log.string() + " --speed 2 --serve 127.0.0.1:" + std::to_string(port) +
+                          " --duration 8");
+  ASSERT_TRUE(test::wait_for_server(port, 10.0)) << moa.err();
+
+  const auto page = test::http_get(port, "/", 5.0);
+  ASSERT_EQ(page.status, 200);
+  EXPECT_THAT(page.headers, HasSubstr("text/html"));
+  EXPECT_THAT(page.body, HasSubstr("<canvas id=\"chart-trajectory\""));
+  EXPECT_THAT(page.body, HasSubstr("Chart.js v3"));  // inlined, not referenced
+  EXPECT_THAT(page.body, Not(HasSubstr("http://")));
+  EXPECT_THAT(page.body, Not(HasSubstr("https://")));
+  EXPECT_FALSE(std::regex_search(page.body, std::regex(R"((src|href)\s*=)")))
+      << "the page references something";
+
+  const auto stream = test::http_get(port, "/events", 2.0);
+  ASSERT_EQ(stream.status, 200);
+  EXPECT_THAT(stream.headers, HasSubstr("text/event-stream"));
+  const auto events = events_of(stream.body);
+  EXPECT_GE(events.size(), 20u);
+  EXPECT_LE(events.size(), 50u);  // decimated: at most ~20 events/s whatever the rate
+  const std::regex number(R"(-?[0-9][0-9.e+-]*)");
+  for (const auto& e : events) {
+    ASSERT_EQ(e.front(), '{') << e;
+    ASSERT_EQ(e.back(), '}') << e;
+    for (const char* key : {"t", "x", "y", "theta"}) {
+      std::smatch m;
+      EXPECT_TRUE(std::regex_search(
+          e, m, std::regex("\"" + std::string(key) + "\": -?[0-9][0-9.e+-]*[,}]")))
+          << key << " in " << e;
+    }
+    EXPECT_THAT(e, HasSubstr("\"sensors\": [{\"name\": \"m1\""));
+    EXPECT_THAT(e, HasSubstr("\"omega\": "));
+    EXPECT_THAT(e, HasSubstr("\"squal\": "));
+    EXPECT_THAT(e, HasSubstr("\"used\": "));
+    EXPECT_THAT(e, HasSubstr("\"excluded\": "));
+  }
+  EXPECT_EQ(moa.wait(15.0), 0) << moa.err();
+  EXPECT_THAT(moa.out(), HasSubstr("dashboard sent"));
+}
+
+TEST(LiveDashboard, BoundsClientsAndASlowClientNeverSlowsThePublisher) {
+  const io::RobotConfig config = io::read_config(simulated_log() / "robot.yaml");
+  io::DashboardOptions options;
+  options.port = 0;
+  options.max_clients = 2;
+  options.client_queue = 4;
+  options.send_buffer = 4096;
+  options.max_rate = 100.0;
+  io::Dashboard dashboard(config, options);
+  const int port = dashboard.port();
+  ASSERT_GT(port, 0);
+
+  // Two clients that connect and never read: their sockets fill up.
+  std::vector<int> sockets;
+  for (int k = 0; k < 2; ++k) {
+    const int fd = socket(AF_INET, SOCK_STREAM, 0);
+    const int small = 1024;  // a receive window that fills at once
+    setsockopt(fd, SOL_SOCKET, SO_RCVBUF, &small, sizeof small);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(static_cast<std::uint16_t>(port));
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ASSERT_EQ(connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+    const std::string get = "GET /events HTTP/1.1\r\nHost: x\r\n\r\n";
+    ASSERT_EQ(write(fd, get.data(), get.size()), static_cast<ssize_t>(get.size()));
+    sockets.push_back(fd);
+  }
+  for (int i = 0; i < 200 && dashboard.stats().clients < 2; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_EQ(dashboard.stats().clients, 2u);
+  EXPECT_EQ(test::http_get(port, "/events", 2.0).status, 503);
+  EXPECT_EQ(test::http_get(port, "/", 2.0).status, 200);  // the page still comes
+
+  // 4 s of epochs at 1 kHz, 400 events of ~1 kB: the publisher never waits
+  // for the clients, whose queues stay bounded (the oldest events dropped).
+  ArraySample sample;
+  sample.size = config.array.size();
+  sample.dt = 1e-3;
+  OdometryStep step;
+  step.sample = &sample;
+  double worst = 0.0;
+  for (int k = 0; k < 4000; ++k) {
+    sample.t = k * 1e-3;
+    for (int i = 0; i < sample.size; ++i) {
+      sample.counts[static_cast<std::size_t>(i)] = Eigen::Vector2d(k / 3.0, -k / 7.0);
+    }
+    step.pose.t = Eigen::Vector2d(k * 1e-4, 0.0);
+    const auto before = Clock::now();
+    dashboard.publish(step);
+    worst = std::max(worst, std::chrono::duration<double>(Clock::now() - before).count());
+    std::this_thread::sleep_until(before + std::chrono::microseconds(1000));
+  }
+  const auto stats = dashboard.stats();
+  EXPECT_GT(stats.events, 200u);
+  EXPECT_GT(stats.dropped, 0u) << stats.events << " events, clients " << stats.clients;
+  EXPECT_LT(worst, 0.05) << "publish() waited for a client";
+  for (const int fd : sockets) close(fd);
+}
+
+TEST(LiveDashboard, ListenAddressIsHostColonPortOrAPort) {
+  io::DashboardOptions o;
+  io::parse_listen_address("8081", "--serve", o);
+  EXPECT_EQ(o.host, "127.0.0.1");
+  EXPECT_EQ(o.port, 8081);
+  io::parse_listen_address("0.0.0.0:9000", "--serve", o);
+  EXPECT_EQ(o.host, "0.0.0.0");
+  EXPECT_EQ(o.port, 9000);
+  io::parse_listen_address("[::1]:9001", "--serve", o);
+  EXPECT_EQ(o.host, "::1");
+  EXPECT_EQ(o.port, 9001);
+  for (const char* bad : {"", "http", "70000", "-1", ":80", "host:", "1.2.3.4:8o"}) {
+    try {
+      io::parse_listen_address(bad, "--serve", o);
+      ADD_FAILURE() << bad;
+    } catch (const io::Error& e) {
+      EXPECT_THAT(e.what(), HasSubstr("--serve " + std::string(bad) + ":")) << bad;
+    }
+  }
+  const fs::path& log = simulated_log();
+  const auto r = test::run_moa("live --config " + (log / "robot.yaml").string() + " --replay " +
+                               log.string() + " --serve nowhere --duration 1");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr("--serve nowhere: the port must be a number"));
+  io::DashboardOptions invalid;
+  invalid.max_rate = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_STREQ(invalid.validate(), "max_rate: must be in (0, 100] events/s");
+}
+
+std::optional<std::string> find_chromium() {
+  for (const char* name : {"chromium", "chromium-browser", "google-chrome"}) {
+    const std::string probe = std::string("command -v ") + name + " >/dev/null 2>&1";
+    if (std::system(probe.c_str()) == 0) return std::string(name);
+  }
+  return std::nullopt;
+}
+
+std::string tag_of(const std::string& dom, const std::string& id) {
+  const auto at = dom.find("id=\"" + id + "\"");
+  if (at == std::string::npos) return {};
+  const auto open = dom.rfind('<', at);
+  return dom.substr(open, dom.find('>', at) - open + 1);
+}
+
+unsigned long attribute(const std::string& tag, const std::string& name) {
+  std::smatch m;
+  if (!std::regex_search(tag, m, std::regex(name + "=\"([0-9]+)\""))) return 0;
+  return std::stoul(m[1]);
+}
+
+TEST(LiveDashboard, ChromiumDrawsTheChartsUpdatingWhileAReplayRuns) {
+  const auto chromium = find_chromium();
+  if (!chromium) GTEST_SKIP() << "no chromium on the PATH (make deps installs it)";
+  const fs::path& log = simulated_log();
+  const fs::path dir = test::scratch_dir("live-dashboard-browser");
+  const int port = test::free_port();
+  test::BackgroundMoa moa("live --config " + (log / "robot.yaml").string() + " --replay " +
+                          log.string() + " --serve 127.0.0.1:" + std::to_string(port) +
+                          " --duration 10 --quiet");
+  ASSERT_TRUE(test::wait_for_server(port, 10.0)) << moa.err();
+  // The page's stream stays open until the run ends (its "end" event closes
+  // it); Chromium dumps the DOM once the network is idle and the budget spent.
+  const std::string command =
+      "timeout 60 " + *chromium +
+      " --headless --no-sandbox --disable-gpu --disable-dev-shm-usage --no-first-run"
+      " --user-data-dir=" +
+      (dir / "profile").string() +
+      " --window-size=1280,900 --virtual-time-budget=2000 --enable-logging=stderr --v=0"
+      " --dump-dom http://127.0.0.1:" +
+      std::to_string(port) + "/ >" + (dir / "dom.html").string() + " 2>" +
+      (dir / "chromium.log").string();
+  ASSERT_EQ(std::system(command.c_str()), 0) << slurp(dir / "chromium.log");
+  const std::string dom = slurp(dir / "dom.html");
+  const std::string console = slurp(dir / "chromium.log");
+  EXPECT_EQ(moa.wait(15.0), 0) << moa.err();
+
+  EXPECT_THAT(dom, HasSubstr("data-moa-status=\"ended\""));
+  EXPECT_THAT(tag_of(dom, "moa-errors"), HasSubstr("hidden"));
+  EXPECT_EQ(console.find("CONSOLE"), std::string::npos) << console;
+  // About 20 events a second for the seconds after the page loaded (Chromium
+  // takes a few to start): every chart
+  // was redrawn for each, with data on it.
+  const std::string body = dom.substr(dom.find("<body"), 200);
+  EXPECT_GE(attribute(body, "data-events"), 40u) << body;
+  for (const char* id : {"chart-trajectory", "chart-health", "chart-twist"}) {
+    const std::string tag = tag_of(dom, id);
+    EXPECT_GE(attribute(tag, "data-updates"), 40u) << id << ": " << tag;
+    EXPECT_GE(attribute(tag, "data-points"), 8u) << id << ": " << tag;
+  }
+  if (!HasFailure()) fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace moa
