@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "moa/analysis/evaluate.hpp"
+#include "moa/core/odometry.hpp"
 #include "moa/io/config.hpp"
 #include "moa/io/log.hpp"
 #include "moa/io/odometry_csv.hpp"
@@ -99,6 +100,27 @@ TEST(EkfScaleCli, ScaleStatesReduceTheHeadingErrorOfAWrongRadius) {
               upper);
   EXPECT_LT(upper, 0.0);
   if (!HasFailure()) fs::remove_all(dir);
+}
+
+TEST(EkfScaleOptions, InvalidFieldsAreNamed) {
+  const auto message = [](auto change) {
+    OdometryOptions o;
+    o.fuse_camera = true;
+    o.ekf.estimate_scale = true;
+    change(o);
+    return std::string(o.validate());
+  };
+  EXPECT_EQ(message([](auto&) {}), "");
+  EXPECT_EQ(message([](auto& o) { o.fuse_camera = false; }).rfind("ekf.estimate_scale:", 0), 0u);
+  EXPECT_EQ(message([](auto& o) { o.ekf.scale_sd.x() = 0.0; }).rfind("ekf.scale_sd:", 0), 0u);
+  EXPECT_EQ(message([](auto& o) { o.ekf.scale_sd.y() = std::nan(""); }).rfind("ekf.scale_sd:", 0),
+            0u);
+  EXPECT_EQ(message([](auto& o) {
+              o.ekf.scale_random_walk.x() = -1e-3;
+            }).rfind("ekf.scale_random_walk:", 0),
+            0u);
+  // A random walk of 0: scales constant over the run, but unknown.
+  EXPECT_EQ(message([](auto& o) { o.ekf.scale_random_walk.setZero(); }), "");
 }
 
 TEST(EkfScaleCli, ScaleStatesNeedCameraFusion) {
