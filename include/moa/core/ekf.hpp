@@ -53,7 +53,8 @@
 //     shows as a sideways drift d theta x (travel) in the translation after
 //     it. During an in-place turn a position fix says nothing about either.
 // Rollback keeps working: a Step stores the scales and the 5x5 covariance
-// before it (history 128 x 352 bytes = 45 KB, 26.6 KB before), and
+// before it (history 128 x 352 bytes = 45 KB on the Cortex-M4F, 26.6 KB
+// before; 384 bytes a step on x86-64, where Eigen aligns Vector2d), and
 // re-prediction uses the corrected scales. Off, the scale rows of the
 // covariance are zero and the pose filter's arithmetic is the 3x3 one
 // (outputs byte-identical). Measured (docs/math.md, "Camera fusion"): a
