@@ -41,7 +41,7 @@
 //   d pose'/d s_v = G (vx, vy, 0)^T,  d pose'/d s_w = G (0, 0, omega)^T
 //   P' = F5 P F5^T + diag(G S (Q + Q_floor) S G^T, rw^2 dt)
 // The scales start at 1 with sd scale_sd (5 %) and walk by
-// scale_random_walk (1e-3 per sqrt(s): 0.8 % over a minute). The update
+// scale_random_walk (1e-3 per sqrt(second): 0.8 % over a minute). The update
 // has H = [I 0]: fixes observe the pose only, the scales move through
 // their correlation with it (the rows F5 builds):
 //   - s_v needs translation between fixes: its column of F5 is the distance
@@ -95,7 +95,7 @@ struct EkfOptions {
   /// Prior sd of s_v and s_w around 1 (mice resolutions and radii are a
   /// few % off before calibration).
   Eigen::Vector2d scale_sd{0.05, 0.05};
-  /// Random walk of s_v and s_w, sd per sqrt(s): a floor that changes, a
+  /// Random walk of s_v and s_w, sd per sqrt(second): a floor that changes, a
   /// sensor that gets dirty. Over a step of dt the variance grows by
   /// scale_random_walk^2 dt.
   Eigen::Vector2d scale_random_walk{1e-3, 1e-3};
