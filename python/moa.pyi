@@ -58,6 +58,10 @@ class Steps(TypedDict, total=False):
     pxy: FloatArray  # m^2
     pyy: FloatArray  # m^2
     ptt: FloatArray  # rad^2
+    scale_v: FloatArray  # 1, with fuse_camera and ekf_scale
+    scale_omega: FloatArray  # 1
+    sd_scale_v: FloatArray  # 1
+    sd_scale_omega: FloatArray  # 1
 
 def read_config(path: PathLike) -> dict[str, Any]:
     """Reads a robot config v1 into arrays.
@@ -93,13 +97,14 @@ def odometry(
     initial_pose: Optional[Sequence[float]] = None,
     max_row_interval: float = 0.05,
     max_gap: float = 3600.0,
+    ekf_scale: bool = False,
 ) -> Steps:
     """Runs `moa odometry` on a log; returns its columns as arrays (equal to odometry.csv).
 
     estimator: ls, sekimori, consensus, wheels or oracle. The options are the
     command's flags: sensors (names), rate (Hz), no_wheels, fuse_camera,
     camera_latency (s), camera_sigma (m), e_th (m^2), r_th, alpha,
-    initial_pose (x, y, theta), max_row_interval (s), max_gap (s).
+    initial_pose (x, y, theta), max_row_interval (s), max_gap (s), ekf_scale.
     """
 
 class Odometry:

@@ -145,8 +145,9 @@ class Options {
 };
 
 const std::set<std::string> kOdometryOptions{
-    "sensors", "rate", "no_wheels", "fuse_camera",  "camera_latency",   "camera_sigma",
-    "e_th",    "r_th", "alpha",     "initial_pose", "max_row_interval", "max_gap"};
+    "sensors",          "rate",    "no_wheels", "fuse_camera", "camera_latency",
+    "camera_sigma",     "e_th",    "r_th",      "alpha",       "initial_pose",
+    "max_row_interval", "max_gap", "ekf_scale"};
 
 /// `moa odometry`'s flags as keywords, resolved as the command line does.
 OdometryOptions odometry_options(const std::string& estimator, const py::kwargs& kwargs,
@@ -157,6 +158,7 @@ OdometryOptions odometry_options(const std::string& estimator, const py::kwargs&
   o.set("fuse_camera", options.fuse_camera);
   o.set("camera_latency", options.camera_latency);
   o.set("camera_sigma", options.camera_sigma);
+  o.set("ekf_scale", options.ekf.estimate_scale);
   o.set("e_th", options.sekimori.e_th);
   o.set("r_th", options.sekimori.r_th);
   o.set("alpha", options.consensus.alpha);
@@ -195,6 +197,12 @@ class Steps {
     const Eigen::Matrix3d& p = step.pose_covariance;
     for (const double v : {p(0, 0), p(0, 1), p(1, 1), p(2, 2)}) covariance_.push_back(v);
     fused_ = fused_ || step.fused;
+    for (const double v :
+         {step.scale(0), step.scale(1), std::sqrt(std::max(step.scale_covariance(0, 0), 0.0)),
+          std::sqrt(std::max(step.scale_covariance(1, 1), 0.0))}) {
+      scale_.push_back(v);
+    }
+    scaled_ = scaled_ || step.scaled;
     source_.emplace_back(describe(e.source));
     for (int i = 0; i < n_; ++i) {
       const bool used = contains(e.estimate.used, i);
@@ -232,6 +240,14 @@ class Steps {
       d["pyy"] = to_numpy(std::move(cov[2]));
       d["ptt"] = to_numpy(std::move(cov[3]));
     }
+    if (scaled_) {
+      std::array<std::vector<double>, 4> scale;
+      for (std::size_t j = 0; j < scale_.size(); ++j) scale[j % 4].push_back(scale_[j]);
+      d["scale_v"] = to_numpy(std::move(scale[0]));
+      d["scale_omega"] = to_numpy(std::move(scale[1]));
+      d["sd_scale_v"] = to_numpy(std::move(scale[2]));
+      d["sd_scale_omega"] = to_numpy(std::move(scale[3]));
+    }
     *this = Steps(n_);
     return d;
   }
@@ -243,6 +259,8 @@ class Steps {
   std::array<std::vector<double>, kColumns> numbers_;
   std::vector<double> covariance_;
   bool fused_ = false;
+  std::vector<double> scale_;  ///< scale_v, scale_omega, sd_scale_v, sd_scale_omega per step
+  bool scaled_ = false;
   std::vector<std::string> source_;
   std::vector<bool> used_;
   std::vector<std::string> excluded_;
@@ -677,7 +695,8 @@ config: path of robot.yaml (or a moa.Config); log_dir: the log directory or
 its mice.csv; estimator: ls, sekimori, consensus, wheels or oracle.
 Options, as the command's flags: sensors (list of names), rate (Hz),
 no_wheels, fuse_camera, camera_latency (s), camera_sigma (m), e_th (m^2),
-r_th, alpha, initial_pose (x, y, theta), max_row_interval (s), max_gap (s).
+r_th, alpha, initial_pose (x, y, theta), max_row_interval (s), max_gap (s),
+ekf_scale.
 
 Returns a dict of arrays, one row per epoch, equal to odometry.csv: t (s,
 epoch end), x, y, theta (world_T_robot), vx, vy, omega (robot frame), sd_vx,
@@ -685,7 +704,8 @@ sd_vy, sd_omega, source (str: mice, wheels, hold); per sensor (K, N):
 used (bool), excluded (str: '' when used, else the reason and noise flags as
 odometry.csv writes them, e.g. 'inconsistent/over-speed'), noise_flags
 (uint8 bits: 1 over-speed, 2 low-squal, 4 overflow); names; with
-fuse_camera pxx, pxy, pyy (m^2), ptt (rad^2).)");
+fuse_camera pxx, pxy, pyy (m^2), ptt (rad^2); with ekf_scale too scale_v,
+scale_omega, sd_scale_v, sd_scale_omega (1).)");
 
   py::class_<PyOdometry>(m, "Odometry", R"(The odometry pipeline, fed row by row or in bulk.
 

@@ -22,6 +22,7 @@
 #include "moa/io/error.hpp"
 #include "moa/io/log.hpp"
 #include "moa/io/replay_reader.hpp"
+#include "support/browser.hpp"
 #include "support/http.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"
@@ -33,13 +34,6 @@ using ::testing::HasSubstr;
 using ::testing::Not;
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
-
-std::string slurp(const fs::path& file) {
-  std::ifstream in(file);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
 
 /// A 40 s simulated log (the calibration scenario: four sensors, mixed
 /// motion), made once and removed at exit.
@@ -268,21 +262,6 @@ TEST(LiveDashboard, ListenAddressIsHostColonPortOrAPort) {
   EXPECT_STREQ(invalid.validate(), "max_rate: must be in (0, 100] events/s");
 }
 
-std::optional<std::string> find_chromium() {
-  for (const char* name : {"chromium", "chromium-browser", "google-chrome"}) {
-    const std::string probe = std::string("command -v ") + name + " >/dev/null 2>&1";
-    if (std::system(probe.c_str()) == 0) return std::string(name);
-  }
-  return std::nullopt;
-}
-
-std::string tag_of(const std::string& dom, const std::string& id) {
-  const auto at = dom.find("id=\"" + id + "\"");
-  if (at == std::string::npos) return {};
-  const auto open = dom.rfind('<', at);
-  return dom.substr(open, dom.find('>', at) - open + 1);
-}
-
 unsigned long attribute(const std::string& tag, const std::string& name) {
   std::smatch m;
   if (!std::regex_search(tag, m, std::regex(name + "=\"([0-9]+)\""))) return 0;
@@ -290,7 +269,7 @@ unsigned long attribute(const std::string& tag, const std::string& name) {
 }
 
 TEST(LiveDashboard, ChromiumDrawsTheChartsUpdatingWhileAReplayRuns) {
-  const auto chromium = find_chromium();
+  const auto chromium = test::find_chromium();
   if (!chromium) GTEST_SKIP() << "no chromium on the PATH (make deps installs it)";
   const fs::path& log = simulated_log();
   const fs::path dir = test::scratch_dir("live-dashboard-browser");
@@ -301,22 +280,15 @@ TEST(LiveDashboard, ChromiumDrawsTheChartsUpdatingWhileAReplayRuns) {
   ASSERT_TRUE(test::wait_for_server(port, 10.0)) << moa.err();
   // The page's stream stays open until the run ends (its "end" event closes
   // it); Chromium dumps the DOM once the network is idle and the budget spent.
-  const std::string command =
-      "timeout 60 " + *chromium +
-      " --headless --no-sandbox --disable-gpu --disable-dev-shm-usage --no-first-run"
-      " --user-data-dir=" +
-      (dir / "profile").string() +
-      " --window-size=1280,900 --virtual-time-budget=2000 --enable-logging=stderr --v=0"
-      " --dump-dom http://127.0.0.1:" +
-      std::to_string(port) + "/ >" + (dir / "dom.html").string() + " 2>" +
-      (dir / "chromium.log").string();
-  ASSERT_EQ(std::system(command.c_str()), 0) << slurp(dir / "chromium.log");
-  const std::string dom = slurp(dir / "dom.html");
-  const std::string console = slurp(dir / "chromium.log");
+  const test::BrowserPage page = test::load_page(
+      *chromium, "http://127.0.0.1:" + std::to_string(port) + "/", dir, 1280, 900, 2000, 60);
+  ASSERT_EQ(page.exit_code, 0) << page.console;
+  const std::string& dom = page.dom;
+  const std::string& console = page.console;
   EXPECT_EQ(moa.wait(15.0), 0) << moa.err();
 
   EXPECT_THAT(dom, HasSubstr("data-moa-status=\"ended\""));
-  EXPECT_THAT(tag_of(dom, "moa-errors"), HasSubstr("hidden"));
+  EXPECT_THAT(test::tag_of(dom, "moa-errors"), HasSubstr("hidden"));
   EXPECT_EQ(console.find("CONSOLE"), std::string::npos) << console;
   // About 20 events a second for the seconds after the page loaded (Chromium
   // takes a few to start): every chart
@@ -324,7 +296,7 @@ TEST(LiveDashboard, ChromiumDrawsTheChartsUpdatingWhileAReplayRuns) {
   const std::string body = dom.substr(dom.find("<body"), 200);
   EXPECT_GE(attribute(body, "data-events"), 40u) << body;
   for (const char* id : {"chart-trajectory", "chart-health", "chart-twist"}) {
-    const std::string tag = tag_of(dom, id);
+    const std::string tag = test::tag_of(dom, id);
     EXPECT_GE(attribute(tag, "data-updates"), 40u) << id << ": " << tag;
     EXPECT_GE(attribute(tag, "data-points"), 8u) << id << ": " << tag;
   }

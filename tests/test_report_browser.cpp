@@ -13,6 +13,7 @@
 
 #include "moa/io/config.hpp"
 #include "moa/io/report.hpp"
+#include "support/browser.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"
 
@@ -22,31 +23,8 @@ namespace {
 using ::testing::HasSubstr;
 namespace fs = std::filesystem;
 
-std::string slurp(const fs::path& file) {
-  std::ifstream in(file);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::optional<std::string> find_chromium() {
-  for (const char* name : {"chromium", "chromium-browser", "google-chrome"}) {
-    const std::string probe = std::string("command -v ") + name + " >/dev/null 2>&1";
-    if (std::system(probe.c_str()) == 0) return std::string(name);
-  }
-  return std::nullopt;
-}
-
-/// The attributes of the element with id `id` in the dumped DOM.
-std::string tag_of(const std::string& dom, const std::string& id) {
-  const auto at = dom.find("id=\"" + id + "\"");
-  if (at == std::string::npos) return {};
-  const auto open = dom.rfind('<', at);
-  return dom.substr(open, dom.find('>', at) - open + 1);
-}
-
 TEST(ReportBrowser, ChromiumDrawsEveryChartWithoutErrors) {
-  const auto chromium = find_chromium();
+  const auto chromium = test::find_chromium();
   if (!chromium) GTEST_SKIP() << "no chromium on the PATH (make deps installs it)";
 
   const fs::path dir = test::scratch_dir("report-browser");
@@ -77,24 +55,15 @@ TEST(ReportBrowser, ChromiumDrawsEveryChartWithoutErrors) {
                                     (dir / "cal.yaml").string() + " --out " + page.string());
   ASSERT_EQ(report.exit_code, 0) << report.err;
 
-  // --virtual-time-budget lets the page's timers run before the DOM is dumped;
-  // --enable-logging=stderr --v=0 prints the page's console messages as "CONSOLE".
-  const std::string command =
-      "timeout 120 " + *chromium +
-      " --headless --no-sandbox --disable-gpu --disable-dev-shm-usage --no-first-run"
-      " --user-data-dir=" +
-      (dir / "profile").string() +
-      " --window-size=1280,4000 --virtual-time-budget=10000 --enable-logging=stderr --v=0"
-      " --dump-dom file://" +
-      fs::absolute(page).string() + " >" + (dir / "dom.html").string() + " 2>" +
-      (dir / "chromium.log").string();
-  ASSERT_EQ(std::system(command.c_str()), 0) << slurp(dir / "chromium.log");
-  const std::string dom = slurp(dir / "dom.html");
-  const std::string console = slurp(dir / "chromium.log");
+  const test::BrowserPage loaded = test::load_page(
+      *chromium, "file://" + fs::absolute(page).string(), dir, 1280, 4000, 10000, 120);
+  ASSERT_EQ(loaded.exit_code, 0) << loaded.console;
+  const std::string& dom = loaded.dom;
+  const std::string& console = loaded.console;
 
   // The script ran to its end, nothing went wrong, and the console stayed quiet.
   EXPECT_THAT(dom, HasSubstr("data-moa-status=\"ready\""));
-  const std::string errors = tag_of(dom, "moa-errors");
+  const std::string errors = test::tag_of(dom, "moa-errors");
   EXPECT_THAT(errors, HasSubstr("hidden")) << dom.substr(dom.find("id=\"moa-errors\""), 600);
   EXPECT_EQ(console.find("CONSOLE"), std::string::npos) << console;
   // Every chart has pixels and its data elements on its canvas: at least one
@@ -106,7 +75,7 @@ TEST(ReportBrowser, ChromiumDrawsEveryChartWithoutErrors) {
                                                           {"chart-speed", 100},
                                                           {"chart-layout", 8}};
   for (const auto& [id, least] : charts) {
-    const std::string tag = tag_of(dom, id);
+    const std::string tag = test::tag_of(dom, id);
     EXPECT_THAT(tag, HasSubstr("data-painted=\"1\"")) << id << ": " << tag;
     std::smatch points;
     ASSERT_TRUE(std::regex_search(tag, points, std::regex("data-points=\"([0-9]+)\""))) << tag;

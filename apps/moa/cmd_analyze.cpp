@@ -9,12 +9,14 @@
 
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "commands.hpp"
 #include "moa/analysis/sensitivity.hpp"
 #include "moa/io/config.hpp"
 #include "moa/io/error.hpp"
+#include "moa/io/json.hpp"
 
 namespace moa::cli {
 namespace {
@@ -56,16 +58,21 @@ int run_sensitivity(const AnalyzeArgs& args) {
     }
   }
   if (args.json) {
-    std::string items;
+    // Units: dp_m in m; twist (m/s, m/s, rad/s); velocity errors likewise.
+    io::JsonWriter json;
+    json.begin_object().member("dp_m", args.dp).key("twist").begin_array();
+    for (int k = 0; k < 3; ++k) json.value(v(k));
+    json.end_array().key("rows").begin_array();
     for (const Row& r : rows) {
-      if (!items.empty()) items += ", ";
-      items += fmt::format(
-          "{{\"sensor\": \"{}\", \"axis\": \"{}\", \"first_order\": [{:.9g}, {:.9g}, {:.9g}], "
-          "\"exact\": [{:.9g}, {:.9g}, {:.9g}]}}",
-          r.sensor, r.axis, r.first(0), r.first(1), r.first(2), r.exact(0), r.exact(1), r.exact(2));
+      json.begin_object().member("sensor", r.sensor).member("axis", std::string_view(&r.axis, 1));
+      json.key("first_order").begin_array();
+      for (int k = 0; k < 3; ++k) json.value(r.first(k));
+      json.end_array().key("exact").begin_array();
+      for (int k = 0; k < 3; ++k) json.value(r.exact(k));
+      json.end_array().end_object();
     }
-    fmt::print("{{\"dp_m\": {}, \"twist\": [{}, {}, {}], \"rows\": [{}]}}\n", args.dp, v(0), v(1),
-               v(2), items);
+    json.end_array().end_object();
+    fmt::print("{}\n", json.str());
     return 0;
   }
   fmt::print(

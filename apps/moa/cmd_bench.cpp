@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <fstream>
 #include <memory>
 #include <numbers>
@@ -147,28 +148,40 @@ int run_bench(const BenchArgs& args) {
   const char* build = "debug (assertions on): figures are not representative";
 #endif
   if (args.json) {
-    std::string per_n;
+    // Keys: nanoseconds per update (ns), ratios (1).
+    const auto timings = [](io::JsonWriter& json, const Row& r) {
+      json.member("n", r.n)
+          .member("ls_ns_per_update", r.ls)
+          .member("naive_ls_ns_per_update", r.naive_ls)
+          .member("sekimori_ns_per_update", r.sekimori)
+          .member("naive_sekimori_ns_per_update", r.naive_sekimori)
+          .member("consensus_ns_per_update", r.consensus);
+    };
+    io::JsonWriter json;
+    json.begin_object();
+    timings(json, four);
+    json.member("ls_speedup", four.naive_ls / four.ls)
+        .member("sekimori_speedup", four.naive_sekimori / four.sekimori)
+        .member("consensus_vs_naive_ls", four.naive_ls / four.consensus)
+        .key("per_n")
+        .begin_array();
     for (const Row& r : rows) {
-      if (!per_n.empty()) per_n += ", ";
-      per_n += fmt::format(
-          "{{\"n\": {}, \"ls_ns_per_update\": {:.1f}, \"naive_ls_ns_per_update\": {:.1f}, "
-          "\"sekimori_ns_per_update\": {:.1f}, \"naive_sekimori_ns_per_update\": {:.1f}, "
-          "\"consensus_ns_per_update\": {:.1f}}}",
-          r.n, r.ls, r.naive_ls, r.sekimori, r.naive_sekimori, r.consensus);
+      json.begin_object();
+      timings(json, r);
+      json.end_object();
     }
-    fmt::print(
-        "{{\"n\": {}, \"ls_ns_per_update\": {:.1f}, \"naive_ls_ns_per_update\": {:.1f}, "
-        "\"sekimori_ns_per_update\": {:.1f}, \"naive_sekimori_ns_per_update\": {:.1f}, "
-        "\"consensus_ns_per_update\": {:.1f}, \"ls_speedup\": {:.1f}, \"sekimori_speedup\": "
-        "{:.1f}, "
-        "\"consensus_vs_naive_ls\": {:.2f}, \"per_n\": [{}], \"machine\": {{\"cpu\": {}, "
-        "\"hardware_threads\": {}}}, \"compiler\": {}, \"build\": \"{}\", \"batches\": {}, "
-        "\"updates_per_batch\": {}}}\n",
-        four.n, four.ls, four.naive_ls, four.sekimori, four.naive_sekimori, four.consensus,
-        four.naive_ls / four.ls, four.naive_sekimori / four.sekimori,
-        four.naive_ls / four.consensus, per_n, io::json_string(cpu_model()),
-        std::thread::hardware_concurrency(), io::json_string(__VERSION__), build, args.batches,
-        args.updates);
+    json.end_array()
+        .key("machine")
+        .begin_object()
+        .member("cpu", cpu_model())
+        .member("hardware_threads", static_cast<std::uint64_t>(std::thread::hardware_concurrency()))
+        .end_object()
+        .member("compiler", __VERSION__)
+        .member("build", build)
+        .member("batches", args.batches)
+        .member("updates_per_batch", args.updates)
+        .end_object();
+    fmt::print("{}\n", json.str());
     return 0;
   }
   fmt::print("median ns per update ({} batches of {} updates; {}; {})\n", args.batches,

@@ -69,8 +69,9 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
   if (live) return;
   cmd->add_flag("--no-wheels", f.no_wheels,
                 "Ignore wheels.csv (by default it is the fallback and plausibility check)");
-  cmd->add_flag("--fuse-camera", o.fuse_camera,
-                "Fuse camera.csv position fixes with an EKF (adds pose covariance columns)");
+  CLI::Option* fuse =
+      cmd->add_flag("--fuse-camera", o.fuse_camera,
+                    "Fuse camera.csv position fixes with an EKF (adds pose covariance columns)");
   cmd->add_option("--camera-latency", o.camera_latency,
                   "Delay from a fix's capture (camera.csv t) to its arrival, s: late fixes are "
                   "applied at their capture time")
@@ -80,6 +81,10 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
                   "Std. dev. of a camera fix, m, when camera.csv has no sx, sy")
       ->check(kFinite & CLI::PositiveNumber)
       ->capture_default_str();
+  cmd->add_flag("--ekf-scale", o.ekf.estimate_scale,
+                "With --fuse-camera: estimate the dead reckoning's linear and rotation scales "
+                "(adds scale_v, scale_omega, sd_scale_v, sd_scale_omega columns)")
+      ->needs(fuse);
 }
 
 OdometryOptions resolve_odometry_flags(const OdometryFlags& f, const io::RobotConfig& config,

@@ -55,7 +55,8 @@ def assert_equals_cli(py, csv_path):
     """moa.odometry's dict equals the CSV: numbers to 1e-9, selection exactly."""
     f = read_csv(csv_path)
     assert len(py["t"]) == len(f["t"]) > 0
-    columns = NUMERIC + [c for c in ("pxx", "pxy", "pyy", "ptt") if c in f]
+    columns = NUMERIC + [c for c in ("pxx", "pxy", "pyy", "ptt", "scale_v", "scale_omega",
+                                      "sd_scale_v", "sd_scale_omega") if c in f]
     for c in columns:
         np.testing.assert_allclose(py[c], np.array(f[c], dtype=float), rtol=0, atol=1e-9,
                                    err_msg=c)
@@ -80,6 +81,8 @@ def assert_equals_cli(py, csv_path):
       "--initial-pose", "0.1,-0.2,0.3"],
      {"fuse_camera": True, "camera_latency": 0.02, "camera_sigma": 0.01,
       "initial_pose": (0.1, -0.2, 0.3)}),
+    ("faults-liftoff", "consensus", ["--fuse-camera", "--camera-latency", "0.1", "--ekf-scale"],
+     {"fuse_camera": True, "camera_latency": 0.1, "ekf_scale": True}),
     ("faults-liftoff", "oracle", ["--max-row-interval", "0.04", "--max-gap", "10"],
      {"max_row_interval": 0.04, "max_gap": 10}),
 ])

@@ -39,15 +39,53 @@ Eigen::Matrix3d exact_step_twist_jacobian(const Pose2& pose, const Twist2& twist
   return g;
 }
 
+Twist2 scaled_twist(const Twist2& twist, const Eigen::Vector2d& scale) {
+  return Twist2{twist.v * scale(0), twist.omega * scale(1)};
+}
+
+Eigen::Matrix<double, 3, 2> exact_step_scale_jacobian(const Pose2& pose, const Twist2& twist,
+                                                      const Eigen::Vector2d& scale, double dt) {
+  const Eigen::Matrix3d g = exact_step_twist_jacobian(pose, scaled_twist(twist, scale), dt);
+  Eigen::Matrix<double, 3, 2> out;
+  out.col(0) = g.leftCols<2>() * twist.v;
+  out.col(1) = g.col(2) * twist.omega;
+  return out;
+}
+
 PoseEkf::PoseEkf(double t0, const Pose2& initial, const Eigen::Matrix3d& covariance,
                  EkfOptions options)
-    : options_(options), t_(t0), pose_(initial), cov_(covariance) {}
+    : options_(options), t_(t0), pose_(initial) {
+  cov_.topLeftCorner<3, 3>() = covariance;
+  if (options_.estimate_scale) {
+    cov_.bottomRightCorner<2, 2>() = options_.scale_sd.cwiseAbs2().asDiagonal();
+  }
+}
 
 void PoseEkf::propagate(const Twist2& twist, const Eigen::Matrix3d& q, double dt) {
-  const Eigen::Matrix3d f = exact_step_pose_jacobian(pose_, twist, dt);
-  const Eigen::Matrix3d g = exact_step_twist_jacobian(pose_, twist, dt);
-  pose_ = integrate_exact(pose_, twist, dt);
-  cov_ = f * cov_ * f.transpose() + g * q * g.transpose();
+  if (!options_.estimate_scale) {
+    // The pose filter alone, on its 3x3 block: the same arithmetic as ever.
+    const Eigen::Matrix3d f = exact_step_pose_jacobian(pose_, twist, dt);
+    const Eigen::Matrix3d g = exact_step_twist_jacobian(pose_, twist, dt);
+    pose_ = integrate_exact(pose_, twist, dt);
+    const Eigen::Matrix3d p = cov_.topLeftCorner<3, 3>();
+    cov_.topLeftCorner<3, 3>() = f * p * f.transpose() + g * q * g.transpose();
+    return;
+  }
+  // Scale states: the twist integrated is S xi, S = diag(s_v, s_v, s_w);
+  // its noise S Q S. The scales follow a random walk.
+  const Twist2 used = scaled_twist(twist, scale_);
+  const Eigen::Matrix3d g = exact_step_twist_jacobian(pose_, used, dt);
+  StateCovariance f = StateCovariance::Identity();
+  f.topLeftCorner<3, 3>() = exact_step_pose_jacobian(pose_, used, dt);
+  f.block<3, 1>(0, 3) = g.leftCols<2>() * twist.v;
+  f.block<3, 1>(0, 4) = g.col(2) * twist.omega;
+  const Eigen::Vector3d s(scale_(0), scale_(0), scale_(1));
+  const Eigen::Matrix3d gs = g * s.asDiagonal();
+  StateCovariance noise = StateCovariance::Zero();
+  noise.topLeftCorner<3, 3>() = gs * q * gs.transpose();
+  noise.bottomRightCorner<2, 2>() = (options_.scale_random_walk.cwiseAbs2() * dt).asDiagonal();
+  pose_ = integrate_exact(pose_, used, dt);
+  cov_ = f * cov_ * f.transpose() + noise;
 }
 
 void PoseEkf::predict(double t, const Twist2& twist, const Eigen::Matrix3d& twist_covariance,
@@ -58,7 +96,8 @@ void PoseEkf::predict(double t, const Twist2& twist, const Eigen::Matrix3d& twis
       Eigen::Vector3d(twist.v.norm(), twist.v.norm(), std::abs(twist.omega));
   const Eigen::Vector3d floor =
       (options_.twist_noise_floor.cwiseAbs2() + relative.cwiseAbs2()) * (kFloorInterval / dt);
-  Step step{t - dt, t, twist, twist_covariance + Eigen::Matrix3d(floor.asDiagonal()), pose_, cov_};
+  Step step{t - dt, t,      twist, twist_covariance + Eigen::Matrix3d(floor.asDiagonal()),
+            pose_,  scale_, cov_};
   if (history_.full()) history_.pop_front();
   history_.push_back(step);
   propagate(step.twist, step.q, dt);
@@ -68,13 +107,24 @@ void PoseEkf::predict(double t, const Twist2& twist, const Eigen::Matrix3d& twis
 template <int M>
 FixResult PoseEkf::correct(const Eigen::Matrix<double, M, 1>& z,
                            const Eigen::Matrix<double, M, M>& r, double gate) {
-  using HMatrix = Eigen::Matrix<double, M, 3>;
+  return options_.estimate_scale ? correct_states<kStates, M>(z, r, gate)
+                                 : correct_states<3, M>(z, r, gate);
+}
+
+// N: the states updated, the pose (3) or the pose and the scales (5).
+template <int N, int M>
+FixResult PoseEkf::correct_states(const Eigen::Matrix<double, M, 1>& z,
+                                  const Eigen::Matrix<double, M, M>& r, double gate) {
+  using HMatrix = Eigen::Matrix<double, M, N>;
+  using Covariance = Eigen::Matrix<double, N, N>;
   const HMatrix h = HMatrix::Identity();
+  Covariance cov = cov_.topLeftCorner<N, N>();
   // 1. innovation, heading wrapped
-  Eigen::Matrix<double, M, 1> y = z - h * Eigen::Vector3d(pose_.t.x(), pose_.t.y(), pose_.theta);
+  Eigen::Matrix<double, M, 1> y =
+      z - h.template leftCols<3>() * Eigen::Vector3d(pose_.t.x(), pose_.t.y(), pose_.theta);
   if constexpr (M == 3) y(2) = wrap_angle(y(2));
   // 2. innovation covariance
-  const Eigen::Matrix<double, M, M> s = h * cov_ * h.transpose() + r;
+  const Eigen::Matrix<double, M, M> s = h * cov * h.transpose() + r;
   const Eigen::Matrix<double, M, M> s_inv = s.inverse();
   // 3. gate (with recovery after too many rejections in a row)
   last_distance_ = y.dot(s_inv * y);
@@ -83,20 +133,21 @@ FixResult PoseEkf::correct(const Eigen::Matrix<double, M, 1>& z,
     if (++consecutive_rejections_ <= options_.max_consecutive_rejections) {
       return FixResult::kRejected;
     }
-    for (int i = 0; i < M; ++i) cov_(i, i) += y(i) * y(i);
-    if constexpr (M == 2) cov_(2, 2) += 0.01;  // heading unknown to this fix: 0.1 rad more
-    s_used_inv = (h * cov_ * h.transpose() + r).inverse();
+    for (int i = 0; i < M; ++i) cov(i, i) += y(i) * y(i);
+    if constexpr (M == 2) cov(2, 2) += 0.01;  // heading unknown to this fix: 0.1 rad more
+    s_used_inv = (h * cov * h.transpose() + r).inverse();
   }
   consecutive_rejections_ = 0;
   // 4. gain
-  const Eigen::Matrix<double, 3, M> k = cov_ * h.transpose() * s_used_inv;
+  const Eigen::Matrix<double, N, M> k = cov * h.transpose() * s_used_inv;
   // 5. state
-  const Eigen::Vector3d dx = k * y;
-  pose_.t += dx.head<2>();
+  const Eigen::Matrix<double, N, 1> dx = k * y;
+  pose_.t += dx.template head<2>();
   pose_.theta += dx(2);
+  if constexpr (N == kStates) scale_ += dx.template tail<2>();
   // 6. Joseph-form covariance
-  const Eigen::Matrix3d a = Eigen::Matrix3d::Identity() - k * h;
-  cov_ = a * cov_ * a.transpose() + k * r * k.transpose();
+  const Covariance a = Covariance::Identity() - k * h;
+  cov_.topLeftCorner<N, N>() = a * cov * a.transpose() + k * r * k.transpose();
   return FixResult::kApplied;
 }
 
@@ -118,9 +169,11 @@ FixResult PoseEkf::update(double t, const Eigen::Matrix<double, M, 1>& z,
   if (k == 0) return FixResult::kTooOld;
   const std::size_t index = k - 1;
   const Pose2 saved_pose = pose_;
-  const Eigen::Matrix3d saved_cov = cov_;
+  const Eigen::Vector2d saved_scale = scale_;
+  const StateCovariance saved_cov = cov_;
   Step& step = history_[index];
   pose_ = step.pose_before;
+  scale_ = step.scale_before;
   cov_ = step.cov_before;
   const double dt = step.t_end - step.t_begin;
   const double dt1 = t - step.t_begin;
@@ -131,13 +184,14 @@ FixResult PoseEkf::update(double t, const Eigen::Matrix<double, M, 1>& z,
   const FixResult result = correct<M>(z, r, gate);
   if (result != FixResult::kApplied) {
     pose_ = saved_pose;
+    scale_ = saved_scale;
     cov_ = saved_cov;
     return result;
   }
   std::size_t next = index + 1;
   if (split) {
     // Replace the step by its two parts; the second starts from the fixed state.
-    Step second{t, step.t_end, step.twist, step.q * (dt / (step.t_end - t)), pose_, cov_};
+    Step second{t, step.t_end, step.twist, step.q * (dt / (step.t_end - t)), pose_, scale_, cov_};
     step.t_end = t;
     step.q *= dt / dt1;
     if (history_.full()) {  // make room by dropping the oldest step
@@ -152,6 +206,7 @@ FixResult PoseEkf::update(double t, const Eigen::Matrix<double, M, 1>& z,
   for (std::size_t j = next; j < history_.size(); ++j) {
     Step& later = history_[j];
     later.pose_before = pose_;
+    later.scale_before = scale_;
     later.cov_before = cov_;
     propagate(later.twist, later.q, later.t_end - later.t_begin);
   }

@@ -90,6 +90,12 @@ const char* OdometryOptions::validate() const {
   }
   if (!ekf.twist_noise_floor.allFinite() || (ekf.twist_noise_floor.array() < 0.0).any())
     return "ekf.twist_noise_floor: must be finite and not negative";
+  if (!ekf.scale_sd.allFinite() || (ekf.scale_sd.array() <= 0.0).any())
+    return "ekf.scale_sd: must be positive and finite";
+  if (!ekf.scale_random_walk.allFinite() || (ekf.scale_random_walk.array() < 0.0).any())
+    return "ekf.scale_random_walk: must be finite and not negative (1/sqrt(s))";
+  if (ekf.estimate_scale && !fuse_camera)
+    return "ekf.estimate_scale: needs fuse_camera (the scales are estimated from camera fixes)";
   return "";
 }
 
@@ -387,6 +393,11 @@ void Odometry::process(const ArraySample& sample, StepSink sink) {
     step.pose = ekf_->pose();
     step.fused = true;
     step.pose_covariance = ekf_->covariance();
+    if (ekf_->estimates_scale()) {
+      step.scaled = true;
+      step.scale = ekf_->scale();
+      step.scale_covariance = ekf_->scale_covariance();
+    }
   } else {
     step.pose = reckoner_.step(twist, sample.dt);
   }

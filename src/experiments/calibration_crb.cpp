@@ -20,6 +20,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <numbers>
 #include <random>
 #include <string>
@@ -28,6 +29,7 @@
 #include "experiments_list.hpp"
 #include "moa/calibration/exact.hpp"
 #include "moa/io/error.hpp"
+#include "moa/io/json.hpp"
 
 namespace moa::experiments {
 namespace {
@@ -109,7 +111,7 @@ MountVector difference(const SensorMount& a, const SensorMount& b) {
 }  // namespace
 
 Result calibration_crb(const Options& options) {
-  std::string text, json;
+  std::string text;
   const int runs = options.runs > 0 ? options.runs : 50;
   const SensorArray nominal = nominal_array();
   const SensorArray truth = true_array(nominal);
@@ -176,23 +178,35 @@ Result calibration_crb(const Options& options) {
 
   const std::array<const char*, kMountParameters> names{"position_x", "position_y", "yaw",
                                                         "scale_x", "scale_y"};
-  {
-    std::vector<std::string> rows;
-    for (int p = 0; p < p_all; ++p) {
-      rows.push_back(fmt::format(
-          "{{\"sensor\": {}, \"parameter\": \"{}\", \"true\": {:.9g}, \"rmse\": {:.6g}, "
-          "\"bias\": {:.6g}, \"crb_sd\": {:.6g}, \"efficiency\": {:.4f}, \"rmse_ols\": {:.6g}}}",
-          p / kMountParameters, names[static_cast<std::size_t>(p % kMountParameters)],
-          mount_parameters(truth[p / kMountParameters])(p % kMountParameters), rmse(p), bias(p),
-          bound(p), efficiency(p), rmse_ols(p)));
-    }
-    json = fmt::format(
-        "{{\"experiment\": \"calibration-crb\", \"runs\": {}, \"samples\": {}, \"count_sd\": {}, "
-        "\"reference_sd\": [{}, {}, {}], \"median_efficiency\": {:.4f}, \"mirror_found_runs\": {}, "
-        "\"parameters\": [{}]}}\n",
-        runs, clean.size(), kCountSd, kSpeedSd, kSpeedSd, kRateSd, median, mirrors_found,
-        fmt::join(rows, ", "));
+  io::JsonWriter json;
+  json.begin_object()
+      .member("experiment", "calibration-crb")
+      .member("runs", runs)
+      .member("samples", static_cast<std::uint64_t>(clean.size()))
+      .member("count_sd", kCountSd)
+      .key("reference_sd")
+      .begin_array()
+      .value(kSpeedSd)
+      .value(kSpeedSd)
+      .value(kRateSd)
+      .end_array()
+      .member("median_efficiency", median)
+      .member("mirror_found_runs", mirrors_found)
+      .key("parameters")
+      .begin_array();
+  for (int p = 0; p < p_all; ++p) {
+    json.begin_object()
+        .member("sensor", p / kMountParameters)
+        .member("parameter", names[static_cast<std::size_t>(p % kMountParameters)])
+        .member("true", mount_parameters(truth[p / kMountParameters])(p % kMountParameters))
+        .member("rmse", rmse(p))
+        .member("bias", bias(p))
+        .member("crb_sd", bound(p))
+        .member("efficiency", efficiency(p))
+        .member("rmse_ols", rmse_ols(p))
+        .end_object();
   }
+  json.end_array().end_object();
   text += fmt::format(
       "Exact calibration against its Cramer-Rao bound: 4 sensors, errors up to 8 mm, 4 deg, 4 %,\n"
       "sensor 2 mirrored (not in the nominal config); {} s of mixed motion, {} reference\n"
@@ -210,7 +224,7 @@ Result calibration_crb(const Options& options) {
   }
   text += fmt::format("\nmedian efficiency {:.3f}; mirroring right in {} of {} runs\n", median,
                       mirrors_found, runs);
-  return {text, json};
+  return {text, json.str() + "\n"};
 }
 
 }  // namespace moa::experiments

@@ -19,6 +19,7 @@
 #include <numbers>
 #include <random>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "experiments_list.hpp"
@@ -26,6 +27,7 @@
 #include "moa/calibration/kimlee.hpp"
 #include "moa/core/estimate.hpp"
 #include "moa/io/error.hpp"
+#include "moa/io/json.hpp"
 
 namespace moa::experiments {
 namespace {
@@ -145,16 +147,18 @@ std::string fmt6(const std::array<double, 6>& a, int digits = 3) {
   return s;
 }
 
-std::string json6(const std::array<double, 6>& a, double unit) {
-  std::vector<std::string> parts;
-  for (double v : a) parts.push_back(fmt::format("{:.9g}", v * unit));
-  return fmt::format("[{}]", fmt::join(parts, ", "));
+/// a (in units of 0.3 m) in metres, as a JSON array.
+void json6(io::JsonWriter& json, std::string_view name, const std::array<double, 6>& a,
+           double unit) {
+  json.key(name).begin_array();
+  for (double v : a) json.value(v * unit);
+  json.end_array();
 }
 
 }  // namespace
 
 Result kimlee_example(const Options& options) {
-  std::string text, json;
+  std::string text;
   const int runs = options.runs > 0 ? options.runs : 200;
   const SensorArray nominal = nominal_array();
   SensorArray truth = nominal;
@@ -190,27 +194,32 @@ Result kimlee_example(const Options& options) {
       velocity_statistics("true positions (eq. 52)", truth, fig3_samples)};
 
   const auto& kept = ex.sensors[0].estimated;
-  {
-    std::vector<std::string> rows;
-    for (const auto& f : fig3) {
-      rows.push_back(fmt::format(
-          "{{\"positions\": \"{}\", \"mean\": [{:.9g}, {:.9g}, {:.9g}], \"sd\": [{:.9g}, {:.9g}, "
-          "{:.9g}]}}",
-          f.positions, f.mean(0), f.mean(1), f.mean(2), f.sd(0), f.sd(1), f.sd(2)));
-    }
-    json = fmt::format(
-        "{{\"experiment\": \"kimlee-example\", \"units\": \"m\", \"nominal_eq51\": {}, "
-        "\"true_eq52\": {}, \"paper_eq53\": {}, \"kimlee\": {}, \"exact\": {}, \"kimlee_rank\": "
-        "{}, \"kimlee_singular_values\": [{:.9g}], \"kimlee_threshold\": {:.9g}, "
-        "\"exact_estimated\": [{}, {}, {}, {}, {}], \"quantised\": {{\"runs\": {}, "
-        "\"kimlee_mean\": {}, \"kimlee_sd\": {}, \"kimlee_rank_min\": {}, \"kimlee_rank_max\": {}, "
-        "\"exact_mean\": {}, \"exact_sd\": {}}}, \"fig3_samples\": {}, \"fig3\": [{}]}}\n",
-        json6(kEq51, kRadius), json6(kEq52, kRadius), json6(kEq53, kRadius),
-        json6(in_units(kl.calibrated), kRadius), json6(in_units(ex.calibrated), kRadius), kl.rank,
-        fmt::join(kl.singular_values, ", "), kl.threshold, kept[0], kept[1], kept[2], kept[3],
-        kept[4], runs, json6(kl_q.mean, kRadius), json6(kl_q.sd, kRadius), rank_min, rank_max,
-        json6(ex_q.mean, kRadius), json6(ex_q.sd, kRadius), kFig3Samples, fmt::join(rows, ", "));
+  io::JsonWriter json;
+  json.begin_object().member("experiment", "kimlee-example").member("units", "m");
+  json6(json, "nominal_eq51", kEq51, kRadius);
+  json6(json, "true_eq52", kEq52, kRadius);
+  json6(json, "paper_eq53", kEq53, kRadius);
+  json6(json, "kimlee", in_units(kl.calibrated), kRadius);
+  json6(json, "exact", in_units(ex.calibrated), kRadius);
+  json.member("kimlee_rank", kl.rank).key("kimlee_singular_values").begin_array();
+  for (double v : kl.singular_values) json.value(v);
+  json.end_array().member("kimlee_threshold", kl.threshold).key("exact_estimated").begin_array();
+  for (int k = 0; k < 5; ++k) json.value(static_cast<bool>(kept[static_cast<std::size_t>(k)]));
+  json.end_array().key("quantised").begin_object().member("runs", runs);
+  json6(json, "kimlee_mean", kl_q.mean, kRadius);
+  json6(json, "kimlee_sd", kl_q.sd, kRadius);
+  json.member("kimlee_rank_min", rank_min).member("kimlee_rank_max", rank_max);
+  json6(json, "exact_mean", ex_q.mean, kRadius);
+  json6(json, "exact_sd", ex_q.sd, kRadius);
+  json.end_object().member("fig3_samples", kFig3Samples).key("fig3").begin_array();
+  for (const auto& f : fig3) {
+    json.begin_object().member("positions", f.positions).key("mean").begin_array();
+    for (int k = 0; k < 3; ++k) json.value(f.mean(k));
+    json.end_array().key("sd").begin_array();
+    for (int k = 0; k < 3; ++k) json.value(f.sd(k));
+    json.end_array().end_object();
   }
+  json.end_array().end_object();
 
   text += fmt::format(
       "Kim & Lee Section V: N = 3, r = 0.3 m, theta = -pi/6, ADNS-3080 at 1600 cpi, one\n"
@@ -269,7 +278,7 @@ Result kimlee_example(const Options& options) {
       "(the paper: after calibration omega moves from the nominal's toward the true one: {}).\n",
       before / true_w, after / true_w, fig3[2].mean(2) / true_w,
       std::abs(after - true_w) < std::abs(before - true_w) ? "it does here" : "it does not here");
-  return {text, json};
+  return {text, json.str() + "\n"};
 }
 
 }  // namespace moa::experiments

@@ -28,10 +28,19 @@ void append_exclusion(std::string& out, Exclusion reason, std::uint8_t noise_fla
   }
 }
 
-std::vector<std::string> extra_columns(bool fused) {
+std::vector<std::string> extra_columns(bool fused, bool scaled) {
   std::vector<std::string> columns{"sd_vx", "sd_vy", "sd_omega", "source", "used", "excluded"};
   if (fused) columns.insert(columns.end(), {"pxx", "pxy", "pyy", "ptt"});
+  if (scaled) {
+    columns.insert(columns.end(), {"scale_v", "scale_omega", "sd_scale_v", "sd_scale_omega"});
+  }
   return columns;
+}
+
+// scale_v, scale_omega, sd_scale_v, sd_scale_omega of a step.
+std::array<double, 4> scale_fields(const OdometryStep& step) {
+  return {step.scale(0), step.scale(1), std::sqrt(std::max(step.scale_covariance(0, 0), 0.0)),
+          std::sqrt(std::max(step.scale_covariance(1, 1), 0.0))};
 }
 
 std::string joined(const std::vector<std::string>& names) {
@@ -52,8 +61,11 @@ std::string describe_exclusion(Exclusion reason, std::uint8_t noise_flags) {
 
 struct OdometryCsvWriter::Impl {
   template <class Target>
-  Impl(const Target& target, std::vector<std::string> sensor_names, bool with_cov)
-      : names(std::move(sensor_names)), fused(with_cov), writer(target, extra_columns(with_cov)) {
+  Impl(const Target& target, std::vector<std::string> sensor_names, bool with_cov, bool with_scale)
+      : names(std::move(sensor_names)),
+        fused(with_cov),
+        scaled(with_scale),
+        writer(target, extra_columns(with_cov, with_scale)) {
     for (const auto& name : names) {
       if (name.find_first_of(",\r\n") != std::string::npos) names_break_csv = true;
     }
@@ -106,6 +118,7 @@ struct OdometryCsvWriter::Impl {
 
   std::vector<std::string> names;
   bool fused;
+  bool scaled;
   OdometryWriter writer;
   /// A name with a comma or a line break: the rows go through the writer's
   /// checks, which name the column it would break.
@@ -116,11 +129,12 @@ struct OdometryCsvWriter::Impl {
 };
 
 OdometryCsvWriter::OdometryCsvWriter(const std::filesystem::path& file,
-                                     std::vector<std::string> names, bool fused)
-    : impl_(std::make_unique<Impl>(file, std::move(names), fused)) {}
+                                     std::vector<std::string> names, bool fused, bool scaled)
+    : impl_(std::make_unique<Impl>(file, std::move(names), fused, scaled)) {}
 
-OdometryCsvWriter::OdometryCsvWriter(std::FILE* stream, std::vector<std::string> names, bool fused)
-    : impl_(std::make_unique<Impl>(stream, std::move(names), fused)) {}
+OdometryCsvWriter::OdometryCsvWriter(std::FILE* stream, std::vector<std::string> names, bool fused,
+                                     bool scaled)
+    : impl_(std::make_unique<Impl>(stream, std::move(names), fused, scaled)) {}
 
 OdometryCsvWriter::~OdometryCsvWriter() = default;
 
@@ -156,6 +170,9 @@ void OdometryCsvWriter::write(const OdometryStep& step) {
       const Eigen::Matrix3d& p = step.pose_covariance;
       for (const double v : {p(0, 0), p(0, 1), p(1, 1), p(2, 2)}) fields.push_back(number(v));
     }
+    if (s.scaled) {
+      for (const double v : scale_fields(step)) fields.push_back(number(v));
+    }
     s.writer.write(step.t(), step.pose, e.estimate.twist, fields);
     return;
   }
@@ -172,6 +189,14 @@ void OdometryCsvWriter::write(const OdometryStep& step) {
     const Eigen::Matrix3d& p = step.pose_covariance;
     end = numbers;
     for (const double v : {p(0, 0), p(0, 1), p(1, 1), p(2, 2)}) {
+      *end++ = ',';
+      end = write_shortest(end, v);
+    }
+    s.extra.append(numbers, end);
+  }
+  if (s.scaled) {
+    end = numbers;
+    for (const double v : scale_fields(step)) {
       *end++ = ',';
       end = write_shortest(end, v);
     }
@@ -198,6 +223,10 @@ struct OdometryCsvReader::Impl {
     const auto pxx = csv.column("pxx"), pxy = csv.column("pxy"), pyy = csv.column("pyy"),
                ptt = csv.column("ptt");
     if (pxx && pxy && pyy && ptt) cov = {*pxx, *pxy, *pyy, *ptt};
+    const auto sv = csv.column("scale_v"), sw = csv.column("scale_omega");
+    if (sv && sw) scale = {*sv, *sw};
+    const auto dv = csv.column("sd_scale_v"), dw = csv.column("sd_scale_omega");
+    if (dv && dw) scale_sd = {*dv, *dw};
   }
 
   int sensor(std::size_t column, std::string_view name, const OdometryRow& r) const {
@@ -286,6 +315,7 @@ struct OdometryCsvReader::Impl {
   std::optional<std::size_t> used, excluded, source;
   std::optional<std::array<std::size_t, 3>> sd;
   std::optional<std::array<std::size_t, 4>> cov;
+  std::optional<std::array<std::size_t, 2>> scale, scale_sd;
 };
 
 OdometryCsvReader::OdometryCsvReader(const std::filesystem::path& file, const RobotConfig& config,
@@ -311,6 +341,10 @@ std::optional<OdometryRow> OdometryCsvReader::next() {
   if (s.cov) {
     r.pose_covariance = Eigen::Vector4d(s.csv.number((*s.cov)[0]), s.csv.number((*s.cov)[1]),
                                         s.csv.number((*s.cov)[2]), s.csv.number((*s.cov)[3]));
+  }
+  if (s.scale) r.scale = Eigen::Vector2d(s.csv.number((*s.scale)[0]), s.csv.number((*s.scale)[1]));
+  if (s.scale_sd) {
+    r.scale_sd = Eigen::Vector2d(s.csv.number((*s.scale_sd)[0]), s.csv.number((*s.scale_sd)[1]));
   }
   if (s.source) {
     const std::string_view text = s.csv.field(*s.source);

@@ -214,7 +214,8 @@ OdometryRun run_odometry(const RobotConfig& config, const std::string& config_pa
 OdometryRun write_odometry(const RobotConfig& config, const std::string& config_path,
                            const LogFiles& log, const OdometryOptions& options, const fs::path& out,
                            const ProgressCallback& progress) {
-  OdometryCsvWriter writer(out, config.names, options.fuse_camera);
+  OdometryCsvWriter writer(out, config.names, options.fuse_camera,
+                           options.fuse_camera && options.ekf.estimate_scale);
   const OdometryRun run = run_odometry(
       config, config_path, log, options, [&](const OdometryStep& step) { writer.write(step); },
       progress);

@@ -30,6 +30,39 @@
 // Recovery: when max_consecutive_rejections fixes in a row fail the gate,
 // the dead reckoning has left the camera behind (a systematic drift the
 // process noise did not hold); P gains diag(y y^T) and the fix is applied.
+//
+// Scale states (EkfOptions::estimate_scale, `moa odometry --ekf-scale`):
+// the state becomes (x, y, theta, s_v, s_w) and the twist integrated is
+// S xi, S = diag(s_v, s_v, s_w): s_v corrects the mice's linear resolution
+// (cpi, a common scale error), s_w their rotation (radius, or the same
+// resolution through omega). Prediction, with G = G(S xi) as above:
+//   pose' = pose * exp(S xi dt),  s' = s + w,  w ~ N(0, diag(rw^2) dt)
+//   F5 = [[F(S xi), d pose'/d s], [0, I]]
+//   d pose'/d s_v = G (vx, vy, 0)^T,  d pose'/d s_w = G (0, 0, omega)^T
+//   P' = F5 P F5^T + diag(G S (Q + Q_floor) S G^T, rw^2 dt)
+// The scales start at 1 with sd scale_sd (5 %) and walk by
+// scale_random_walk (1e-3 per sqrt(second): 0.8 % over a minute). The update
+// has H = [I 0]: fixes observe the pose only, the scales move through
+// their correlation with it (the rows F5 builds):
+//   - s_v needs translation between fixes: its column of F5 is the distance
+//     the robot travelled, R(theta) V v dt; at rest or turning in place it
+//     gets nothing.
+//   - s_w needs rotation and heading information: with heading fixes
+//     directly (theta' - theta = s_w omega dt); from positions alone only
+//     through the geometry, the heading error a turn leaves (s_w - 1) phi
+//     shows as a sideways drift d theta x (travel) in the translation after
+//     it. During an in-place turn a position fix says nothing about either.
+// Rollback keeps working: a Step stores the scales and the 5x5 covariance
+// before it (history 128 x 352 bytes = 45 KB on the Cortex-M4F, 26.6 KB
+// before; 384 bytes a step on x86-64, where Eigen aligns Vector2d), and
+// re-prediction uses the corrected scales. Off, the scale rows of the
+// covariance are zero and the pose filter's arithmetic is the 3x3 one
+// (outputs byte-identical). Measured (docs/math.md, "Camera fusion"): a
+// robot whose mice over-estimate rotation by 3 % (sensors 3 mm further out)
+// has heading RMS 0.041 rad without the scale states and 0.012 with them
+// (seeds 101-105), s_w found to 0.9708-0.9712 +- 0.0055 (true 0.9709); on a
+// calibrated robot they cost ~0.003 rad heading RMS, so they are opt-in.
+//
 // Fixed-size matrices only: no allocation per step.
 #pragma once
 
@@ -47,8 +80,25 @@ namespace moa {
 Eigen::Matrix3d exact_step_pose_jacobian(const Pose2& pose, const Twist2& twist, double dt);
 /// d pose' / d twist (3x3) of integrate_exact(pose, twist, dt).
 Eigen::Matrix3d exact_step_twist_jacobian(const Pose2& pose, const Twist2& twist, double dt);
+/// The twist (s_v vx, s_v vy, s_w omega).
+Twist2 scaled_twist(const Twist2& twist, const Eigen::Vector2d& scale);
+/// d pose' / d (s_v, s_w) (3x2) of integrate_exact(pose, scaled_twist(twist, scale), dt):
+/// G(scaled twist) [[vx, 0], [vy, 0], [0, omega]].
+Eigen::Matrix<double, 3, 2> exact_step_scale_jacobian(const Pose2& pose, const Twist2& twist,
+                                                      const Eigen::Vector2d& scale, double dt);
 
 struct EkfOptions {
+  /// Augments the state with the dead reckoning's scales (s_v, s_w): the
+  /// twist integrated is (s_v vx, s_v vy, s_w omega). Off: the pose filter
+  /// alone, arithmetic unchanged (the scale rows of the covariance stay 0).
+  bool estimate_scale = false;
+  /// Prior sd of s_v and s_w around 1 (mice resolutions and radii are a
+  /// few % off before calibration).
+  Eigen::Vector2d scale_sd{0.05, 0.05};
+  /// Random walk of s_v and s_w, sd per sqrt(second): a floor that changes, a
+  /// sensor that gets dirty. Over a step of dt the variance grows by
+  /// scale_random_walk^2 dt.
+  Eigen::Vector2d scale_random_walk{1e-3, 1e-3};
   /// Process-noise floor added to every twist covariance: sd of vx, vy
   /// (m/s) and omega (rad/s) of a twist averaged over 10 ms; white, so over
   /// a step of dt its variance is floor^2 * (0.01 s / dt).
@@ -82,6 +132,13 @@ class PoseEkf {
   /// 1 kHz (26 KB; the Cortex-M4F program holds the whole pipeline in 128 KB).
   static constexpr std::size_t kHistory = 128;
 
+  /// State (x, y, theta, s_v, s_w); without estimate_scale s = (1, 1) and
+  /// its rows of the covariance are zero.
+  static constexpr int kStates = 5;
+  using StateCovariance = Eigen::Matrix<double, kStates, kStates>;
+
+  /// `covariance`: of the pose; the scales start at 1 with sd
+  /// options.scale_sd (when estimate_scale), uncorrelated with the pose.
   PoseEkf(double t0, const Pose2& initial, const Eigen::Matrix3d& covariance,
           EkfOptions options = {});
 
@@ -94,7 +151,15 @@ class PoseEkf {
   FixResult update_pose(double t, const Eigen::Vector3d& z, const Eigen::Matrix3d& r);
 
   const Pose2& pose() const { return pose_; }
-  const Eigen::Matrix3d& covariance() const { return cov_; }
+  /// Covariance of (x, y, theta).
+  Eigen::Matrix3d covariance() const { return cov_.topLeftCorner<3, 3>(); }
+  /// (s_v, s_w): (1, 1) unless estimate_scale.
+  const Eigen::Vector2d& scale() const { return scale_; }
+  /// Covariance of (s_v, s_w); zero unless estimate_scale.
+  Eigen::Matrix2d scale_covariance() const { return cov_.bottomRightCorner<2, 2>(); }
+  /// Covariance of the whole state (x, y, theta, s_v, s_w).
+  const StateCovariance& state_covariance() const { return cov_; }
+  bool estimates_scale() const { return options_.estimate_scale; }
   double time() const { return t_; }
   /// Squared Mahalanobis distance of the last fix's innovation.
   double last_distance() const { return last_distance_; }
@@ -105,7 +170,8 @@ class PoseEkf {
     Twist2 twist;
     Eigen::Matrix3d q;  ///< twist covariance incl. the floor
     Pose2 pose_before;  ///< state at t_begin
-    Eigen::Matrix3d cov_before;
+    Eigen::Vector2d scale_before;
+    StateCovariance cov_before;
   };
   void propagate(const Twist2& twist, const Eigen::Matrix3d& q, double dt);
   template <int M>
@@ -114,11 +180,15 @@ class PoseEkf {
   template <int M>
   FixResult correct(const Eigen::Matrix<double, M, 1>& z, const Eigen::Matrix<double, M, M>& r,
                     double gate);
+  template <int N, int M>
+  FixResult correct_states(const Eigen::Matrix<double, M, 1>& z,
+                           const Eigen::Matrix<double, M, M>& r, double gate);
 
   EkfOptions options_;
   double t_;
   Pose2 pose_;
-  Eigen::Matrix3d cov_;
+  Eigen::Vector2d scale_{1.0, 1.0};
+  StateCovariance cov_ = StateCovariance::Zero();
   FixedRing<Step, kHistory> history_;
   double last_distance_ = 0.0;
   int consecutive_rejections_ = 0;

@@ -113,6 +113,10 @@ struct OdometryStep {
   Pose2 pose;                           ///< world_T_robot at sample->t
   bool fused = false;                   ///< pose_covariance is the EKF's
   Eigen::Matrix3d pose_covariance = Eigen::Matrix3d::Zero();  ///< (x, y, theta), with fuse_camera
+  bool scaled = false;  ///< with fuse_camera and ekf.estimate_scale: scale is estimated
+  /// The EKF's dead-reckoning scales (s_v, s_w) (PoseEkf::scale()); (1, 1) unless scaled.
+  Eigen::Vector2d scale{1.0, 1.0};
+  Eigen::Matrix2d scale_covariance = Eigen::Matrix2d::Zero();  ///< of (s_v, s_w)
   double t() const { return sample->t; }
 };
 

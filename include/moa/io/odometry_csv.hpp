@@ -2,11 +2,14 @@
 // rows read back with their selection columns typed.
 //
 //   t,x,y,theta,vx,vy,omega,sd_vx,sd_vy,sd_omega,source,used,excluded[,pxx,pxy,pyy,ptt]
+//     [,scale_v,scale_omega,sd_scale_v,sd_scale_omega]
 //
 // used:     the sensors of the estimate, names joined by '+'
 // excluded: name:reason[/flag...] joined by ';', reason a describe(Exclusion)
 //           word, flags the noise inflations (over-speed, low-squal, overflow)
 // pxx..ptt: the EKF's pose covariance (m^2, m^2, m^2, rad^2) with camera fusion
+// scale_*:  the EKF's dead-reckoning scales s_v, s_w and their sd (unit 1),
+//           with camera fusion and the scale states (--ekf-scale)
 #pragma once
 
 #include <Eigen/Core>
@@ -29,10 +32,12 @@ namespace moa::io {
 class OdometryCsvWriter {
  public:
   /// `names`: the sensor names in config order; `fused`: adds the pose
-  /// covariance columns.
-  OdometryCsvWriter(const std::filesystem::path& file, std::vector<std::string> names, bool fused);
+  /// covariance columns; `scaled`: then the scale columns.
+  OdometryCsvWriter(const std::filesystem::path& file, std::vector<std::string> names, bool fused,
+                    bool scaled = false);
   /// The same rows to an open stream (stdout), flushed by flush() and commit().
-  OdometryCsvWriter(std::FILE* stream, std::vector<std::string> names, bool fused);
+  OdometryCsvWriter(std::FILE* stream, std::vector<std::string> names, bool fused,
+                    bool scaled = false);
   ~OdometryCsvWriter();
   void write(const OdometryStep& step);
   void flush();
@@ -58,6 +63,8 @@ struct OdometryRow {
   /// Sensors listed in `used` or `excluded`.
   SensorMask listed = 0;
   std::optional<Eigen::Vector4d> pose_covariance;  ///< pxx, pxy, pyy, ptt
+  std::optional<Eigen::Vector2d> scale;            ///< scale_v, scale_omega
+  std::optional<Eigen::Vector2d> scale_sd;         ///< sd_scale_v, sd_scale_omega
 };
 
 /// Streams odometry.csv; sensor names must be the config's. Throws io::Error
