@@ -16,6 +16,10 @@
 //     (within 0.1 %: else the instruction counts are not instructions).
 //     Prints the largest differences and the device's instruction counts;
 //     exits 1 when a check fails.
+//
+//   qemu_stream csv POSES.bin OUT.csv
+//     writes the device's steps as odometry.csv's first seven columns
+//     (t,x,y,theta,vx,vy,omega; shortest round-trip digits), for `moa evaluate`.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -39,7 +43,8 @@ int usage() {
   std::cerr
       << "usage: qemu_stream pack CONFIG LOG OUT.bin [--estimator E] [--rate HZ] "
          "[--no-wheels] [--fuse-camera]\n"
-         "       qemu_stream compare CONFIG ODOMETRY.csv POSES.bin POSE_TOL TWIST_TOL PER_TICK\n";
+         "       qemu_stream compare CONFIG ODOMETRY.csv POSES.bin POSE_TOL TWIST_TOL PER_TICK\n"
+         "       qemu_stream csv POSES.bin OUT.csv\n";
   return 2;
 }
 
@@ -185,6 +190,48 @@ int pack(int argc, char** argv) {
   return 0;
 }
 
+/// The device's output file: its steps and its summary; false (and a
+/// message) when the file is not one.
+bool read_poses(const char* file, std::vector<q::StreamPose>& poses, q::StreamSummary& summary) {
+  std::ifstream in(file, std::ios::binary);
+  std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (bytes.size() < sizeof(q::StreamSummary) ||
+      (bytes.size() - sizeof(q::StreamSummary)) % sizeof(q::StreamPose) != 0) {
+    std::cerr << "qemu_stream: " << file << ": not the device's output (" << bytes.size()
+              << " bytes)\n";
+    return false;
+  }
+  std::memcpy(&summary, bytes.data() + bytes.size() - sizeof(summary), sizeof(summary));
+  if (std::memcmp(summary.magic, q::kOutputMagic, sizeof(summary.magic)) != 0) {
+    std::cerr << "qemu_stream: " << file << ": no summary record\n";
+    return false;
+  }
+  poses.resize((bytes.size() - sizeof(summary)) / sizeof(q::StreamPose));
+  std::memcpy(poses.data(), bytes.data(), poses.size() * sizeof(q::StreamPose));
+  return true;
+}
+
+int csv(int argc, char** argv) {
+  if (argc != 4) return usage();
+  q::StreamSummary summary{};
+  std::vector<q::StreamPose> poses;
+  if (!read_poses(argv[2], poses, summary)) return 1;
+  std::ofstream out(argv[3]);
+  out << "t,x,y,theta,vx,vy,omega\n";
+  char line[256];
+  for (const auto& p : poses) {
+    std::snprintf(line, sizeof(line), "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", p.t, p.x, p.y,
+                  p.theta, p.vx, p.vy, p.omega);
+    out << line;
+  }
+  out.close();
+  if (!out) {
+    std::cerr << "qemu_stream: cannot write " << argv[3] << "\n";
+    return 1;
+  }
+  return 0;
+}
+
 int compare(int argc, char** argv) {
   if (argc != 8) return usage();
   const std::string config_path = argv[2];
@@ -193,22 +240,9 @@ int compare(int argc, char** argv) {
   const double twist_tol = std::stod(argv[6]);
   const double expected_per_tick = std::stod(argv[7]);
 
-  std::ifstream in(argv[4], std::ios::binary);
-  std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (bytes.size() < sizeof(q::StreamSummary) ||
-      (bytes.size() - sizeof(q::StreamSummary)) % sizeof(q::StreamPose) != 0) {
-    std::cerr << "qemu_stream: " << argv[4] << ": not the device's output (" << bytes.size()
-              << " bytes)\n";
-    return 1;
-  }
   q::StreamSummary summary{};
-  std::memcpy(&summary, bytes.data() + bytes.size() - sizeof(summary), sizeof(summary));
-  if (std::memcmp(summary.magic, q::kOutputMagic, sizeof(summary.magic)) != 0) {
-    std::cerr << "qemu_stream: " << argv[4] << ": no summary record\n";
-    return 1;
-  }
-  std::vector<q::StreamPose> poses((bytes.size() - sizeof(summary)) / sizeof(q::StreamPose));
-  std::memcpy(poses.data(), bytes.data(), poses.size() * sizeof(q::StreamPose));
+  std::vector<q::StreamPose> poses;
+  if (!read_poses(argv[4], poses, summary)) return 1;
 
   moa::io::OdometryCsvReader reference(argv[3], config, config_path);
   std::size_t n = 0, failures = 0;
@@ -281,6 +315,7 @@ int main(int argc, char** argv) try {
   const std::string command = argv[1];
   if (command == "pack") return pack(argc, argv);
   if (command == "compare") return compare(argc, argv);
+  if (command == "csv") return csv(argc, argv);
   return usage();
 } catch (const std::exception& e) {
   std::cerr << "qemu_stream: " << e.what() << "\n";
