@@ -20,6 +20,8 @@ DEBIAN_PACKAGES += python3-dev pybind11-dev python3-numpy python3-pytest python3
 DEBIAN_PACKAGES += libcpp-httplib-dev pkgconf
 # The core cross-compiled for a Cortex-M4F (embedded/): GCC, newlib, libstdc++.
 DEBIAN_PACKAGES += gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
+# ... and run on an emulated Cortex-M4F (mps2-an386) by the test embedded_qemu_odometry.
+DEBIAN_PACKAGES += qemu-system-arm
 
 # The libFuzzer targets of every reader (tests/fuzz/run.sh, a step of .ci/run): clang and its runtime.
 DEBIAN_PACKAGES += clang libclang-rt-14-dev

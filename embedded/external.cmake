@@ -23,7 +23,15 @@ ExternalProject_Add(
              -DMOA_WARNINGS_AS_ERRORS=${MOA_WARNINGS_AS_ERRORS} -DEigen3_DIR=${Eigen3_DIR}
   BUILD_ALWAYS TRUE
   INSTALL_COMMAND ""
-  BUILD_BYPRODUCTS ${MOA_M4F_BINARY_DIR}/consensus_m4f.elf)
+  BUILD_BYPRODUCTS ${MOA_M4F_BINARY_DIR}/consensus_m4f.elf ${MOA_M4F_BINARY_DIR}/odometry_qemu.elf)
+
+# The pipeline on an emulated Cortex-M4F (run_qemu.cmake), where Debian's
+# qemu-system-arm is installed (make deps installs it).
+find_program(MOA_QEMU_SYSTEM_ARM qemu-system-arm)
+if(MOA_BUILD_TESTS AND NOT MOA_QEMU_SYSTEM_ARM)
+  message(STATUS "qemu-system-arm not found: the test embedded_qemu_odometry (the Cortex-M4F "
+                 "program under QEMU) is not registered; install qemu-system-arm (make deps)")
+endif()
 
 if(MOA_BUILD_TESTS)
   add_test(NAME embedded_m4f_fits_without_heap
@@ -31,5 +39,16 @@ if(MOA_BUILD_TESTS)
                    -DLINKER_SCRIPT=${PROJECT_SOURCE_DIR}/embedded/stm32f4.ld
                    -DSIZE=${MOA_arm_none_eabi_size} -DNM=${MOA_arm_none_eabi_nm}
                    -P ${PROJECT_SOURCE_DIR}/embedded/check_m4f.cmake)
-  set_tests_properties(embedded_m4f_fits_without_heap PROPERTIES LABELS embedded TIMEOUT 600)
+  # Both tests build ${MOA_M4F_BINARY_DIR} first: one at a time.
+  set_tests_properties(embedded_m4f_fits_without_heap PROPERTIES LABELS embedded TIMEOUT 600
+                                                                 RESOURCE_LOCK moa_m4f_build)
+  if(MOA_QEMU_SYSTEM_ARM)
+    add_test(NAME embedded_qemu_odometry
+             COMMAND ${CMAKE_COMMAND} -DBINARY_DIR=${MOA_M4F_BINARY_DIR} -DMOA=$<TARGET_FILE:moa_cli>
+                     -DSTREAM=$<TARGET_FILE:qemu_stream> -DQEMU=${MOA_QEMU_SYSTEM_ARM}
+                     -DWORK_DIR=${CMAKE_CURRENT_BINARY_DIR}/embedded_qemu
+                     -P ${PROJECT_SOURCE_DIR}/embedded/run_qemu.cmake)
+    set_tests_properties(embedded_qemu_odometry PROPERTIES LABELS embedded TIMEOUT 600
+                                                           RESOURCE_LOCK moa_m4f_build)
+  endif()
 endif()

@@ -31,7 +31,8 @@ extern "C" [[noreturn]] void reset_handler() {
   moa_m4f_main();
 }
 
-extern "C" void default_handler() {
+// Weak: a program may end the run instead (odometry_qemu.cpp, under QEMU).
+extern "C" __attribute__((weak)) void default_handler() {
   for (;;) {
   }
 }

@@ -1,0 +1,91 @@
+# cmake -DBINARY_DIR=... -DMOA=moa -DSTREAM=qemu_stream -DQEMU=qemu-system-arm
+#       -DWORK_DIR=... -P run_qemu.cmake
+# The test embedded_qemu_odometry: the library pipeline (moa::Odometry) run on
+# an emulated Cortex-M4F against the host's `moa odometry` on the same log.
+#  1. brings the Cortex-M4F build (BINARY_DIR) up to date;
+#  2. simulates a log on the host (`moa simulate --scenario faults-dirty`:
+#     four HDNS-2051 sensors, 17 s at 100 Hz, a dirty floor patch, wheels and
+#     camera);
+#  3. per case (estimator, options): `moa odometry` writes odometry.csv;
+#     `qemu_stream pack` packs the log for the device; QEMU runs
+#     odometry_qemu.elf on mps2-an386 (Cortex-M4 with FPU) under -icount
+#     shift=0 (1 instruction = 1 ns of virtual time) with semihosting; and
+#     `qemu_stream compare` checks the device's steps against odometry.csv and
+#     prints the instructions per step the device counted.
+#
+# Tolerance: the device and the host both compute in IEEE binary64 from the
+# same source, so the results are nearly exact. What differs: Eigen's SSE2
+# kernels on the host against scalar code on the M4F (summation order) and
+# glibc's libm against newlib's (sin, cos, exp, log, within an ulp or so); each
+# changes a result by a few units in the last place (u = 2^-53 = 1.1e-16). A
+# twist is some 100 operations from the counts through a least-squares solve
+# whose condition number is about 10 for these arrays: relative error below
+# 10 * 100 * u = 1e-13, and the twists are below 1 m/s and 1 rad/s. A pose
+# sums 1702 steps of twist * dt (dt = 0.01 s): below 1702 * 0.01 * 1e-13 =
+# 1.7e-15 m from the twists, plus the heading's error times the distance
+# (about 1 m). 1e-12 (m, rad, m/s, rad/s) covers that with margin and is
+# nine orders of magnitude below one count (32 um at 800 cpi); the epoch
+# times and the sensors each estimate used must be identical.
+set(pose_tolerance 1e-12)
+set(twist_tolerance 1e-12)
+# mps2-an386 clocks the SysTick at 25 MHz: one tick is 40 ns, 40 instructions.
+set(instructions_per_tick 40)
+
+foreach(var BINARY_DIR MOA STREAM QEMU WORK_DIR)
+  if(NOT ${var})
+    message(FATAL_ERROR "run_qemu.cmake: -D${var}= is required")
+  endif()
+endforeach()
+
+execute_process(COMMAND ${CMAKE_COMMAND} --build ${BINARY_DIR} --target odometry_qemu
+                RESULT_VARIABLE built)
+if(NOT built EQUAL 0)
+  message(FATAL_ERROR "building ${BINARY_DIR} failed")
+endif()
+set(elf ${BINARY_DIR}/odometry_qemu.elf)
+
+file(REMOVE_RECURSE ${WORK_DIR})
+file(MAKE_DIRECTORY ${WORK_DIR})
+set(log ${WORK_DIR}/log)
+execute_process(COMMAND ${MOA} simulate --scenario faults-dirty --seed 1 --out ${log} --quiet
+                COMMAND_ERROR_IS_FATAL ANY)
+
+# name; flags of `moa odometry` and `qemu_stream pack`
+set(cases "consensus\;--estimator\;consensus" "sekimori\;--estimator\;sekimori"
+          "ls\;--estimator\;ls" "consensus-camera\;--estimator\;consensus\;--fuse-camera")
+foreach(case IN LISTS cases)
+  list(POP_FRONT case name)
+  set(dir ${WORK_DIR}/${name})
+  file(MAKE_DIRECTORY ${dir})
+  execute_process(COMMAND ${MOA} odometry --config ${log}/robot.yaml --log ${log} ${case}
+                          --out ${dir}/odometry.csv --quiet COMMAND_ERROR_IS_FATAL ANY)
+  execute_process(COMMAND ${STREAM} pack ${log}/robot.yaml ${log} ${dir}/in.bin ${case}
+                  COMMAND_ERROR_IS_FATAL ANY)
+  # The device's console (semihosting) is QEMU's stdout; a fault or an error
+  # ends the emulation with status 1; TIMEOUT guards against a hang.
+  execute_process(
+    COMMAND ${QEMU} -machine mps2-an386 -cpu cortex-m4 -nographic -monitor none -serial null
+            -semihosting-config enable=on,target=native,arg=odometry_qemu,arg=in.bin,arg=out.bin
+            -icount shift=0 -kernel ${elf}
+    WORKING_DIRECTORY ${dir}
+    RESULT_VARIABLE ran
+    OUTPUT_VARIABLE console
+    ERROR_VARIABLE console
+    TIMEOUT 120)
+  string(STRIP "${console}" console)
+  message("[${name}] ${console}")
+  if(NOT ran EQUAL 0)
+    message(FATAL_ERROR "[${name}] QEMU: ${ran}")
+  endif()
+  execute_process(
+    COMMAND ${STREAM} compare ${log}/robot.yaml ${dir}/odometry.csv ${dir}/out.bin
+            ${pose_tolerance} ${twist_tolerance} ${instructions_per_tick}
+    RESULT_VARIABLE compared
+    OUTPUT_VARIABLE report
+    ERROR_VARIABLE report)
+  string(STRIP "${report}" report)
+  message("[${name}] ${report}")
+  if(NOT compared EQUAL 0)
+    message(FATAL_ERROR "[${name}] the device's steps differ from odometry.csv")
+  endif()
+endforeach()
