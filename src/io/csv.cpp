@@ -128,58 +128,64 @@ int count_digits(std::uint64_t v) {
   return guess + (v >= kPow10[static_cast<std::size_t>(guess)] ? 1 : 0);
 }
 
-constexpr char kPairs[] =
-    "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
-    "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
-    "8081828384858687888990919293949596979899";
+// The eight decimal digits of v < 10^8, leading zeros included, as the
+// eight bytes of a little-endian word: v split into two 4-digit halves, each
+// into two 2-digit quarters, each into two digits, every step in all lanes
+// of the word at once (x / 100 as x * 10486 >> 20 for x < 10^4, x / 10 as
+// x * 103 >> 10 for x < 100; checked against printf for every v < 10^8).
+std::uint64_t digits8(std::uint32_t v) {
+  const std::uint64_t high = v / 10000, low = v % 10000;
+  std::uint64_t x = high | low << 32;
+  const std::uint64_t h100 = (x * 10486 >> 20) & 0x0000007F0000007Fu;
+  x = h100 | (x - h100 * 100) << 16;
+  const std::uint64_t h10 = (x * 103 >> 10) & 0x000F000F000F000Fu;
+  x = h10 | (x - h10 * 10) << 8;
+  return x | 0x3030303030303030u;
+}
 
-// The eight decimal digits of v < 10^8, leading zeros included, at out.
-// y = v 2^32 / 10^6 in 32.32 fixed point, from ceil(2^48 / 10^6) and one
-// unit up, so that the fraction never falls below the true one: each
-// multiplication by 100 then moves the next two digits into the integer
-// part (Jeaiii's method; checked against printf for every v < 10^8).
 void put8(char* out, std::uint32_t v) {
-  std::uint64_t y = (std::uint64_t{v} * 281474977u >> 16) + 1;
-  for (int i = 0; i < 4; ++i) {
-    const auto pair = static_cast<std::size_t>(y >> 32) * 2;
-    out[2 * i] = kPairs[pair];
-    out[2 * i + 1] = kPairs[pair + 1];
-    y = (y & 0xffffffffu) * 100u;
+  if constexpr (std::endian::native == std::endian::little) {
+    const std::uint64_t digits = digits8(v);
+    std::memcpy(out, &digits, 8);
+  } else {
+    for (int i = 7; i >= 0; --i, v /= 10) out[i] = static_cast<char>('0' + v % 10);
   }
 }
 
-// The n decimal digits of v (v < 10^n) ending at `end`.
-void put_digits(char* end, std::uint64_t v, int n) {
-  while (n > 8) {
-    end -= 8;
-    put8(end, static_cast<std::uint32_t>(v % 100000000));
-    v /= 100000000;
-    n -= 8;
+// The decimal digits of v (n of them, v < 10^n <= 10^24), right-aligned to
+// end at buffer + 24, followed by 24 '0's. Returns the first digit.
+const char* put_digits(char (&buffer)[48], std::uint64_t v, int n) {
+  std::memset(buffer + 24, '0', 24);
+  if (n <= 8) {
+    put8(buffer + 16, static_cast<std::uint32_t>(v));
+  } else if (n <= 16) {
+    put8(buffer + 8, static_cast<std::uint32_t>(v / 100000000));
+    put8(buffer + 16, static_cast<std::uint32_t>(v % 100000000));
+  } else {
+    const std::uint64_t high = v / 100000000;
+    put8(buffer, static_cast<std::uint32_t>(high / 100000000));
+    put8(buffer + 8, static_cast<std::uint32_t>(high % 100000000));
+    put8(buffer + 16, static_cast<std::uint32_t>(v % 100000000));
   }
-  auto w = static_cast<std::uint32_t>(v);
-  while (n >= 2) {
-    const std::uint32_t pair = (w % 100) * 2;
-    w /= 100;
-    *--end = kPairs[pair + 1];
-    *--end = kPairs[pair];
-    n -= 2;
-  }
-  if (n == 1) *--end = static_cast<char>('0' + w);
+  return buffer + 24 - n;
 }
 
-// significand * 10^exponent (significand > 0, no trailing zeros), as fmt's
-// general format without a precision lays it out: fixed notation when the
-// decimal exponent of the first digit is in [-4, upper), else d.ddde+XX
-// with at least two exponent digits.
+// significand * 10^exponent (significand > 0, no trailing zeros, at most 17
+// digits), as fmt's general format without a precision lays it out: fixed
+// notation when the decimal exponent of the first digit is in [-4, upper),
+// upper <= 16, else d.ddde+XX with at least two exponent digits. The digits
+// are copied in fixed 16- and 24-byte blocks: bytes past the returned end,
+// up to out + kMaxNumberText - 1, may be overwritten.
 char* put_decimal(char* out, std::uint64_t significand, int exponent, int upper) {
   const int n = count_digits(significand);
   const int first = exponent + n - 1;  // decimal exponent of the first digit
+  char buffer[48];
+  const char* digits = put_digits(buffer, significand, n);
   if (first < -4 || first >= upper) {
-    // The digits one place to the right, then the first moved before the point.
-    put_digits(out + 1 + n, significand, n);
-    out[0] = out[1];
+    out[0] = digits[0];
     if (n > 1) {
       out[1] = '.';
+      std::memcpy(out + 2, digits + 1, 16);
       out += n + 1;
     } else {
       out += 1;
@@ -192,22 +198,38 @@ char* put_decimal(char* out, std::uint64_t significand, int exponent, int upper)
     *out++ = static_cast<char>('0' + e % 10);
     return out;
   }
-  if (exponent >= 0) {  // 1234e5 -> 123400000
-    put_digits(out + n, significand, n);
-    return std::fill_n(out + n, exponent, '0');
+  if (exponent >= 0) {  // 1234e5 -> 123400000: the zeros follow the digits
+    std::memcpy(out, digits, 16);
+    return out + n + exponent;
   }
   const int whole = exponent + n;  // digits before the point
   if (whole > 0) {                 // 1234e-2 -> 12.34
-    put_digits(out + 1 + n, significand, n);
-    for (int i = 0; i < whole; ++i) out[i] = out[i + 1];
+    std::memcpy(out, digits, 16);
     out[whole] = '.';
-    return out + 1 + n;
+    std::memcpy(out + whole + 1, digits + whole, 16);
+    return out + n + 1;
   }
-  *out++ = '0';  // 1234e-6 -> 0.001234
-  *out++ = '.';
-  for (int i = 0; i < -whole; ++i) *out++ = '0';
-  put_digits(out + n, significand, n);
-  return out + n;
+  std::memcpy(out, "0.000", 5);  // 1234e-6 -> 0.001234
+  std::memcpy(out + 2 - whole, digits, 24);
+  return out + 2 - whole + n;
+}
+
+// value > 0 as m * 10^-6 when that reads back as value: the shortest text
+// then, since below 10^9 the doubles that read back as value span less than
+// 10^-6 and hold no other multiple of it (times, rates: most of them are
+// such). The quotient m / 10^6 of exact operands (m < 2^53) is correctly
+// rounded: the double a correct parser makes of m * 10^-6.
+bool short_decimal_digits(double value, std::uint64_t& significand, int& exponent) {
+  if (!(value < 1e9)) return false;
+  const auto m = static_cast<std::uint64_t>(value * 1e6 + 0.5);
+  if (m == 0 || static_cast<double>(m) / 1e6 != value) return false;
+  significand = m;
+  exponent = -6;
+  while (significand % 10 == 0) {
+    significand /= 10;
+    ++exponent;
+  }
+  return true;
 }
 
 }  // namespace
@@ -224,6 +246,11 @@ char* write_shortest(char* out, double value) {
   if (value == 0.0) {
     *out++ = '0';
     return out;
+  }
+  std::uint64_t significand = 0;
+  int exponent = 0;
+  if (short_decimal_digits(value, significand, exponent)) {
+    return put_decimal(out, significand, exponent, 16);
   }
   const auto decimal = fmt::detail::dragonbox::to_decimal(value);
   return put_decimal(out, decimal.significand, decimal.exponent, 16);

@@ -33,17 +33,18 @@ std::string printable(std::string_view text);
 /// fields, the robot config and the simulator's scenarios.
 std::variant<double, std::string> parse_number(std::string_view text);
 
-/// Room for any text of the two writers below.
-inline constexpr std::size_t kMaxNumberText = 32;
+/// Room for any text of the two writers below (at most 24 chars) and the
+/// scratch past its end that they may overwrite: give them this much.
+inline constexpr std::size_t kMaxNumberText = 40;
 
 /// Writes at `out` the shortest text that reads back as exactly `value`,
 /// laid out as fmt's "{}" lays it out (fixed notation for decimal exponents
 /// -4..15, else d.ddde+XX), and returns the end. The digits are
-/// std::to_chars's, several times faster than fmt's general path. At most
-/// kMaxNumberText chars.
+/// Dragonbox's (what fmt writes), several times faster than fmt's general
+/// path. Needs kMaxNumberText chars of room at `out`.
 char* write_shortest(char* out, double value);
 /// Writes `value` as fmt's "{:.6g}" (printf's %.6g): six significant digits,
-/// trailing zeros dropped. At most kMaxNumberText chars.
+/// trailing zeros dropped. Needs kMaxNumberText chars of room at `out`.
 char* write_6g(char* out, double value);
 
 class CsvReader {
