@@ -41,50 +41,18 @@ void split(std::string_view line, std::vector<std::string_view>& fields) {
   }
 }
 
-// "[-]ddd[.ddd]" with at most 19 digits and no exponent (a time, a
-// count), else nullopt. m / 10^k with m < 2^53 and k <= 22 is exact in
-// both operands, and the division rounds correctly: the double that
-// std::from_chars gives (Clinger's fast path), at a fraction of its cost.
 std::optional<double> short_decimal(std::string_view text) {
-  static constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
-                                      1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
-                                      1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
-  const char* p = text.data();
-  const char* const end = p + text.size();
-  const bool negative = p != end && *p == '-';
-  if (negative) ++p;
-  std::uint64_t m = 0;
-  const char* const first = p;
-  while (p != end && static_cast<unsigned>(*p - '0') < 10)
-    m = 10 * m + static_cast<unsigned>(*p++ - '0');
-  int digits = static_cast<int>(p - first);
-  int fraction = 0;
-  if (p != end && *p == '.') {
-    const char* const point = ++p;
-    while (p != end && static_cast<unsigned>(*p - '0') < 10)
-      m = 10 * m + static_cast<unsigned>(*p++ - '0');
-    fraction = static_cast<int>(p - point);
-    digits += fraction;
-  }
-  if (p != end || digits == 0 || digits > 19 || m > (std::uint64_t{1} << 53)) return std::nullopt;
-  const double value = static_cast<double>(m) / kPow10[fraction];
-  return negative ? -value : value;
+  double value = 0.0;
+  const char* const end = text.data() + text.size();
+  if (scan_decimal(text.data(), end, value) != end) return std::nullopt;
+  return value;
 }
 
-// "[-]ddd" with at most 18 digits, else nullopt (std::from_chars's value).
 std::optional<std::int64_t> short_integer(std::string_view text) {
-  const char* p = text.data();
-  const char* const end = p + text.size();
-  const bool negative = p != end && *p == '-';
-  if (negative) ++p;
-  if (p == end || end - p > 18) return std::nullopt;
   std::int64_t value = 0;
-  for (; p != end; ++p) {
-    const auto digit = static_cast<unsigned>(*p - '0');
-    if (digit >= 10) return std::nullopt;
-    value = 10 * value + digit;
-  }
-  return negative ? -value : value;
+  const char* const end = text.data() + text.size();
+  if (scan_integer(text.data(), end, value) != end) return std::nullopt;
+  return value;
 }
 
 // The first block; it doubles for a line that does not fit.
@@ -143,53 +111,50 @@ std::uint64_t digits8(std::uint32_t v) {
   return x | 0x3030303030303030u;
 }
 
-void put8(char* out, std::uint32_t v) {
+// The eight bytes of x at out, the low byte first.
+void store8(char* out, std::uint64_t x) {
   if constexpr (std::endian::native == std::endian::little) {
-    const std::uint64_t digits = digits8(v);
-    std::memcpy(out, &digits, 8);
+    std::memcpy(out, &x, 8);
   } else {
-    for (int i = 7; i >= 0; --i, v /= 10) out[i] = static_cast<char>('0' + v % 10);
+    for (int i = 0; i < 8; ++i) out[i] = static_cast<char>(x >> (8 * i));
   }
 }
 
-// The decimal digits of v (n of them, v < 10^n <= 10^24), right-aligned to
-// end at buffer + 24, followed by 24 '0's. Returns the first digit.
-const char* put_digits(char (&buffer)[48], std::uint64_t v, int n) {
-  std::memset(buffer + 24, '0', 24);
-  if (n <= 8) {
-    put8(buffer + 16, static_cast<std::uint32_t>(v));
-  } else if (n <= 16) {
-    put8(buffer + 8, static_cast<std::uint32_t>(v / 100000000));
-    put8(buffer + 16, static_cast<std::uint32_t>(v % 100000000));
-  } else {
-    const std::uint64_t high = v / 100000000;
-    put8(buffer, static_cast<std::uint32_t>(high / 100000000));
-    put8(buffer + 8, static_cast<std::uint32_t>(high % 100000000));
-    put8(buffer + 16, static_cast<std::uint32_t>(v % 100000000));
-  }
-  return buffer + 24 - n;
+// Bytes [offset, offset + 8) of the string whose bytes are those of the
+// words w, the low byte of each first: two words shifted into one, so that
+// the digits move from registers to their place without being read back
+// from memory (a load spanning two recent stores stalls the CPU).
+std::uint64_t window(const std::uint64_t* w, int offset) {
+  const auto q = static_cast<std::size_t>(offset >> 3);
+  const int r = (offset & 7) * 8;
+  return w[q] >> r | (w[q + 1] << 1) << (63 - r);
 }
 
 // significand * 10^exponent (significand > 0, no trailing zeros, at most 17
 // digits), as fmt's general format without a precision lays it out: fixed
 // notation when the decimal exponent of the first digit is in [-4, upper),
-// upper <= 16, else d.ddde+XX with at least two exponent digits. The digits
-// are copied in fixed 16- and 24-byte blocks: bytes past the returned end,
-// up to out + kMaxNumberText - 1, may be overwritten.
+// upper <= 16, else d.ddde+XX with at least two exponent digits. The text
+// is stored eight bytes at a time: bytes past the returned end, up to
+// out + kMaxNumberText - 1, may be overwritten.
 char* put_decimal(char* out, std::uint64_t significand, int exponent, int upper) {
+  constexpr std::uint64_t kZeros = 0x3030303030303030u;  // "00000000"
   const int n = count_digits(significand);
   const int first = exponent + n - 1;  // decimal exponent of the first digit
-  char buffer[48];
-  const char* digits = put_digits(buffer, significand, n);
+  // The digits right-aligned in bytes [0, 24), '0's after them.
+  std::uint64_t w[6] = {kZeros, kZeros, kZeros, kZeros, kZeros, kZeros};
+  w[2] = digits8(static_cast<std::uint32_t>(significand % 100000000));
+  if (n > 8) {
+    const std::uint64_t high = significand / 100000000;
+    w[1] = digits8(static_cast<std::uint32_t>(high % 100000000));
+    if (n > 16) w[0] = digits8(static_cast<std::uint32_t>(high / 100000000));
+  }
+  const int s = 24 - n;  // the first digit
   if (first < -4 || first >= upper) {
-    out[0] = digits[0];
-    if (n > 1) {
-      out[1] = '.';
-      std::memcpy(out + 2, digits + 1, 16);
-      out += n + 1;
-    } else {
-      out += 1;
-    }
+    out[0] = static_cast<char>(window(w, s));
+    out[1] = '.';
+    store8(out + 2, window(w, s + 1));
+    store8(out + 10, window(w, s + 9));
+    out += n > 1 ? n + 1 : 1;
     *out++ = 'e';
     *out++ = first < 0 ? '-' : '+';
     const int e = first < 0 ? -first : first;
@@ -198,20 +163,24 @@ char* put_decimal(char* out, std::uint64_t significand, int exponent, int upper)
     *out++ = static_cast<char>('0' + e % 10);
     return out;
   }
-  if (exponent >= 0) {  // 1234e5 -> 123400000: the zeros follow the digits
-    std::memcpy(out, digits, 16);
+  store8(out, window(w, s));
+  store8(out + 8, window(w, s + 8));
+  if (exponent >= 0) {  // 1234e5 -> 123400000: the '0's follow the digits
     return out + n + exponent;
   }
   const int whole = exponent + n;  // digits before the point
   if (whole > 0) {                 // 1234e-2 -> 12.34
-    std::memcpy(out, digits, 16);
     out[whole] = '.';
-    std::memcpy(out + whole + 1, digits + whole, 16);
+    store8(out + whole + 1, window(w, s + whole));
+    store8(out + whole + 9, window(w, s + whole + 8));
     return out + n + 1;
   }
-  std::memcpy(out, "0.000", 5);  // 1234e-6 -> 0.001234
-  std::memcpy(out + 2 - whole, digits, 24);
-  return out + 2 - whole + n;
+  store8(out, 0x3030303030302e30u);  // "0.000000": 1234e-6 -> 0.001234
+  char* const digits = out + 2 - whole;
+  store8(digits, window(w, s));
+  store8(digits + 8, window(w, s + 8));
+  store8(digits + 16, window(w, s + 16));
+  return digits + n;
 }
 
 // value > 0 as m * 10^-6 when that reads back as value: the shortest text
@@ -221,8 +190,12 @@ char* put_decimal(char* out, std::uint64_t significand, int exponent, int upper)
 // rounded: the double a correct parser makes of m * 10^-6.
 bool short_decimal_digits(double value, std::uint64_t& significand, int& exponent) {
   if (!(value < 1e9)) return false;
-  const auto m = static_cast<std::uint64_t>(value * 1e6 + 0.5);
-  if (m == 0 || static_cast<double>(m) / 1e6 != value) return false;
+  const double scaled = value * 1e6;
+  const auto m = static_cast<std::uint64_t>(scaled + 0.5);
+  // value = m / 10^6 (1 + d), |d| <= 2^-53, puts scaled within m 2^-51 of
+  // m: anything farther cannot pass the division's test (a slow one).
+  const double near = static_cast<double>(m);
+  if (m == 0 || std::abs(scaled - near) > near * 0x1p-50 || near / 1e6 != value) return false;
   significand = m;
   exponent = -6;
   while (significand % 10 == 0) {
@@ -361,7 +334,13 @@ bool CsvReader::next_line(std::string_view& line) {
 }
 
 bool CsvReader::read_record() {
-  std::string_view line;
+  if (!next_record()) return false;
+  split(record_, fields_);
+  return true;
+}
+
+bool CsvReader::next_record() {
+  std::string_view& line = record_;
   while (next_line(line)) {
     ++line_;
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
@@ -373,17 +352,21 @@ bool CsvReader::read_record() {
     }
     if (blank_line_ != 0) fail_at(blank_line_, "blank line (only allowed at the end of the file)");
     if (line.front() == '#') continue;
-    split(line, fields_);
     return true;
   }
   return false;
 }
 
-bool CsvReader::next() {
-  if (!read_record()) return false;
+void CsvReader::split_record() {
+  split(record_, fields_);
   if (fields_.size() != header_.size()) {
     fail(fmt::format("expected {} fields, found {}", header_.size(), fields_.size()));
   }
+}
+
+bool CsvReader::next() {
+  if (!next_record()) return false;
+  split_record();
   return true;
 }
 
