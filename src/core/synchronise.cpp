@@ -58,17 +58,6 @@ ArraySample& Synchroniser::slot(std::int64_t k) {
   return ring_[index];
 }
 
-std::optional<RowError> check_row(const SensorRow& row, int n_sensors, double t0, double last_row_t,
-                                  double max_gap) {
-  if (!std::isfinite(row.t)) return RowError::kTimeNotFinite;
-  if (row.t < t0) return RowError::kTimeBeforeStart;
-  if (row.t < last_row_t) return RowError::kTimeBackwards;
-  if (row.t - last_row_t > max_gap) return RowError::kTimeJump;
-  if (row.sensor < 0 || row.sensor >= n_sensors) return RowError::kUnknownSensor;
-  if (!row.counts.allFinite()) return RowError::kCountsNotFinite;
-  return std::nullopt;
-}
-
 std::int64_t Synchroniser::epoch_of(double t) const {
   const auto k = static_cast<std::int64_t>(std::ceil((t - t0_) / options_.period)) - 1;
   return std::max<std::int64_t>(k, 0);
