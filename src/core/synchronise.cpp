@@ -59,8 +59,17 @@ ArraySample& Synchroniser::slot(std::int64_t k) {
 }
 
 std::int64_t Synchroniser::epoch_of(double t) const {
-  const auto k = static_cast<std::int64_t>(std::ceil((t - t0_) / options_.period)) - 1;
-  return std::max<std::int64_t>(k, 0);
+  const double q = (t - t0_) / options_.period;
+  // std::ceil(q) without the call (a library call on baseline x86-64): the
+  // truncation, one up when below q; exact while q fits an int64.
+  std::int64_t c = 0;
+  if (std::abs(q) < 0x1p62) {
+    c = static_cast<std::int64_t>(q);
+    if (static_cast<double>(c) < q) ++c;
+  } else {
+    c = static_cast<std::int64_t>(std::ceil(q));
+  }
+  return std::max<std::int64_t>(c - 1, 0);
 }
 
 void Synchroniser::add(const SensorRow& row) {

@@ -8,7 +8,6 @@
 #include <cassert>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <iterator>
 #include <string_view>
 
@@ -251,13 +250,20 @@ struct MiceReader::Impl {
     }
     std::size_t i = next_sensor;
     for (std::size_t k = 0; k < n; ++k, i = i + 1 == n ? 0 : i + 1) {
-      if (names[i].size() == name.size() &&
-          std::memcmp(names[i].data(), name.data(), name.size()) == 0) {
+      if (names[i].size() == name.size() && same_bytes(names[i].data(), name.data(), name.size())) {
         next_sensor = i + 1 == n ? 0 : i + 1;
         return static_cast<int>(i);
       }
     }
     return -1;
+  }
+
+  // Names are short: a byte loop beats a memcmp call.
+  static bool same_bytes(const char* a, const char* b, std::size_t n) {
+    for (std::size_t k = 0; k < n; ++k) {
+      if (a[k] != b[k]) return false;
+    }
+    return true;
   }
 
   enum class Role : std::uint8_t { kOther, kTime, kSensor, kDx, kDy, kSqual, kFlags };
