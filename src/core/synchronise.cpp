@@ -90,9 +90,12 @@ void Synchroniser::add(const SensorRow& row) {
     deposit(epoch_of(b), 1.0);
     return;
   }
+  const double length = b - a;
   for (std::int64_t k = epoch_of(a); start_of(k) < b; ++k) {
     const double overlap = std::min(b, end_of(k)) - std::max(a, start_of(k));
-    if (overlap > 0.0) deposit(k, overlap / (b - a));
+    // A row on the epoch grid lies whole in one epoch: x / x is 1 exactly,
+    // without the division.
+    if (overlap > 0.0) deposit(k, overlap == length ? 1.0 : overlap / length);
   }
 }
 
