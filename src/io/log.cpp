@@ -416,7 +416,7 @@ struct OdometryWriter::Impl {
   std::vector<char> pending;  ///< [0, used): rows not yet handed to the file
   std::size_t used = 0;
   std::size_t drained = 0;  ///< bytes handed to the file since the last start_writeback()
-  std::string joined;  ///< write()'s extra values, joined
+  std::string joined;       ///< write()'s extra values, joined
   std::optional<double> last_t;
   bool committed = false;
 };
@@ -476,19 +476,35 @@ void OdometryWriter::check(const std::array<double, 7>& values) {
   }
 }
 
-void OdometryWriter::put_row(const std::array<double, 7>& values, std::string_view extra) {
+char* OdometryWriter::put_numbers(const std::array<double, 7>& values, std::size_t max_extra) {
   Impl& impl = *impl_;
   impl.last_t = values[0];
   // The shortest text that reads back as the same double: exact, and no
   // longer than needed.
-  char* out = impl.reserve(values.size() * (kMaxNumberText + 1) + extra.size() + 1);
+  char* out = impl.reserve(values.size() * (kMaxNumberText + 1) + max_extra + 1);
   for (std::size_t i = 0; i < values.size(); ++i) {
     if (i > 0) *out++ = ',';
     out = write_shortest(out, values[i]);
   }
+  return out;
+}
+
+void OdometryWriter::put_row(const std::array<double, 7>& values, std::string_view extra) {
+  char* out = put_numbers(values, extra.size());
   out = std::copy(extra.begin(), extra.end(), out);
-  *out++ = '\n';
-  impl.wrote(out);
+  end_row(out);
+}
+
+char* OdometryWriter::begin_row(double t, const Pose2& pose, const Twist2& twist,
+                                std::size_t max_extra) {
+  const auto values = row_values(t, pose, twist);
+  check(values);
+  return put_numbers(values, max_extra);
+}
+
+void OdometryWriter::end_row(char* end) {
+  *end++ = '\n';
+  impl_->wrote(end);
 }
 
 void OdometryWriter::write(double t, const Pose2& pose, const Twist2& twist,
