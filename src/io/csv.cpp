@@ -169,17 +169,33 @@ char* put_decimal(char* out, std::uint64_t significand, int exponent, int upper)
     return out + n + exponent;
   }
   const int whole = exponent + n;  // digits before the point
-  if (whole > 0) {                 // 1234e-2 -> 12.34
+  // Doubles mostly have 16 or 17 digits: w[1] and w[2] hold all but the
+  // first of 17, which is the last byte of w[0], and no shifting is needed
+  // for d.ddd or 0.0ddd.
+  if (n == 17 && whole == 1) {
+    out[1] = '.';
+    store8(out + 2, w[1]);
+    store8(out + 10, w[2]);
+    out[0] = static_cast<char>(w[0] >> 56);
+    return out + 18;
+  }
+  if (whole > 0) {  // 1234e-2 -> 12.34
     out[whole] = '.';
     store8(out + whole + 1, window(w, s + whole));
     store8(out + whole + 9, window(w, s + whole + 8));
     return out + n + 1;
   }
   store8(out, 0x3030303030302e30u);  // "0.000000": 1234e-6 -> 0.001234
-  char* const digits = out + 2 - whole;
+  char* digits = out + 2 - whole;
+  if (n >= 16) {
+    char* const end = digits + n;
+    if (n == 17) *digits++ = static_cast<char>(w[0] >> 56);
+    store8(digits, w[1]);
+    store8(digits + 8, w[2]);
+    return end;
+  }
   store8(digits, window(w, s));
   store8(digits + 8, window(w, s + 8));
-  store8(digits + 16, window(w, s + 16));
   return digits + n;
 }
 
