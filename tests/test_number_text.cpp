@@ -30,8 +30,14 @@ std::string six_g(double v) {
   return {text, write_6g(text, v)};
 }
 
+std::string shortest_time(double v) {
+  char text[kMaxNumberText];
+  return {text, write_shortest_time(text, v)};
+}
+
 void expect_as_fmt(double v) {
   ASSERT_EQ(shortest(v), fmt::format("{}", v)) << std::bit_cast<std::uint64_t>(v);
+  ASSERT_EQ(shortest_time(v), fmt::format("{}", v)) << std::bit_cast<std::uint64_t>(v);
   ASSERT_EQ(six_g(v), fmt::format("{:.6g}", v)) << std::bit_cast<std::uint64_t>(v);
   double back = 0.0;
   const std::string text = shortest(v);

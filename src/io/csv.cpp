@@ -236,13 +236,17 @@ char* write_shortest(char* out, double value) {
     *out++ = '0';
     return out;
   }
-  std::uint64_t significand = 0;
-  int exponent = 0;
-  if (short_decimal_digits(value, significand, exponent)) {
-    return put_decimal(out, significand, exponent, 16);
-  }
   const auto decimal = fmt::detail::dragonbox::to_decimal(value);
   return put_decimal(out, decimal.significand, decimal.exponent, 16);
+}
+
+char* write_shortest_time(char* out, double value) {
+  std::uint64_t significand = 0;
+  int exponent = 0;
+  if (value > 0.0 && short_decimal_digits(value, significand, exponent)) {
+    return put_decimal(out, significand, exponent, 16);
+  }
+  return write_shortest(out, value);
 }
 
 // Six significant digits from the shortest ones D (n digits). Rounding D

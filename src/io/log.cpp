@@ -482,8 +482,9 @@ char* OdometryWriter::put_numbers(const std::array<double, 7>& values, std::size
   // The shortest text that reads back as the same double: exact, and no
   // longer than needed.
   char* out = impl.reserve(values.size() * (kMaxNumberText + 1) + max_extra + 1);
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    if (i > 0) *out++ = ',';
+  out = write_shortest_time(out, values[0]);
+  for (std::size_t i = 1; i < values.size(); ++i) {
+    *out++ = ',';
     out = write_shortest(out, values[i]);
   }
   return out;

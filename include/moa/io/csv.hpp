@@ -43,6 +43,9 @@ inline constexpr std::size_t kMaxNumberText = 40;
 /// Dragonbox's (what fmt writes), several times faster than fmt's general
 /// path. Needs kMaxNumberText chars of room at `out`.
 char* write_shortest(char* out, double value);
+/// write_shortest() for values that are mostly short decimals (times):
+/// tries m * 10^-6 before Dragonbox. The same text.
+char* write_shortest_time(char* out, double value);
 /// Writes `value` as fmt's "{:.6g}" (printf's %.6g): six significant digits,
 /// trailing zeros dropped. Needs kMaxNumberText chars of room at `out`.
 char* write_6g(char* out, double value);
