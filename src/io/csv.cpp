@@ -146,7 +146,7 @@ char* put_decimal(char* out, std::uint64_t significand, int exponent, int upper)
   if (n > 8) {
     const std::uint64_t high = significand / 100000000;
     w[1] = digits8(static_cast<std::uint32_t>(high % 100000000));
-    if (n > 16) w[0] = digits8(static_cast<std::uint32_t>(high / 100000000));
+    if (n > 16) w[0] += (high / 100000000) << 56;  // "0000000d": one digit
   }
   const int s = 24 - n;  // the first digit
   if (first < -4 || first >= upper) {

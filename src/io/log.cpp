@@ -187,9 +187,16 @@ struct MiceReader::Impl {
       ++p;
       return true;
     };
-    double t_read = 0.0;
-    p = scan_decimal(p, end, t_read);
+    ShortDecimal t_text;
+    p = scan_decimal(p, end, t_text);
     if (!p || !comma()) return false;
+    // The sensors of one report share its time: the same text, the same
+    // value, without the division.
+    if (!(t_text == last_t_text)) {
+      last_t_text = t_text;
+      last_t_value = t_text.value();
+    }
+    const double t_read = last_t_value;
     const char* const first = p;
     while (p != end && *p != ',') ++p;
     name = {first, static_cast<std::size_t>(p - first)};
@@ -275,6 +282,8 @@ struct MiceReader::Impl {
   std::vector<Role> roles;      // per column
   bool plain_layout = false;    // t,sensor,dx,dy[,squal][,flags]: read_plain() applies
   std::size_t next_sensor = 0;  // tried first by find_sensor()
+  ShortDecimal last_t_text;     // read_plain()'s last time and its value
+  double last_t_value = 0.0;
   std::optional<SensorRow> peeked;
   std::optional<double> start;
   std::vector<std::size_t> rows;  // per sensor, read so far

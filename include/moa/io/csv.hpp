@@ -57,10 +57,21 @@ char* write_6g(char* out, double value);
 /// with m < 2^53 and k <= 19 is exact in both operands and the division
 /// rounds correctly: the double std::from_chars gives (Clinger's fast path),
 /// at a fraction of its cost.
-inline const char* scan_decimal(const char* p, const char* end, double& value) {
-  static constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
-                                      1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
-                                      1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+/// The text scan_decimal() read: m * 10^-fraction, negated when negative.
+struct ShortDecimal {
+  std::uint64_t m = 0;
+  int fraction = 0;
+  bool negative = false;
+  bool operator==(const ShortDecimal&) const = default;
+  double value() const {
+    static constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,
+                                        1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19};
+    const double magnitude = static_cast<double>(m) / kPow10[fraction];
+    return negative ? -magnitude : magnitude;
+  }
+};
+
+inline const char* scan_decimal(const char* p, const char* end, ShortDecimal& out) {
   const bool negative = p != end && *p == '-';
   if (negative) ++p;
   std::uint64_t m = 0;
@@ -77,8 +88,14 @@ inline const char* scan_decimal(const char* p, const char* end, double& value) {
     digits += fraction;
   }
   if (digits == 0 || digits > 19 || m > (std::uint64_t{1} << 53)) return nullptr;
-  const double magnitude = static_cast<double>(m) / kPow10[fraction];
-  value = negative ? -magnitude : magnitude;
+  out = {m, fraction, negative};
+  return p;
+}
+
+inline const char* scan_decimal(const char* p, const char* end, double& value) {
+  ShortDecimal d;
+  p = scan_decimal(p, end, d);
+  if (p) value = d.value();
   return p;
 }
 
