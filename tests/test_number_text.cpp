@@ -30,8 +30,14 @@ std::string six_g(double v) {
   return {text, write_6g(text, v)};
 }
 
+std::string shortest_time(double v) {
+  char text[kMaxNumberText];
+  return {text, write_shortest_time(text, v)};
+}
+
 void expect_as_fmt(double v) {
   ASSERT_EQ(shortest(v), fmt::format("{}", v)) << std::bit_cast<std::uint64_t>(v);
+  ASSERT_EQ(shortest_time(v), fmt::format("{}", v)) << std::bit_cast<std::uint64_t>(v);
   ASSERT_EQ(six_g(v), fmt::format("{:.6g}", v)) << std::bit_cast<std::uint64_t>(v);
   double back = 0.0;
   const std::string text = shortest(v);
@@ -110,6 +116,29 @@ TEST(NumberText, OdometryLikeValuesAreWrittenAsFmtWritesThem) {
   for (std::int64_t k = 0; k < 200000; ++k) {
     expect_as_fmt(static_cast<double>(k) / 1000.0);
     expect_as_fmt(static_cast<double>(k * 37 + 1000000));
+  }
+}
+
+TEST(NumberText, ShortDecimalsAreWrittenAsFmtWritesThem) {
+  // The writer's short path (m * 10^-6 below 10^9) and its edges: decimals
+  // with up to eight places, epoch times as the synchroniser computes them,
+  // values near 10^9 and near the doubles' spacing of 10^-6.
+  std::mt19937_64 rng(23);
+  const double scale[] = {1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8};
+  for (int i = 0; i < 200000; ++i) {
+    const auto m = static_cast<double>(rng() % 2000000000000u);
+    expect_as_fmt(m / scale[rng() % 9]);
+  }
+  for (std::int64_t k = 0; k < 100000; ++k) {
+    expect_as_fmt(0.37 + static_cast<double>(k + 1) * (1.0 / 1000.0));
+    expect_as_fmt(1234.5 + static_cast<double>(k) * 0.001);
+  }
+  for (double v : {999999999.999999, 999999999.9999999, 1e9, 1e9 - 0.5, 4503599627.370496, 0.000001,
+                   0.0000015, 0.0000005, 1e-7, 0.5, 0.25, 0.125, 0.0625, 0.03125}) {
+    for (int i = 0; i < 50; ++i) {
+      expect_as_fmt(v);
+      v = std::nextafter(v, 2e9);
+    }
   }
 }
 

@@ -49,6 +49,17 @@ const char* describe(OdometryError error) {
 
 namespace {
 bool positive_finite(double x) { return std::isfinite(x) && x > 0.0; }
+
+// v.norm() > limit (limit > 0), without the square root when |v|^2 is clear
+// of limit^2 by far more than the rounding of either: the same answer.
+bool beyond(const Eigen::Vector2d& v, double limit) {
+  const double n2 = v.squaredNorm(), l2 = limit * limit;
+  if (l2 > 1e-200 && l2 < 1e200) {
+    if (n2 < l2 * (1.0 - 1e-9)) return false;
+    if (n2 > l2 * (1.0 + 1e-9)) return true;
+  }
+  return v.norm() > limit;
+}
 }  // namespace
 
 const char* OdometryOptions::validate() const {
@@ -106,7 +117,8 @@ Odometry::Odometry(const SensorArray& array, double t0, const OdometryOptions& o
       noise_(array, options.consensus.noise),
       sync_(array.size(), t0, options.synchroniser()),
       reckoner_(options.initial.value_or(Pose2{})),
-      t0_(t0) {
+      t0_(t0),
+      period_(1.0 / options.rate) {
   if (n_ > kMaxSensors) {
     geometry_error_ = GeometryError::kTooManySensors;
     return;
@@ -178,8 +190,8 @@ std::optional<OdometryError> Odometry::push(const SensorRow& row, StepSink sink)
     // The row's interval as the synchroniser will take it, at least one epoch.
     const auto i = static_cast<std::size_t>(row.sensor);
     const double begin = std::max(sync_.last_time(row.sensor), row.t - options_.max_row_interval);
-    const double dt = std::max(row.t - begin, 1.0 / options_.rate);
-    if ((velocity_from_counts_[i] * row.counts).norm() > impossible_speed_[i] * dt) {
+    const double dt = std::max(row.t - begin, period_);
+    if (beyond(velocity_from_counts_[i] * row.counts, impossible_speed_[i] * dt)) {
       return OdometryError::kImpossibleCounts;
     }
   }
@@ -285,30 +297,37 @@ void Odometry::apply_fixes(double t) {
 
 bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& wheels,
                         RobustEstimate& out) {
-  // The selected sensors' part of the epoch.
-  compact_.t = sample.t;
-  compact_.dt = sample.dt;
-  compact_.size = m_;
-  for (int k = 0; k < m_; ++k) {
-    const auto i = static_cast<std::size_t>(selected_[static_cast<std::size_t>(k)]);
-    const auto u = static_cast<std::size_t>(k);
-    compact_.counts[u] = sample.counts[i];
-    compact_.squal[u] = sample.squal[i];
-    compact_.flags[u] = sample.flags[i];
-    compact_.faults[u] = sample.faults[i];
+  // All sensors selected (the usual case): the epoch and the estimate are
+  // the estimator's own, with no copy into the selection's indices and back.
+  const bool all = m_ == n_;
+  if (!all) {
+    // The selected sensors' part of the epoch.
+    compact_.t = sample.t;
+    compact_.dt = sample.dt;
+    compact_.size = m_;
+    for (int k = 0; k < m_; ++k) {
+      const auto i = static_cast<std::size_t>(selected_[static_cast<std::size_t>(k)]);
+      const auto u = static_cast<std::size_t>(k);
+      compact_.counts[u] = sample.counts[i];
+      compact_.squal[u] = sample.squal[i];
+      compact_.flags[u] = sample.flags[i];
+      compact_.faults[u] = sample.faults[i];
+    }
+    selected_estimate_ = RobustEstimate{};
   }
-  RobustEstimate e;
+  const ArraySample& in = all ? sample : compact_;
+  RobustEstimate& e = all ? out : selected_estimate_;  // out comes default-constructed
   bool ok = true;
   if (auto* ls = std::get_if<LsEstimator>(&estimator_)) {
-    const auto x = ls->estimate(compact_);
+    const auto x = ls->estimate(in);
     ok = x.has_value();
     if (ok) e.estimate = *x;
   } else if (auto* s = std::get_if<SekimoriEstimator>(&estimator_)) {
-    const auto x = s->estimate(compact_, wheels);
+    const auto x = s->estimate(in, wheels);
     ok = x.has_value();
     if (ok) e = *x;
   } else if (auto* c = std::get_if<ConsensusEstimator>(&estimator_)) {
-    const auto x = c->estimate(compact_, wheels);
+    const auto x = c->estimate(in, wheels);
     ok = x.has_value();
     if (ok) e = *x;
   } else if (auto* solver = std::get_if<SubsetSolver>(&estimator_)) {
@@ -316,10 +335,10 @@ bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& 
     // weighted by the consensus's noise model.
     ok = std::isfinite(sample.dt) && sample.dt > 0.0;
     if (ok) {
-      noise_.measure(compact_, fallback_.last_twist(), points_, e.noise_flags);
+      noise_.measure(in, fallback_.last_twist(), points_, e.noise_flags);
       SensorMask good = 0;
       for (int k = 0; k < m_; ++k) {
-        if (compact_.faults[static_cast<std::size_t>(k)] == 0) {
+        if (in.faults[static_cast<std::size_t>(k)] == 0) {
           good |= SensorMask{1} << k;
         } else {
           e.excluded[static_cast<std::size_t>(k)] = Exclusion::kFaulty;
@@ -345,6 +364,14 @@ bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& 
     for (int k = 0; k < m_; ++k) e.excluded[static_cast<std::size_t>(k)] = Exclusion::kUnselected;
   }
   if (!ok) return false;
+  if (all) {
+    // What the mapping below leaves past the array's sensors.
+    for (auto i = static_cast<std::size_t>(n_); i < kMaxSensors; ++i) {
+      out.excluded[i] = Exclusion::kNone;
+      out.noise_flags[i] = 0;
+    }
+    return true;
+  }
   // Back to the configured array's indices.
   out = RobustEstimate{};
   out.estimate.twist = e.estimate.twist;

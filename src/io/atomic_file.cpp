@@ -54,6 +54,7 @@ AtomicFile::AtomicFile(std::filesystem::path target)
 }
 
 AtomicFile::~AtomicFile() {
+  close_writeback();
   if (committed_) return;
   out_.close();
   std::error_code ignored;
@@ -61,8 +62,24 @@ AtomicFile::~AtomicFile() {
   registered_.release();
 }
 
+void AtomicFile::start_writeback() {
+#if defined(__linux__)
+  out_.flush();
+  if (writeback_fd_ < 0) writeback_fd_ = ::open(temp_.c_str(), O_RDONLY | O_CLOEXEC);
+  if (writeback_fd_ >= 0) (void)::sync_file_range(writeback_fd_, 0, 0, SYNC_FILE_RANGE_WRITE);
+#endif
+}
+
+void AtomicFile::close_writeback() {
+#if defined(__unix__) || defined(__APPLE__)
+  if (writeback_fd_ >= 0) ::close(writeback_fd_);
+#endif
+  writeback_fd_ = -1;
+}
+
 void AtomicFile::commit() {
   if (committed_) throw Error(fmt::format("{}: already committed", target_.string()));
+  close_writeback();
   out_.flush();
   const bool written = static_cast<bool>(out_);
   out_.close();

@@ -41,50 +41,18 @@ void split(std::string_view line, std::vector<std::string_view>& fields) {
   }
 }
 
-// "[-]ddd[.ddd]" with at most 19 digits and no exponent (a time, a
-// count), else nullopt. m / 10^k with m < 2^53 and k <= 22 is exact in
-// both operands, and the division rounds correctly: the double that
-// std::from_chars gives (Clinger's fast path), at a fraction of its cost.
 std::optional<double> short_decimal(std::string_view text) {
-  static constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
-                                      1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
-                                      1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
-  const char* p = text.data();
-  const char* const end = p + text.size();
-  const bool negative = p != end && *p == '-';
-  if (negative) ++p;
-  std::uint64_t m = 0;
-  const char* const first = p;
-  while (p != end && static_cast<unsigned>(*p - '0') < 10)
-    m = 10 * m + static_cast<unsigned>(*p++ - '0');
-  int digits = static_cast<int>(p - first);
-  int fraction = 0;
-  if (p != end && *p == '.') {
-    const char* const point = ++p;
-    while (p != end && static_cast<unsigned>(*p - '0') < 10)
-      m = 10 * m + static_cast<unsigned>(*p++ - '0');
-    fraction = static_cast<int>(p - point);
-    digits += fraction;
-  }
-  if (p != end || digits == 0 || digits > 19 || m > (std::uint64_t{1} << 53)) return std::nullopt;
-  const double value = static_cast<double>(m) / kPow10[fraction];
-  return negative ? -value : value;
+  double value = 0.0;
+  const char* const end = text.data() + text.size();
+  if (scan_decimal(text.data(), end, value) != end) return std::nullopt;
+  return value;
 }
 
-// "[-]ddd" with at most 18 digits, else nullopt (std::from_chars's value).
 std::optional<std::int64_t> short_integer(std::string_view text) {
-  const char* p = text.data();
-  const char* const end = p + text.size();
-  const bool negative = p != end && *p == '-';
-  if (negative) ++p;
-  if (p == end || end - p > 18) return std::nullopt;
   std::int64_t value = 0;
-  for (; p != end; ++p) {
-    const auto digit = static_cast<unsigned>(*p - '0');
-    if (digit >= 10) return std::nullopt;
-    value = 10 * value + digit;
-  }
-  return negative ? -value : value;
+  const char* const end = text.data() + text.size();
+  if (scan_integer(text.data(), end, value) != end) return std::nullopt;
+  return value;
 }
 
 // The first block; it doubles for a line that does not fit.
@@ -128,62 +96,65 @@ int count_digits(std::uint64_t v) {
   return guess + (v >= kPow10[static_cast<std::size_t>(guess)] ? 1 : 0);
 }
 
-constexpr char kPairs[] =
-    "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
-    "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
-    "8081828384858687888990919293949596979899";
+// The eight decimal digits of v < 10^8, leading zeros included, as the
+// eight bytes of a little-endian word: v split into two 4-digit halves, each
+// into two 2-digit quarters, each into two digits, every step in all lanes
+// of the word at once (x / 100 as x * 10486 >> 20 for x < 10^4, x / 10 as
+// x * 103 >> 10 for x < 100; checked against printf for every v < 10^8).
+std::uint64_t digits8(std::uint32_t v) {
+  const std::uint64_t high = v / 10000, low = v % 10000;
+  std::uint64_t x = high | low << 32;
+  const std::uint64_t h100 = (x * 10486 >> 20) & 0x0000007F0000007Fu;
+  x = h100 | (x - h100 * 100) << 16;
+  const std::uint64_t h10 = (x * 103 >> 10) & 0x000F000F000F000Fu;
+  x = h10 | (x - h10 * 10) << 8;
+  return x | 0x3030303030303030u;
+}
 
-// The eight decimal digits of v < 10^8, leading zeros included, at out.
-// y = v 2^32 / 10^6 in 32.32 fixed point, from ceil(2^48 / 10^6) and one
-// unit up, so that the fraction never falls below the true one: each
-// multiplication by 100 then moves the next two digits into the integer
-// part (Jeaiii's method; checked against printf for every v < 10^8).
-void put8(char* out, std::uint32_t v) {
-  std::uint64_t y = (std::uint64_t{v} * 281474977u >> 16) + 1;
-  for (int i = 0; i < 4; ++i) {
-    const auto pair = static_cast<std::size_t>(y >> 32) * 2;
-    out[2 * i] = kPairs[pair];
-    out[2 * i + 1] = kPairs[pair + 1];
-    y = (y & 0xffffffffu) * 100u;
+// The eight bytes of x at out, the low byte first.
+void store8(char* out, std::uint64_t x) {
+  if constexpr (std::endian::native == std::endian::little) {
+    std::memcpy(out, &x, 8);
+  } else {
+    for (int i = 0; i < 8; ++i) out[i] = static_cast<char>(x >> (8 * i));
   }
 }
 
-// The n decimal digits of v (v < 10^n) ending at `end`.
-void put_digits(char* end, std::uint64_t v, int n) {
-  while (n > 8) {
-    end -= 8;
-    put8(end, static_cast<std::uint32_t>(v % 100000000));
-    v /= 100000000;
-    n -= 8;
-  }
-  auto w = static_cast<std::uint32_t>(v);
-  while (n >= 2) {
-    const std::uint32_t pair = (w % 100) * 2;
-    w /= 100;
-    *--end = kPairs[pair + 1];
-    *--end = kPairs[pair];
-    n -= 2;
-  }
-  if (n == 1) *--end = static_cast<char>('0' + w);
+// Bytes [offset, offset + 8) of the string whose bytes are those of the
+// words w, the low byte of each first: two words shifted into one, so that
+// the digits move from registers to their place without being read back
+// from memory (a load spanning two recent stores stalls the CPU).
+std::uint64_t window(const std::uint64_t* w, int offset) {
+  const auto q = static_cast<std::size_t>(offset >> 3);
+  const int r = (offset & 7) * 8;
+  return w[q] >> r | (w[q + 1] << 1) << (63 - r);
 }
 
-// significand * 10^exponent (significand > 0, no trailing zeros), as fmt's
-// general format without a precision lays it out: fixed notation when the
-// decimal exponent of the first digit is in [-4, upper), else d.ddde+XX
-// with at least two exponent digits.
+// significand * 10^exponent (significand > 0, no trailing zeros, at most 17
+// digits), as fmt's general format without a precision lays it out: fixed
+// notation when the decimal exponent of the first digit is in [-4, upper),
+// upper <= 16, else d.ddde+XX with at least two exponent digits. The text
+// is stored eight bytes at a time: bytes past the returned end, up to
+// out + kMaxNumberText - 1, may be overwritten.
 char* put_decimal(char* out, std::uint64_t significand, int exponent, int upper) {
+  constexpr std::uint64_t kZeros = 0x3030303030303030u;  // "00000000"
   const int n = count_digits(significand);
   const int first = exponent + n - 1;  // decimal exponent of the first digit
+  // The digits right-aligned in bytes [0, 24), '0's after them.
+  std::uint64_t w[6] = {kZeros, kZeros, kZeros, kZeros, kZeros, kZeros};
+  w[2] = digits8(static_cast<std::uint32_t>(significand % 100000000));
+  if (n > 8) {
+    const std::uint64_t high = significand / 100000000;
+    w[1] = digits8(static_cast<std::uint32_t>(high % 100000000));
+    if (n > 16) w[0] += (high / 100000000) << 56;  // "0000000d": one digit
+  }
+  const int s = 24 - n;  // the first digit
   if (first < -4 || first >= upper) {
-    // The digits one place to the right, then the first moved before the point.
-    put_digits(out + 1 + n, significand, n);
-    out[0] = out[1];
-    if (n > 1) {
-      out[1] = '.';
-      out += n + 1;
-    } else {
-      out += 1;
-    }
+    out[0] = static_cast<char>(window(w, s));
+    out[1] = '.';
+    store8(out + 2, window(w, s + 1));
+    store8(out + 10, window(w, s + 9));
+    out += n > 1 ? n + 1 : 1;
     *out++ = 'e';
     *out++ = first < 0 ? '-' : '+';
     const int e = first < 0 ? -first : first;
@@ -192,22 +163,62 @@ char* put_decimal(char* out, std::uint64_t significand, int exponent, int upper)
     *out++ = static_cast<char>('0' + e % 10);
     return out;
   }
-  if (exponent >= 0) {  // 1234e5 -> 123400000
-    put_digits(out + n, significand, n);
-    return std::fill_n(out + n, exponent, '0');
+  store8(out, window(w, s));
+  store8(out + 8, window(w, s + 8));
+  if (exponent >= 0) {  // 1234e5 -> 123400000: the '0's follow the digits
+    return out + n + exponent;
   }
   const int whole = exponent + n;  // digits before the point
-  if (whole > 0) {                 // 1234e-2 -> 12.34
-    put_digits(out + 1 + n, significand, n);
-    for (int i = 0; i < whole; ++i) out[i] = out[i + 1];
-    out[whole] = '.';
-    return out + 1 + n;
+  // Doubles mostly have 16 or 17 digits: w[1] and w[2] hold all but the
+  // first of 17, which is the last byte of w[0], and no shifting is needed
+  // for d.ddd or 0.0ddd.
+  if (n == 17 && whole == 1) {
+    out[1] = '.';
+    store8(out + 2, w[1]);
+    store8(out + 10, w[2]);
+    out[0] = static_cast<char>(w[0] >> 56);
+    return out + 18;
   }
-  *out++ = '0';  // 1234e-6 -> 0.001234
-  *out++ = '.';
-  for (int i = 0; i < -whole; ++i) *out++ = '0';
-  put_digits(out + n, significand, n);
-  return out + n;
+  if (whole > 0) {  // 1234e-2 -> 12.34
+    out[whole] = '.';
+    store8(out + whole + 1, window(w, s + whole));
+    store8(out + whole + 9, window(w, s + whole + 8));
+    return out + n + 1;
+  }
+  store8(out, 0x3030303030302e30u);  // "0.000000": 1234e-6 -> 0.001234
+  char* digits = out + 2 - whole;
+  if (n >= 16) {
+    char* const end = digits + n;
+    if (n == 17) *digits++ = static_cast<char>(w[0] >> 56);
+    store8(digits, w[1]);
+    store8(digits + 8, w[2]);
+    return end;
+  }
+  store8(digits, window(w, s));
+  store8(digits + 8, window(w, s + 8));
+  return digits + n;
+}
+
+// value > 0 as m * 10^-6 when that reads back as value: the shortest text
+// then, since below 10^9 the doubles that read back as value span less than
+// 10^-6 and hold no other multiple of it (times, rates: most of them are
+// such). The quotient m / 10^6 of exact operands (m < 2^53) is correctly
+// rounded: the double a correct parser makes of m * 10^-6.
+bool short_decimal_digits(double value, std::uint64_t& significand, int& exponent) {
+  if (!(value < 1e9)) return false;
+  const double scaled = value * 1e6;
+  const auto m = static_cast<std::uint64_t>(scaled + 0.5);
+  // value = m / 10^6 (1 + d), |d| <= 2^-53, puts scaled within m 2^-51 of
+  // m: anything farther cannot pass the division's test (a slow one).
+  const double near = static_cast<double>(m);
+  if (m == 0 || std::abs(scaled - near) > near * 0x1p-50 || near / 1e6 != value) return false;
+  significand = m;
+  exponent = -6;
+  while (significand % 10 == 0) {
+    significand /= 10;
+    ++exponent;
+  }
+  return true;
 }
 
 }  // namespace
@@ -227,6 +238,15 @@ char* write_shortest(char* out, double value) {
   }
   const auto decimal = fmt::detail::dragonbox::to_decimal(value);
   return put_decimal(out, decimal.significand, decimal.exponent, 16);
+}
+
+char* write_shortest_time(char* out, double value) {
+  std::uint64_t significand = 0;
+  int exponent = 0;
+  if (value > 0.0 && short_decimal_digits(value, significand, exponent)) {
+    return put_decimal(out, significand, exponent, 16);
+  }
+  return write_shortest(out, value);
 }
 
 // Six significant digits from the shortest ones D (n digits). Rounding D
@@ -334,7 +354,13 @@ bool CsvReader::next_line(std::string_view& line) {
 }
 
 bool CsvReader::read_record() {
-  std::string_view line;
+  if (!next_record()) return false;
+  split(record_, fields_);
+  return true;
+}
+
+bool CsvReader::next_record() {
+  std::string_view& line = record_;
   while (next_line(line)) {
     ++line_;
     if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
@@ -346,17 +372,21 @@ bool CsvReader::read_record() {
     }
     if (blank_line_ != 0) fail_at(blank_line_, "blank line (only allowed at the end of the file)");
     if (line.front() == '#') continue;
-    split(line, fields_);
     return true;
   }
   return false;
 }
 
-bool CsvReader::next() {
-  if (!read_record()) return false;
+void CsvReader::split_record() {
+  split(record_, fields_);
   if (fields_.size() != header_.size()) {
     fail(fmt::format("expected {} fields, found {}", header_.size(), fields_.size()));
   }
+}
+
+bool CsvReader::next() {
+  if (!next_record()) return false;
+  split_record();
   return true;
 }
 

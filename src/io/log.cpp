@@ -136,18 +136,25 @@ struct MiceReader::Impl {
         squal(csv.column("squal")),
         flags(csv.column("flags")),
         rows(names.size(), 0),
-        last(names.size()) {}
+        last(names.size()) {
+    roles.assign(csv.columns(), Role::kOther);
+    roles[t] = Role::kTime;
+    roles[sensor] = Role::kSensor;
+    roles[dx] = Role::kDx;
+    roles[dy] = Role::kDy;
+    if (squal) roles[*squal] = Role::kSqual;
+    if (flags) roles[*flags] = Role::kFlags;
+    plain_layout = t == 0 && sensor == 1 && dx == 2 && dy == 3 && roles.size() <= 6 &&
+                   std::all_of(roles.begin() + 4, roles.end(),
+                               [](Role r) { return r == Role::kSqual || r == Role::kFlags; });
+  }
 
   std::optional<SensorRow> read() {
-    if (!csv.next()) return std::nullopt;
+    if (!csv.next_record()) return std::nullopt;
     SensorRow row;
-    row.t = csv.time(t);
-    const std::string_view name = csv.field(sensor);
-    const auto it = std::find(names.begin(), names.end(), name);
-    if (it == names.end()) csv.fail(fmt::format("unknown sensor '{}'", name));
-    row.sensor = static_cast<int>(it - names.begin());
-    row.counts = {static_cast<double>(csv.integer(dx, -kMaxExactCount, kMaxExactCount)),
-                  static_cast<double>(csv.integer(dy, -kMaxExactCount, kMaxExactCount))};
+    std::string_view name;
+    const bool plain = read_plain(row, name);
+    if (!plain) read_counts(row, name);
     // A second row of a sensor at the same time, both with counts, is a
     // duplicated line (its counts would be counted twice), never a real
     // report; a zero row at the same time adds nothing and is accepted.
@@ -159,6 +166,78 @@ struct MiceReader::Impl {
     }
     ++rows[i];
     if (!(rows[i] > 1 && last[i].t == row.t && !moved)) last[i] = {row.t, csv.line(), moved};
+    if (!plain) read_quality(row);
+    return row;
+  }
+
+  // The record in one pass, when the columns are t,sensor,dx,dy[,squal][,flags]
+  // (as moa writes mice.csv) and every field is in its plainest form: a time
+  // "[-]ddd[.ddd]" not earlier than the previous one, a known name, integers
+  // of digits in range, no spaces, as many fields as columns. The values are
+  // then those read_counts() and read_quality() read (the same number
+  // parsers), and they would report nothing. False, with nothing changed,
+  // for anything else: they read the record and report its errors.
+  bool read_plain(SensorRow& row, std::string_view& name) {
+    if (!plain_layout) return false;
+    const std::string_view record = csv.record();
+    const char* p = record.data();
+    const char* const end = p + record.size();
+    const auto comma = [&] {
+      if (p == end || *p != ',') return false;
+      ++p;
+      return true;
+    };
+    ShortDecimal t_text;
+    p = scan_decimal(p, end, t_text);
+    if (!p || !comma()) return false;
+    // The sensors of one report share its time: the same text, the same
+    // value, without the division.
+    if (!(t_text == last_t_text)) {
+      last_t_text = t_text;
+      last_t_value = t_text.value();
+    }
+    const double t_read = last_t_value;
+    const char* const first = p;
+    while (p != end && *p != ',') ++p;
+    name = {first, static_cast<std::size_t>(p - first)};
+    const int index = find_sensor(name);
+    if (index < 0) return false;
+    std::int64_t counts[2] = {0, 0};
+    for (auto& v : counts) {
+      if (!comma()) return false;
+      p = scan_integer(p, end, v);
+      if (!p || v < -kMaxExactCount || v > kMaxExactCount) return false;
+    }
+    std::optional<std::uint8_t> quality[2];  // squal, flags
+    for (std::size_t k = 4; k < roles.size(); ++k) {
+      if (!comma()) return false;
+      if (p == end || *p == ',') continue;  // empty: not reported in this row
+      std::int64_t v = 0;
+      p = scan_integer(p, end, v);
+      if (!p || v < 0 || v > 255) return false;
+      quality[roles[k] == Role::kSqual ? 0 : 1] = static_cast<std::uint8_t>(v);
+    }
+    if (p != end || !csv.accept_time(t_read)) return false;
+    row.t = t_read;
+    row.sensor = index;
+    row.counts = {static_cast<double>(counts[0]), static_cast<double>(counts[1])};
+    row.squal = quality[0];
+    row.flags = quality[1].value_or(0);
+    return true;
+  }
+
+  void read_counts(SensorRow& row, std::string_view& name) {
+    csv.split_record();
+    row.t = csv.time(t);
+    name = csv.field(sensor);
+    const auto it = std::find(names.begin(), names.end(), name);
+    if (it == names.end()) csv.fail(fmt::format("unknown sensor '{}'", name));
+    row.sensor = static_cast<int>(it - names.begin());
+    row.counts = {static_cast<double>(csv.integer(dx, -kMaxExactCount, kMaxExactCount)),
+                  static_cast<double>(csv.integer(dy, -kMaxExactCount, kMaxExactCount))};
+  }
+
+  void read_quality(SensorRow& row) const {
     // In optional columns an empty field means "not reported in this row".
     if (squal && !csv.is_empty(*squal)) {
       row.squal = static_cast<std::uint8_t>(csv.integer(*squal, 0, 255));
@@ -166,13 +245,45 @@ struct MiceReader::Impl {
     if (flags && !csv.is_empty(*flags)) {
       row.flags = static_cast<std::uint8_t>(csv.integer(*flags, 0, 255));
     }
-    return row;
   }
+
+  /// Index of the sensor called `name`, -1 if none; the one after the
+  /// previous row's is tried first (rows usually take the sensors in turn).
+  int find_sensor(std::string_view name) {
+    const std::size_t n = names.size();
+    if (n == 0 || name.empty() || name.front() == ' ' || name.front() == '\t' ||
+        name.back() == ' ' || name.back() == '\t') {
+      return -1;
+    }
+    std::size_t i = next_sensor;
+    for (std::size_t k = 0; k < n; ++k, i = i + 1 == n ? 0 : i + 1) {
+      if (names[i].size() == name.size() && same_bytes(names[i].data(), name.data(), name.size())) {
+        next_sensor = i + 1 == n ? 0 : i + 1;
+        return static_cast<int>(i);
+      }
+    }
+    return -1;
+  }
+
+  // Names are short: a byte loop beats a memcmp call.
+  static bool same_bytes(const char* a, const char* b, std::size_t n) {
+    for (std::size_t k = 0; k < n; ++k) {
+      if (a[k] != b[k]) return false;
+    }
+    return true;
+  }
+
+  enum class Role : std::uint8_t { kOther, kTime, kSensor, kDx, kDy, kSqual, kFlags };
 
   CsvReader csv;
   std::vector<std::string> names;  // a copy: the reader may outlive the config
   std::size_t t, sensor, dx, dy;
   std::optional<std::size_t> squal, flags;
+  std::vector<Role> roles;      // per column
+  bool plain_layout = false;    // t,sensor,dx,dy[,squal][,flags]: read_plain() applies
+  std::size_t next_sensor = 0;  // tried first by find_sensor()
+  ShortDecimal last_t_text;     // read_plain()'s last time and its value
+  double last_t_value = 0.0;
   std::optional<SensorRow> peeked;
   std::optional<double> start;
   std::vector<std::size_t> rows;  // per sensor, read so far
@@ -290,6 +401,13 @@ struct OdometryWriter::Impl {
 
   void drain() {
     file->stream().write(pending.data(), static_cast<std::streamsize>(used));
+    // The disk writes what is written while the rows go on, rather than
+    // all of it in commit()'s fsync.
+    drained += used;
+    if (drained >= kWritebackBlock) {
+      file->start_writeback();
+      drained = 0;
+    }
     used = 0;
   }
 
@@ -298,6 +416,7 @@ struct OdometryWriter::Impl {
   }
 
   static constexpr std::size_t kPendingBlock = std::size_t{1} << 16;
+  static constexpr std::size_t kWritebackBlock = std::size_t{1} << 23;
 
   std::string file_name;
   std::vector<std::string> extra_columns;
@@ -305,7 +424,8 @@ struct OdometryWriter::Impl {
   std::FILE* stream = nullptr;
   std::vector<char> pending;  ///< [0, used): rows not yet handed to the file
   std::size_t used = 0;
-  std::string joined;  ///< write()'s extra values, joined
+  std::size_t drained = 0;  ///< bytes handed to the file since the last start_writeback()
+  std::string joined;       ///< write()'s extra values, joined
   std::optional<double> last_t;
   bool committed = false;
 };
@@ -365,19 +485,36 @@ void OdometryWriter::check(const std::array<double, 7>& values) {
   }
 }
 
-void OdometryWriter::put_row(const std::array<double, 7>& values, std::string_view extra) {
+char* OdometryWriter::put_numbers(const std::array<double, 7>& values, std::size_t max_extra) {
   Impl& impl = *impl_;
   impl.last_t = values[0];
   // The shortest text that reads back as the same double: exact, and no
   // longer than needed.
-  char* out = impl.reserve(values.size() * (kMaxNumberText + 1) + extra.size() + 1);
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    if (i > 0) *out++ = ',';
+  char* out = impl.reserve(values.size() * (kMaxNumberText + 1) + max_extra + 1);
+  out = write_shortest_time(out, values[0]);
+  for (std::size_t i = 1; i < values.size(); ++i) {
+    *out++ = ',';
     out = write_shortest(out, values[i]);
   }
+  return out;
+}
+
+void OdometryWriter::put_row(const std::array<double, 7>& values, std::string_view extra) {
+  char* out = put_numbers(values, extra.size());
   out = std::copy(extra.begin(), extra.end(), out);
-  *out++ = '\n';
-  impl.wrote(out);
+  end_row(out);
+}
+
+char* OdometryWriter::begin_row(double t, const Pose2& pose, const Twist2& twist,
+                                std::size_t max_extra) {
+  const auto values = row_values(t, pose, twist);
+  check(values);
+  return put_numbers(values, max_extra);
+}
+
+void OdometryWriter::end_row(char* end) {
+  *end++ = '\n';
+  impl_->wrote(end);
 }
 
 void OdometryWriter::write(double t, const Pose2& pose, const Twist2& twist,

@@ -125,7 +125,6 @@ struct OdometryCsvWriter::Impl {
   bool names_break_csv = false;
   std::optional<Selection> selection;  ///< of `text`
   std::string text;
-  std::string extra;  ///< the row's extra fields, joined
 };
 
 OdometryCsvWriter::OdometryCsvWriter(const std::filesystem::path& file,
@@ -176,33 +175,32 @@ void OdometryCsvWriter::write(const OdometryStep& step) {
     s.writer.write(step.t(), step.pose, e.estimate.twist, fields);
     return;
   }
-  // sd_vx, sd_vy, sd_omega, then the selection, then pxx, pxy, pyy, ptt.
-  char numbers[4 * (kMaxNumberText + 1)];
-  char* end = numbers;
+  // sd_vx, sd_vy, sd_omega, then the selection, then pxx, pxy, pyy, ptt,
+  // then scale_v, scale_omega and their sd, written in place after the
+  // row's numbers.
+  const std::string_view selection = s.selection_text(e);
+  constexpr std::size_t kNumbers = 11 * (kMaxNumberText + 1);
+  char* out =
+      s.writer.begin_row(step.t(), step.pose, e.estimate.twist, kNumbers + selection.size());
   for (int i = 0; i < 3; ++i) {
-    *end++ = ',';
-    end = write_shortest(end, std::sqrt(std::max(e.estimate.covariance(i, i), 0.0)));
+    *out++ = ',';
+    out = write_shortest(out, std::sqrt(std::max(e.estimate.covariance(i, i), 0.0)));
   }
-  s.extra.assign(numbers, end);
-  s.extra += s.selection_text(e);
+  out = std::copy(selection.begin(), selection.end(), out);
   if (s.fused) {
     const Eigen::Matrix3d& p = step.pose_covariance;
-    end = numbers;
     for (const double v : {p(0, 0), p(0, 1), p(1, 1), p(2, 2)}) {
-      *end++ = ',';
-      end = write_shortest(end, v);
+      *out++ = ',';
+      out = write_shortest(out, v);
     }
-    s.extra.append(numbers, end);
   }
   if (s.scaled) {
-    end = numbers;
     for (const double v : scale_fields(step)) {
-      *end++ = ',';
-      end = write_shortest(end, v);
+      *out++ = ',';
+      out = write_shortest(out, v);
     }
-    s.extra.append(numbers, end);
   }
-  s.writer.write_joined(step.t(), step.pose, e.estimate.twist, s.extra);
+  s.writer.end_row(out);
 }
 
 void OdometryCsvWriter::commit() { impl_->writer.commit(); }

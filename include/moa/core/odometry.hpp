@@ -199,6 +199,7 @@ class Odometry {
   void on_epoch(const ArraySample& sample, StepSink sink);
   void drain(bool all, StepSink sink);
   void process(const ArraySample& sample, StepSink sink);
+  /// Into `out`, default-constructed; false when the epoch has no interval.
   bool estimate(const ArraySample& sample, const std::optional<Twist2>& wheels,
                 RobustEstimate& out);
   void apply_fixes(double t);
@@ -213,7 +214,8 @@ class Odometry {
   NoiseModel noise_;   ///< oracle's noise model
   Fallback fallback_;  ///< for the wheels and oracle estimators
   PointMeasurements points_;
-  ArraySample compact_;  ///< the selected sensors' counts of the current epoch
+  ArraySample compact_;               ///< the selected sensors' counts of the current epoch
+  RobustEstimate selected_estimate_;  ///< its estimate, in the selection's indices
   Synchroniser sync_;
   WheelAverager wheels_;
   bool wheels_seen_ = false;
@@ -224,6 +226,7 @@ class Odometry {
   std::optional<PoseEkf> ekf_;
   bool started_ = false;
   double t0_;
+  double period_;  ///< s, 1 / rate
   FixCounts fixes_;
   std::size_t steps_ = 0;
   RowError row_error_ = RowError::kTimeNotFinite;

@@ -53,8 +53,17 @@ const char* describe(RowError error);
 /// The checks every consumer of rows makes: a finite time not before t0 nor
 /// before the previous row's (`last_row_t`) nor more than `max_gap` (s)
 /// after it, a sensor index below n_sensors, finite counts.
-std::optional<RowError> check_row(const SensorRow& row, int n_sensors, double t0, double last_row_t,
-                                  double max_gap = std::numeric_limits<double>::infinity());
+inline std::optional<RowError> check_row(const SensorRow& row, int n_sensors, double t0,
+                                         double last_row_t,
+                                         double max_gap = std::numeric_limits<double>::infinity()) {
+  if (!std::isfinite(row.t)) return RowError::kTimeNotFinite;
+  if (row.t < t0) return RowError::kTimeBeforeStart;
+  if (row.t < last_row_t) return RowError::kTimeBackwards;
+  if (row.t - last_row_t > max_gap) return RowError::kTimeJump;
+  if (row.sensor < 0 || row.sensor >= n_sensors) return RowError::kUnknownSensor;
+  if (!row.counts.allFinite()) return RowError::kCountsNotFinite;
+  return std::nullopt;
+}
 
 /// Epochs that can be pending at once (each an ArraySample, ~300 bytes).
 inline constexpr std::size_t kMaxPendingEpochs = 64;

@@ -20,14 +20,21 @@ class AtomicFile {
   AtomicFile& operator=(const AtomicFile&) = delete;
 
   std::ostream& stream() { return out_; }
+  /// Starts writing what the stream holds so far to the disk, without
+  /// waiting for it (Linux: sync_file_range), so that commit()'s fsync has
+  /// less left to wait for. Optional; failures are left for commit() to see.
+  void start_writeback();
   /// Flushes, closes and renames onto the target; throws io::Error on failure.
   void commit();
 
  private:
+  void close_writeback();
+
   std::filesystem::path target_;
   std::filesystem::path temp_;
   TemporaryPath registered_;
   std::ofstream out_;
+  int writeback_fd_ = -1;  ///< the temporary, opened by start_writeback()
   bool committed_ = false;
 };
 

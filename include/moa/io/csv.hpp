@@ -33,18 +33,87 @@ std::string printable(std::string_view text);
 /// fields, the robot config and the simulator's scenarios.
 std::variant<double, std::string> parse_number(std::string_view text);
 
-/// Room for any text of the two writers below.
-inline constexpr std::size_t kMaxNumberText = 32;
+/// Room for any text of the two writers below (at most 24 chars) and the
+/// scratch past its end that they may overwrite: give them this much.
+inline constexpr std::size_t kMaxNumberText = 40;
 
 /// Writes at `out` the shortest text that reads back as exactly `value`,
 /// laid out as fmt's "{}" lays it out (fixed notation for decimal exponents
 /// -4..15, else d.ddde+XX), and returns the end. The digits are
-/// std::to_chars's, several times faster than fmt's general path. At most
-/// kMaxNumberText chars.
+/// Dragonbox's (what fmt writes), several times faster than fmt's general
+/// path. Needs kMaxNumberText chars of room at `out`.
 char* write_shortest(char* out, double value);
+/// write_shortest() for values that are mostly short decimals (times):
+/// tries m * 10^-6 before Dragonbox. The same text.
+char* write_shortest_time(char* out, double value);
 /// Writes `value` as fmt's "{:.6g}" (printf's %.6g): six significant digits,
-/// trailing zeros dropped. At most kMaxNumberText chars.
+/// trailing zeros dropped. Needs kMaxNumberText chars of room at `out`.
 char* write_6g(char* out, double value);
+
+/// "[-]ddd[.ddd]" (at most 19 digits, no exponent, no '+') from p: stores
+/// its value, the double std::from_chars gives, and returns the end of the
+/// text read; nullptr when the text at p is not of that form (the readers'
+/// fast paths, which leave everything else to CsvReader::number). m / 10^k
+/// with m < 2^53 and k <= 19 is exact in both operands and the division
+/// rounds correctly: the double std::from_chars gives (Clinger's fast path),
+/// at a fraction of its cost.
+/// The text scan_decimal() read: m * 10^-fraction, negated when negative.
+struct ShortDecimal {
+  std::uint64_t m = 0;
+  int fraction = 0;
+  bool negative = false;
+  bool operator==(const ShortDecimal&) const = default;
+  double value() const {
+    static constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,
+                                        1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19};
+    const double magnitude = static_cast<double>(m) / kPow10[fraction];
+    return negative ? -magnitude : magnitude;
+  }
+};
+
+inline const char* scan_decimal(const char* p, const char* end, ShortDecimal& out) {
+  const bool negative = p != end && *p == '-';
+  if (negative) ++p;
+  std::uint64_t m = 0;
+  const char* const first = p;
+  while (p != end && static_cast<unsigned>(*p - '0') < 10)
+    m = 10 * m + static_cast<unsigned>(*p++ - '0');
+  int digits = static_cast<int>(p - first);
+  int fraction = 0;
+  if (p != end && *p == '.') {
+    const char* const point = ++p;
+    while (p != end && static_cast<unsigned>(*p - '0') < 10)
+      m = 10 * m + static_cast<unsigned>(*p++ - '0');
+    fraction = static_cast<int>(p - point);
+    digits += fraction;
+  }
+  if (digits == 0 || digits > 19 || m > (std::uint64_t{1} << 53)) return nullptr;
+  out = {m, fraction, negative};
+  return p;
+}
+
+inline const char* scan_decimal(const char* p, const char* end, double& value) {
+  ShortDecimal d;
+  p = scan_decimal(p, end, d);
+  if (p) value = d.value();
+  return p;
+}
+
+/// "[-]ddd" (1 to 18 digits) from p: stores its value and returns the end
+/// of the digits, or nullptr.
+inline const char* scan_integer(const char* p, const char* end, std::int64_t& value) {
+  const bool negative = p != end && *p == '-';
+  if (negative) ++p;
+  const char* const first = p;
+  std::int64_t v = 0;
+  while (p != end && static_cast<unsigned>(*p - '0') < 10) {
+    if (p - first == 18) return nullptr;
+    v = 10 * v + (*p++ - '0');
+  }
+  if (p == first) return nullptr;
+  value = negative ? -v : v;
+  return p;
+}
 
 class CsvReader {
  public:
@@ -57,6 +126,8 @@ class CsvReader {
   /// 1-based line of the current record (the header's before the first next()).
   std::size_t line() const { return line_; }
 
+  /// Columns of the header.
+  std::size_t columns() const { return header_.size(); }
   /// Index of the column called `name`, nullopt if the header has none.
   std::optional<std::size_t> column(std::string_view name) const;
   /// Index of a column the file must have; throws "FILE:LINE: missing column 'name'".
@@ -64,6 +135,21 @@ class CsvReader {
 
   /// Advances to the next record; false at the end of the file.
   bool next();
+  /// next() in two steps, for a reader's fast path: advances to the next
+  /// record (comment and blank lines skipped, a trailing '\r' dropped)
+  /// without cutting it into fields; split_record() then does what next()
+  /// does next: the fields, and the error if there are not as many as columns.
+  bool next_record();
+  void split_record();
+  /// The current record's text (valid until the next record is read).
+  std::string_view record() const { return record_; }
+  /// Takes t as the current record's time, as time() does, when it is not
+  /// earlier than the previous record's; false otherwise (nothing changes).
+  bool accept_time(double t) {
+    if (last_time_ && t < *last_time_) return false;
+    last_time_ = t;
+    return true;
+  }
 
   /// Fields of the current record, by column index.
   std::string_view field(std::size_t column) const { return fields_[column]; }
@@ -100,6 +186,7 @@ class CsvReader {
   bool eof_ = false;
   std::vector<std::string> header_;
   std::size_t header_line_ = 0;
+  std::string_view record_;
   std::vector<std::string_view> fields_;
   std::size_t line_ = 0;
   std::size_t blank_line_ = 0;  // first blank line not yet followed by content, 0 if none

@@ -114,6 +114,12 @@ class OdometryWriter {
   /// holds a comma or a line break (OdometryCsvWriter, from numbers, fixed
   /// words and checked names); the other checks are write()'s.
   void write_joined(double t, const Pose2& pose, const Twist2& twist, std::string_view extra);
+  /// write_joined() in two steps, the extra values written in place: checks
+  /// the row and writes its seven numbers, then returns where the caller
+  /// writes the extra values (",v1,v2,...", at most `max_extra` chars);
+  /// end_row() takes the end of what it wrote.
+  char* begin_row(double t, const Pose2& pose, const Twist2& twist, std::size_t max_extra);
+  void end_row(char* end);
   void commit();
   /// Flushes a stream (no-op for a file, which appears on commit()).
   void flush();
@@ -121,6 +127,7 @@ class OdometryWriter {
  private:
   void header();
   void check(const std::array<double, 7>& values);
+  char* put_numbers(const std::array<double, 7>& values, std::size_t max_extra);
   void put_row(const std::array<double, 7>& values, std::string_view extra);
   struct Impl;
   std::unique_ptr<Impl> impl_;
