@@ -10,6 +10,7 @@
 #include <fstream>
 #include <numbers>
 #include <random>
+#include <string>
 
 #include "moa/io/config.hpp"
 #include "support/calibration_data.hpp"
@@ -78,6 +79,53 @@ TEST(CalibrateCli, ExactMeetsTheLimitsOnNoisyMixedMotion) {
     EXPECT_EQ(m.mirrored, truth[i].mirrored) << kNames[i];
     EXPECT_EQ(m.cpi, nominal[i].cpi);
   }
+  fs::remove_all(dir);
+}
+
+// wheels.csv with its omega column zeroed: a reference that is not the
+// robot's twist (issue #20: one yaw moved 45 -> 64 deg, residual RMS 156
+// mm/s against 0.36, negative information eigenvalues, and written).
+void zero_omega(const fs::path& wheels) {
+  std::ifstream in(wheels);
+  std::string text, line;
+  while (std::getline(in, line)) {
+    const auto comma = line.rfind(',');
+    const bool data = !line.empty() && line[0] != '#' && line[0] != 't';
+    text += (data ? line.substr(0, comma) + ",0" : line) + "\n";
+  }
+  in.close();
+  std::ofstream(wheels) << text;
+}
+
+TEST(CalibrateCli, ExactRefusesAModelThatDoesNotExplainTheDataUnlessForced) {
+  std::mt19937_64 rng(31);
+  const SensorArray nominal = test::four_sensor_nominal();
+  const SensorArray truth =
+      test::perturbed(nominal, rng, 0.008, 4.0 * std::numbers::pi / 180.0, 0.04, 1);
+  const fs::path dir = write_reference_log("cal-misfit", nominal, truth, test::mixed_motion, 20.0,
+                                           0.01, {0.005, 0.02});
+  // The same log as it is passes the check, by far.
+  const auto good = test::run_moa(calibrate_args(dir, "exact"));
+  ASSERT_EQ(good.exit_code, 0) << good.err;
+  EXPECT_THAT(good.out, HasSubstr("model check: residual "));
+  EXPECT_THAT(good.out, HasSubstr("accepted up to 4;"));
+  fs::remove(dir / "cal.yaml");
+
+  zero_omega(dir / "wheels.csv");
+  const auto r = test::run_moa(calibrate_args(dir, "exact"));
+  EXPECT_EQ(r.exit_code, 1);
+  expect_one_line_error(
+      r,
+      "--method exact: refused, the calibrated model does not explain the data: at the "
+      "calibrated mounts the counts disagree with a rigid motion by ");
+  EXPECT_THAT(r.err, HasSubstr("Nothing written (--force writes it anyway)"));
+  EXPECT_FALSE(fs::exists(dir / "cal.yaml"));
+
+  const auto forced = test::run_moa(calibrate_args(dir, "exact") + " --force");
+  ASSERT_EQ(forced.exit_code, 0) << forced.err;
+  EXPECT_THAT(forced.err, HasSubstr("warning: the calibrated model does not explain the data"));
+  EXPECT_THAT(forced.out, HasSubstr("written anyway (--force)"));
+  EXPECT_TRUE(fs::exists(dir / "cal.yaml"));
   fs::remove_all(dir);
 }
 

@@ -7,6 +7,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <variant>
 
 #include "calibrate_wizard.hpp"
 #include "commands.hpp"
@@ -41,6 +42,12 @@ int run_calibrate(CalibrateArgs args) {
   const io::RobotConfig config = io::read_config(args.config);
   const io::CalibrationSummary summary =
       io::calibrate_log(config, args.config, args.log, *method, args.options);
+  if (const auto* exact = std::get_if<ExactCalibration>(&summary.result);
+      exact != nullptr && exact->check.misfit()) {
+    fmt::print(stderr,
+               "moa calibrate: warning: the calibrated model does not explain the data; written "
+               "anyway (--force), see the report's model check\n");
+  }
   io::write_config(summary.calibrated, args.out);
   if (args.json) {
     fmt::print("{}\n", summary.to_json(args.out));
@@ -106,6 +113,10 @@ void add_calibrate(CLI::App& app, Action& action) {
                   "guided: 1-sigma of the robot's turning during a push, rad")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  cmd->add_flag("--force", args->options.force,
+                "exact: write a calibration whose model does not explain the data (residual far "
+                "above the counts' noise, information not positive definite) with a warning "
+                "instead of refusing it");
   cmd->add_flag("--json", args->json, "Print the report as one JSON object (SI units)");
   cmd->add_flag("--quiet", args->quiet, "Print nothing on success");
   // --guided [--live]: the live, step-by-step guided calibration (calibrate_wizard.cpp).

@@ -233,6 +233,50 @@ void run_kimlee(CalibrationSummary& r, const RobotConfig& config, const fs::path
   r.result = cal;
 }
 
+// The model check of the exact method (ExactModelCheck): a fact line
+// always; a misfit is refused (io::Error) unless forced, then a warning.
+void model_check(CalibrationSummary& r, const ExactModelCheck& check, const RobotConfig& config,
+                 const fs::path& log, bool force) {
+  const std::string residual =
+      check.tested
+          ? fmt::format(
+                "residual {:.3g} counts per interval and axis against the counts' own noise {:.3g} "
+                "(best rigid-motion fit): variance ratio {:.3g}, accepted up to {:.3g}",
+                std::sqrt(check.residual_variance), std::sqrt(check.noise_variance),
+                check.variance_ratio(), check.bound)
+          : std::string("residual not tested (too few samples to know the counts' noise)");
+  const std::string& worst = config.names[static_cast<std::size_t>(check.min_eigenvalue_sensor)];
+  r.facts.push_back(fmt::format(
+      "model check: {}; smallest information eigenvalue {:.3g} ({}), accepted down to -1", residual,
+      check.min_eigenvalue, worst));
+  if (!check.misfit()) return;
+  std::vector<std::string> why;
+  if (check.residual_too_large()) {
+    why.push_back(fmt::format(
+        "at the calibrated mounts the counts disagree with a rigid motion by {:.3g} counts per "
+        "interval and axis, {:.3g} times their own noise of {:.3g} (accepted up to {:.3g} times)",
+        std::sqrt(check.residual_variance), std::sqrt(check.variance_ratio()),
+        std::sqrt(check.noise_variance), std::sqrt(check.bound)));
+  }
+  if (check.information_indefinite()) {
+    why.push_back(fmt::format(
+        "the information of sensor '{}' is not positive definite (eigenvalue {:.3g}): wheels.csv "
+        "and mice.csv disagree about the motion",
+        worst, check.min_eigenvalue));
+  }
+  const std::string reason = fmt::format("{}", fmt::join(why, "; "));
+  if (force) {
+    r.warnings.push_back(fmt::format(
+        "the calibrated model does not explain the data, written anyway (--force): {}", reason));
+    return;
+  }
+  throw Error(fmt::format(
+      "{}: --method exact: refused, the calibrated model does not explain the data: {}; is "
+      "wheels.csv the twist of this robot in its frame (vx, vy in m/s, omega in rad/s) over the "
+      "same time as mice.csv? Nothing written (--force writes it anyway)",
+      log.string(), reason));
+}
+
 void run_exact(CalibrationSummary& r, const RobotConfig& config, const fs::path& log,
                const CalibrationOptions& options) {
   const ReferenceData ref = read_reference(config, log, r.method, options);
@@ -301,6 +345,7 @@ void run_exact(CalibrationSummary& r, const RobotConfig& config, const fs::path&
         "{} samples skipped: a sensor reported lift or counter overflow", cal.samples_unusable));
   }
   if (!cal.converged) r.warnings.push_back("the optimiser did not converge: the result is rough");
+  model_check(r, cal.check, config, log, options.force);
   if (ref.samples.size() < 30) {
     r.warnings.push_back(fmt::format(
         "only {} samples: the noise levels (and so the 1-sigma) are rough", ref.samples.size()));
@@ -486,6 +531,18 @@ CalibrationSummary calibrate_log(const RobotConfig& config, const std::string& c
       break;
   }
   for (const auto& s : r.sensors) {
+    // A fit that ran away (a scale through zero: a flipped axis) gives no
+    // sensor a config can hold: refused, --force or not.
+    const MountVector p = mount_parameters(s.calibrated);
+    if (!p.allFinite() || !(s.calibrated.scale.minCoeff() > 0.0)) {
+      throw Error(fmt::format(
+          "{}: --method {}: refused, sensor '{}' calibrated to position ({:.4g}, {:.4g}) m, yaw "
+          "{:.4g} rad, scale ({:.4g}, {:.4g}): not a sensor mount (a scale must be positive); the "
+          "data do not fit "
+          "the model. Nothing written",
+          method == CalibrationMethod::kGuided ? config_path : log.string(), describe(method),
+          s.name, p(0), p(1), p(2), p(3), p(4)));
+    }
     for (auto& w : plausibility_warnings(s.name, s.nominal, s.calibrated)) {
       r.warnings.push_back(std::move(w));
     }
