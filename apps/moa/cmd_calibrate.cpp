@@ -4,16 +4,20 @@
 // calibrated config and prints the report.
 #include <fmt/core.h>
 
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
 #include <variant>
+#include <vector>
 
 #include "calibrate_wizard.hpp"
 #include "commands.hpp"
 #include "moa/io/calibration_run.hpp"
 #include "moa/io/config.hpp"
 #include "moa/io/error.hpp"
+#include "moa/io/odometry_run.hpp"
+#include "moa/io/output_path.hpp"
 
 namespace moa::cli {
 namespace {
@@ -39,6 +43,14 @@ int run_calibrate(CalibrateArgs args) {
   args.options.spin = args.spin;
   // The options are checked before the config is read, so that a wrong flag is named first.
   io::check_calibration_options(*method, args.log, args.options);
+  std::vector<std::filesystem::path> inputs{args.config};
+  for (const auto& dir : {std::filesystem::path(args.log), args.options.push_x, args.options.push_y,
+                          args.options.spin}) {
+    if (dir.empty()) continue;
+    const auto files = io::resolve_log(dir).files();
+    inputs.insert(inputs.end(), files.begin(), files.end());
+  }
+  io::refuse_output_onto_inputs(args.out, "--out", inputs);
   const io::RobotConfig config = io::read_config(args.config);
   const io::CalibrationSummary summary =
       io::calibrate_log(config, args.config, args.log, *method, args.options);

@@ -6,10 +6,12 @@
 #include <charconv>
 #include <chrono>
 #include <cstdint>
+#include <filesystem>
 #include <string>
 #include <system_error>
 
 #include "commands.hpp"
+#include "moa/io/output_path.hpp"
 #include "moa/sim/log_writer.hpp"
 #include "moa/sim/scenario.hpp"
 
@@ -25,6 +27,11 @@ struct SimulateArgs {
 
 int run_simulate(const SimulateArgs& args) {
   const sim::Scenario scenario = sim::load_scenario(args.scenario);
+  // The log directory is replaced whole: it must not hold the scenario file.
+  std::error_code ec;
+  if (std::filesystem::is_regular_file(args.scenario, ec)) {
+    io::refuse_output_onto_inputs(args.out, "--out", {args.scenario});
+  }
 
   // A progress line only where someone watches (a terminal) and only once
   // the run has taken long enough to wonder about.

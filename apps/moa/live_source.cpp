@@ -3,6 +3,7 @@
 #include <fmt/core.h>
 
 #include "moa/io/error.hpp"
+#include "moa/io/odometry_run.hpp"
 #include "odometry_options.hpp"
 #include "sensor_binding.hpp"
 
@@ -86,6 +87,17 @@ LiveSource open_source(const SourceFlags& f, const io::RobotConfig& config,
     s.origin = fmt::format("a replay of {}", f.replay);
   }
   return s;
+}
+
+std::vector<std::filesystem::path> source_files(const SourceFlags& f) {
+  std::vector<std::filesystem::path> files;
+  for (const auto& binding : parse_bindings(f.mice, "--mouse")) files.emplace_back(binding.target);
+  if (!f.serial.empty()) files.emplace_back(f.serial);
+  if (!f.replay.empty()) {
+    const auto log = io::resolve_log(f.replay).files();
+    files.insert(files.end(), log.begin(), log.end());
+  }
+  return files;
 }
 
 std::string LiveSource::alive(const io::RobotConfig& config) const {
