@@ -267,7 +267,7 @@ void model_check(CalibrationSummary& r, const ExactModelCheck& check, const Robo
   const std::string reason = fmt::format("{}", fmt::join(why, "; "));
   if (force) {
     r.warnings.push_back(fmt::format(
-        "the calibrated model does not explain the data, written anyway (--force): {}", reason));
+        "the calibrated model does not explain the data, kept as forced (--force): {}", reason));
     return;
   }
   throw Error(fmt::format(
