@@ -8,6 +8,8 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "moa/io/error.hpp"
 #include "support/run.hpp"
@@ -143,6 +145,32 @@ TEST(CarelessCalls, NotANumberIsRefusedNamingTheOption) {
   const auto s = test::run_moa("evaluate --truth " + kExample + "/truth.csv --odometry " +
                                kExample + "/truth.csv --json");
   EXPECT_EQ(s.exit_code, 0) << s.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(CarelessCalls, InfinityAndOutOfRangeNumbersGetOneShortMessage) {
+  // CLI11's own ranges printed 1.797...e308 in full, and "(inf is not a
+  // finite number) AND (Value inf not in range ...)".
+  const std::string out = (test::scratch_dir("careless-range") / "o").string();
+  const std::string odometry_args =
+      "odometry --config " + kExample + "/robot.yaml --log " + kExample + " --out " + out + " ";
+  const std::string guided = "calibrate --config " + kExample + "/robot.yaml --method guided " +
+                             "--push-x " + kExample + " --spin " + kExample +
+                             " --distance 1 --turns 5 --out " + out + " ";
+  const std::vector<std::pair<std::string, std::string>> cases{
+      {odometry_args + "--rate inf", "--rate: inf is not a finite number\n"},
+      {odometry_args + "--rate 0", "--rate: 0: must be within [0.1, 10000]\n"},
+      {odometry_args + "--camera-latency -0.5", "--camera-latency: -0.5: must be >= 0\n"},
+      {guided + "--turn-sd inf", "--turn-sd: inf is not a finite number\n"},
+      {guided + "--max-row-interval -1", "--max-row-interval: -1: must be > 0\n"},
+      {"live --config " + kExample + "/robot.yaml --replay " + kExample + " --speed -1",
+       "--speed: -1: must be > 0\n"},
+  };
+  for (const auto& [args, message] : cases) {
+    const auto r = test::run_moa(args);
+    EXPECT_EQ(r.exit_code, io::kExitUsage) << args;
+    EXPECT_EQ(r.err, message + "Run with --help for more information.\n") << args;
+  }
   EXPECT_FALSE(fs::exists(out));
 }
 

@@ -15,6 +15,7 @@
 #include "moa/analysis/sensitivity.hpp"
 #include "moa/io/config.hpp"
 #include "moa/io/error.hpp"
+#include "odometry_options.hpp"
 
 namespace moa::cli {
 namespace {
@@ -95,7 +96,7 @@ void add_analyze(CLI::App& app, Action& action) {
       ->required()
       ->check(CLI::ExistingFile);
   sens->add_option("--dp", args->dp, "Position error applied to each coordinate in turn, m")
-      ->check(CLI::PositiveNumber)
+      ->check(kPositive)
       ->capture_default_str();
   sens->add_option("--twist", args->twist, "Robot twist VX,VY,OMEGA (m/s, m/s, rad/s)")
       ->expected(3)

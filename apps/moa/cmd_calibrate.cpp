@@ -18,6 +18,7 @@
 #include "moa/io/error.hpp"
 #include "moa/io/odometry_run.hpp"
 #include "moa/io/output_path.hpp"
+#include "odometry_options.hpp"
 
 namespace moa::cli {
 namespace {
@@ -98,32 +99,32 @@ void add_calibrate(CLI::App& app, Action& action) {
   cmd->add_option("--turns", args->options.turns, "guided: number of whole turns of the spin");
   cmd->add_option("--max-row-interval", args->options.max_row_interval,
                   "Longest interval one mice.csv row may cover, s")
-      ->check(CLI::PositiveNumber)
+      ->check(kPositive)
       ->capture_default_str();
   cmd->add_option("--min-interval", args->options.min_interval,
                   "kimlee, exact: merge consecutive wheels.csv rows into intervals of at least "
                   "this many seconds (default: 0.05 for exact, 0 for kimlee)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kNonNegative);
   cmd->add_option("--measurements", args->options.measurements,
                   "kimlee, exact: sum the intervals into this many measurements of equal "
                   "duration (default: 10 for kimlee, the paper's M; every interval for exact); 0: "
                   "every interval")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kNonNegative);
   cmd->add_option("--distance-sd", args->options.tolerances.distance_sd,
                   "guided: 1-sigma of the push distance, m")
-      ->check(CLI::NonNegativeNumber)
+      ->check(kNonNegative)
       ->capture_default_str();
   cmd->add_option("--turn-sd", args->options.tolerances.turn_sd,
                   "guided: 1-sigma of the spin's total angle, rad")
-      ->check(CLI::NonNegativeNumber)
+      ->check(kNonNegative)
       ->capture_default_str();
   cmd->add_option("--centre-sd", args->options.tolerances.centre_sd,
                   "guided: 1-sigma of the spin centre per axis, m")
-      ->check(CLI::NonNegativeNumber)
+      ->check(kNonNegative)
       ->capture_default_str();
   cmd->add_option("--heading-sd", args->options.tolerances.heading_sd,
                   "guided: 1-sigma of the robot's turning during a push, rad")
-      ->check(CLI::NonNegativeNumber)
+      ->check(kNonNegative)
       ->capture_default_str();
   cmd->add_flag("--force", args->options.force,
                 "exact: write a calibration whose model does not explain the data (residual far "

@@ -308,7 +308,7 @@ void add_live(CLI::App& app, Action& action) {
                   "[HOST:]PORT: serve the dashboard (a page at /, events at /events) while it "
                   "runs; HOST defaults to 127.0.0.1 (docs/live.md)");
   cmd->add_option("--duration", args->duration, "Stop after this many seconds (0: at Ctrl-C)")
-      ->check(kFinite & CLI::NonNegativeNumber);
+      ->check(kNonNegative);
   cmd->add_flag("--quiet", args->quiet, "No status line and no summary");
   cmd->callback([&action, args] { action = [args] { return run_live(*args); }; });
 }

@@ -25,11 +25,11 @@ void add_source_flags(CLI::App* cmd, SourceFlags& f) {
   cmd->add_option("--baud", f.baud, "Baud rate of --serial")->needs(serial)->capture_default_str();
   cmd->add_option("--speed", f.speed, "Playback speed of --replay (2: twice real time)")
       ->needs(replay)
-      ->check(kFinite & CLI::PositiveNumber)
+      ->check(kPositive)
       ->capture_default_str();
   cmd->add_option("--start-timeout", f.start_timeout,
                   "Seconds to wait for the serial device's HELLO and first DATA")
-      ->check(kFinite & CLI::PositiveNumber)
+      ->check(kPositive)
       ->capture_default_str();
   cmd->add_flag("--no-grab", f.no_grab,
                 "Do not grab the mice (EVIOCGRAB): the desktop cursor follows them too");
