@@ -62,7 +62,14 @@ int run_simulate(const SimulateArgs& args) {
   return 0;
 }
 
-// Digits only: CLI11 alone reads "-1" and "1e23" as 2^64 - 1.
+std::string scenario_help() {
+  std::string names;
+  for (const auto& n : sim::builtin_scenarios()) names += (names.empty() ? "" : ", ") + n;
+  return "A built-in scenario (" + names + ") or a scenario YAML file (docs/simulator.md)";
+}
+
+}  // namespace
+
 CLI::Validator seed_check() {
   return CLI::Validator(
       [](const std::string& text) -> std::string {
@@ -75,14 +82,6 @@ CLI::Validator seed_check() {
       },
       "SEED");
 }
-
-std::string scenario_help() {
-  std::string names;
-  for (const auto& n : sim::builtin_scenarios()) names += (names.empty() ? "" : ", ") + n;
-  return "A built-in scenario (" + names + ") or a scenario YAML file (docs/simulator.md)";
-}
-
-}  // namespace
 
 void add_simulate(CLI::App& app, Action& action) {
   auto args = std::make_shared<SimulateArgs>();
