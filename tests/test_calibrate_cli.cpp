@@ -129,6 +129,27 @@ TEST(CalibrateCli, ExactRefusesAModelThatDoesNotExplainTheDataUnlessForced) {
   fs::remove_all(dir);
 }
 
+TEST(CalibrateCli, AMountWithANegativeScaleIsRefusedEvenWhenForced) {
+  // The faults-spikes scenario, seed 2: spikes in the counts drive one
+  // sensor's fitted scale x through zero (to -0.88). Before, the config
+  // writer refused it as "config: sensor 'm4': key 'scale': must be > 0".
+  const fs::path dir = test::scratch_dir("cal-negative-scale");
+  const auto sim = test::run_moa("simulate --scenario faults-spikes --seed 2 --quiet --out " +
+                                 (dir / "log").string());
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const std::string args = "calibrate --config " + (dir / "log" / "robot.yaml").string() +
+                           " --log " + (dir / "log").string() + " --method exact --out " +
+                           (dir / "cal.yaml").string();
+  for (const std::string force : {"", " --force"}) {
+    const auto r = test::run_moa(args + force);
+    EXPECT_EQ(r.exit_code, 1) << force;
+    expect_one_line_error(r, "--method exact: refused, sensor 'm4' calibrated to position");
+    EXPECT_THAT(r.err, HasSubstr("not a sensor mount (a scale must be positive)"));
+    EXPECT_FALSE(fs::exists(dir / "cal.yaml"));
+  }
+  fs::remove_all(dir);
+}
+
 TEST(CalibrateCli, PapersExampleGivesEquation53WithKimleeAndEquation52WithExact) {
   // Kim & Lee Section V as a log: 3 s of rows of 12 packets at 6400 fps,
   // the exact reference per row. kimlee sums the rows into the paper's
