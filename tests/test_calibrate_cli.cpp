@@ -342,6 +342,34 @@ TEST_F(CalibrateCliBadInput, SensorThatCountedNothingInAPushIsNamed) {
   EXPECT_FALSE(fs::exists(out()));
 }
 
+TEST_F(CalibrateCliBadInput, ImpossibleCountsAreRefusedWithTheLine) {
+  // Line 40 of mice.csv gets dx = 2e9 (31 km in a row): refused by every
+  // method as moa odometry refuses it, naming the line.
+  std::ifstream in(dir_ / "mice.csv");
+  std::string text, line;
+  for (int n = 1; std::getline(in, line); ++n) {
+    if (n == 40) {
+      const auto first = line.find(',', line.find(',') + 1);  // after t,sensor
+      const auto second = line.find(',', first + 1);
+      line = line.substr(0, first + 1) + "2000000000" + line.substr(second);
+    }
+    text += line + "\n";
+  }
+  in.close();
+  std::ofstream(dir_ / "mice.csv") << text;
+  const std::string guided = "calibrate --config " + config() + " --method guided --push-x " +
+                             dir_.string() + " --spin " + dir_.string() +
+                             " --distance 1 --turns 1 --out " + out();
+  for (const std::string& args :
+       {calibrate_args(dir_, "exact"), calibrate_args(dir_, "kimlee"), guided}) {
+    const auto r = test::run_moa(args);
+    EXPECT_EQ(r.exit_code, 1) << args;
+    expect_one_line_error(r, (dir_ / "mice.csv").string() + ":40: row at t = ");
+    EXPECT_THAT(r.err, HasSubstr("counts imply a speed far beyond what the sensor can track"));
+    EXPECT_FALSE(fs::exists(out()));
+  }
+}
+
 TEST_F(CalibrateCliBadInput, UnknownMethodIsRejected) {
   const auto r = test::run_moa(calibrate_args(dir_, "magic"));
   EXPECT_NE(r.exit_code, 0);

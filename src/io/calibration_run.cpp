@@ -9,8 +9,10 @@
 #include <iterator>
 #include <numbers>
 #include <utility>
+#include <vector>
 
 #include "moa/calibration/reference.hpp"
+#include "moa/core/odometry.hpp"
 #include "moa/io/error.hpp"
 #include "moa/io/json.hpp"
 #include "moa/io/log.hpp"
@@ -35,6 +37,39 @@ std::string list_kept(const std::array<bool, kMountParameters>& estimated) {
 }
 
 // ------------------------------------------------------------ reading
+
+// A row whose counts imply a speed far beyond what its sensor can track is
+// a corrupt value (2e9 counts), refused as `moa odometry` refuses it
+// (core/odometry.hpp: 10 x max_speed, 50 m/s unrated). The row's interval
+// is taken as at least max_row_interval (odometry: one epoch, shorter), so
+// nothing odometry accepts is refused here.
+class CountsCheck {
+ public:
+  CountsCheck(const RobotConfig& config, double t0, double max_row_interval)
+      : max_row_interval_(max_row_interval),
+        last_(static_cast<std::size_t>(config.array.size()), t0) {
+    for (int i = 0; i < config.array.size(); ++i) {
+      to_velocity_.push_back(config.array[i].robot_velocity_from_counts());
+      const auto& rated = config.array[i].max_speed;
+      limit_.push_back(rated ? kImpossibleSpeedFactor * *rated : kImpossibleUnratedSpeed);
+    }
+  }
+  void check(const SensorRow& row, const MiceReader& reader) {
+    const auto i = static_cast<std::size_t>(row.sensor);
+    const double dt = std::max(row.t - last_[i], max_row_interval_);  // s
+    last_[i] = std::max(last_[i], row.t);
+    if (!((to_velocity_[i] * row.counts).norm() <= limit_[i] * dt)) {
+      throw Error(fmt::format("{}:{}: row at t = {} s: {}", reader.file(), reader.line(), row.t,
+                              describe(OdometryError::kImpossibleCounts)));
+    }
+  }
+
+ private:
+  double max_row_interval_;
+  std::vector<double> last_;                  // s, per sensor
+  std::vector<Eigen::Matrix2d> to_velocity_;  // counts -> m of the sensor point
+  std::vector<double> limit_;                 // m/s
+};
 
 struct ReferenceData {
   std::vector<CalibrationSample> samples;
@@ -93,9 +128,11 @@ ReferenceData read_reference(const RobotConfig& config, const fs::path& log,
   MiceReader reader(files.mice, config);
   const double t0 = reader.start_time();
   IntervalAccumulator intervals(config.array.size(), t0, reference.times, options.max_row_interval);
+  CountsCheck counts(config, t0, options.max_row_interval);
   std::size_t n_rows = 0;
   while (const auto row = reader.next()) {
     ++n_rows;
+    counts.check(*row, reader);
     if (const auto error = intervals.add(*row)) {
       throw Error(
           fmt::format("{}: row {} (t = {} s): {}", log.string(), n_rows, row->t, describe(*error)));
@@ -121,12 +158,14 @@ struct Totals {
   std::vector<std::uint8_t> flags;
 };
 
-Totals count_totals(const fs::path& dir, const RobotConfig& config) {
+Totals count_totals(const fs::path& dir, const RobotConfig& config, double max_row_interval) {
   MiceReader reader(resolve_log(dir).mice, config);
+  CountsCheck counts(config, reader.start_time(), max_row_interval);
   Totals t;
   t.counts.assign(static_cast<std::size_t>(config.array.size()), Eigen::Vector2d::Zero());
   t.flags.assign(static_cast<std::size_t>(config.array.size()), 0);
   while (const auto row = reader.next()) {
+    counts.check(*row, reader);
     const auto i = static_cast<std::size_t>(row->sensor);
     t.counts[i] += row->counts;
     t.flags[i] |= row->flags;
@@ -357,7 +396,7 @@ void run_exact(CalibrationSummary& r, const RobotConfig& config, const fs::path&
 void run_guided(CalibrationSummary& r, const RobotConfig& config, const std::string& config_path,
                 const CalibrationOptions& options) {
   const auto read = [&](const fs::path& dir, const char* what, bool all_must_count) {
-    const Totals t = count_totals(dir, config);
+    const Totals t = count_totals(dir, config, options.max_row_interval);
     for (std::size_t i = 0; i < t.counts.size(); ++i) {
       if (all_must_count && t.counts[i].isZero()) {
         throw Error(fmt::format(
