@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "moa/io/error.hpp"
 #include "moa/io/odometry_run.hpp"
 #include "moa/io/output_path.hpp"
 #include "moa/io/report.hpp"
@@ -35,8 +36,12 @@ int run_report(const ReportArgs& args) {
   inputs.title = args.title;
   std::vector<std::filesystem::path> read{inputs.config, inputs.odometry, inputs.truth.value_or(""),
                                           inputs.calibration.value_or("")};
-  const auto log_files = io::resolve_log(inputs.log).files();
-  read.insert(read.end(), log_files.begin(), log_files.end());
+  try {
+    const auto log_files = io::resolve_log(inputs.log).files();
+    read.insert(read.end(), log_files.begin(), log_files.end());
+  } catch (const io::Error&) {
+    // No log to overwrite: write_report says what is wrong with it.
+  }
   io::refuse_output_onto_inputs(args.out, "--out", read);
   io::ReportOptions options;
   options.max_points = args.max_points;
