@@ -207,6 +207,7 @@ def calibrate(
     turn_sd: float = 0.0087,
     centre_sd: float = 0.001,
     heading_sd: float = 0.0044,
+    force: bool = False,
 ) -> Calibration:
     """Runs `moa calibrate`: exact, kimlee (log_dir with wheels.csv) or guided (recordings)."""
 

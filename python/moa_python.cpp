@@ -410,9 +410,19 @@ py::dict sensor_dict(const io::SensorCalibrationReport& s) {
   return d;
 }
 
-const std::set<std::string> kCalibrationOptions{
-    "max_row_interval", "min_interval", "measurements", "push_x",  "push_y",    "spin",
-    "distance",         "turns",        "distance_sd",  "turn_sd", "centre_sd", "heading_sd"};
+const std::set<std::string> kCalibrationOptions{"max_row_interval",
+                                                "min_interval",
+                                                "measurements",
+                                                "push_x",
+                                                "push_y",
+                                                "spin",
+                                                "distance",
+                                                "turns",
+                                                "distance_sd",
+                                                "turn_sd",
+                                                "centre_sd",
+                                                "heading_sd",
+                                                "force"};
 
 io::CalibrationSummary calibrate(const py::object& config_path, const py::object& log,
                                  const std::string& method_name, const py::kwargs& kwargs) {
@@ -435,6 +445,7 @@ io::CalibrationSummary calibrate(const py::object& config_path, const py::object
   o.set("turn_sd", options.tolerances.turn_sd);
   o.set("centre_sd", options.tolerances.centre_sd);
   o.set("heading_sd", options.tolerances.heading_sd);
+  o.set("force", options.force);
   const fs::path log_path = log.is_none() ? fs::path() : log.cast<fs::path>();
   io::check_calibration_options(*method, log_path, options);
   const Config config = load_config(config_path);

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <numbers>
 #include <random>
+#include <string>
 
 #include "moa/io/config.hpp"
 #include "support/calibration_data.hpp"
@@ -77,6 +78,74 @@ TEST(CalibrateCli, ExactMeetsTheLimitsOnNoisyMixedMotion) {
     EXPECT_LT((m.scale - truth[i].scale).cwiseAbs().maxCoeff(), 0.003) << kNames[i];
     EXPECT_EQ(m.mirrored, truth[i].mirrored) << kNames[i];
     EXPECT_EQ(m.cpi, nominal[i].cpi);
+  }
+  fs::remove_all(dir);
+}
+
+// wheels.csv with its omega column zeroed: a reference that is not the
+// robot's twist (issue #20: one yaw moved 45 -> 64 deg, residual RMS 156
+// mm/s against 0.36, negative information eigenvalues, and written).
+void zero_omega(const fs::path& wheels) {
+  std::ifstream in(wheels);
+  std::string text, line;
+  while (std::getline(in, line)) {
+    const auto comma = line.rfind(',');
+    const bool data = !line.empty() && line[0] != '#' && line[0] != 't';
+    text += (data ? line.substr(0, comma) + ",0" : line) + "\n";
+  }
+  in.close();
+  std::ofstream(wheels) << text;
+}
+
+TEST(CalibrateCli, ExactRefusesAModelThatDoesNotExplainTheDataUnlessForced) {
+  std::mt19937_64 rng(31);
+  const SensorArray nominal = test::four_sensor_nominal();
+  const SensorArray truth =
+      test::perturbed(nominal, rng, 0.008, 4.0 * std::numbers::pi / 180.0, 0.04, 1);
+  const fs::path dir = write_reference_log("cal-misfit", nominal, truth, test::mixed_motion, 20.0,
+                                           0.01, {0.005, 0.02});
+  // The same log as it is passes the check, by far.
+  const auto good = test::run_moa(calibrate_args(dir, "exact"));
+  ASSERT_EQ(good.exit_code, 0) << good.err;
+  EXPECT_THAT(good.out, HasSubstr("model check: residual "));
+  EXPECT_THAT(good.out, HasSubstr("accepted up to 4;"));
+  fs::remove(dir / "cal.yaml");
+
+  zero_omega(dir / "wheels.csv");
+  const auto r = test::run_moa(calibrate_args(dir, "exact"));
+  EXPECT_EQ(r.exit_code, 1);
+  expect_one_line_error(
+      r,
+      "--method exact: refused, the calibrated model does not explain the data: at the "
+      "calibrated mounts the counts disagree with a rigid motion by ");
+  EXPECT_THAT(r.err, HasSubstr("Nothing written (--force writes it anyway)"));
+  EXPECT_FALSE(fs::exists(dir / "cal.yaml"));
+
+  const auto forced = test::run_moa(calibrate_args(dir, "exact") + " --force");
+  ASSERT_EQ(forced.exit_code, 0) << forced.err;
+  EXPECT_THAT(forced.err, HasSubstr("warning: the calibrated model does not explain the data"));
+  EXPECT_THAT(forced.out, HasSubstr("kept as forced (--force)"));
+  EXPECT_TRUE(fs::exists(dir / "cal.yaml"));
+  fs::remove_all(dir);
+}
+
+TEST(CalibrateCli, AMountWithANegativeScaleIsRefusedEvenWhenForced) {
+  // The faults-spikes scenario, seed 2: spikes in the counts drive one
+  // sensor's fitted scale x through zero (to -0.88). Before, the config
+  // writer refused it as "config: sensor 'm4': key 'scale': must be > 0".
+  const fs::path dir = test::scratch_dir("cal-negative-scale");
+  const auto sim = test::run_moa("simulate --scenario faults-spikes --seed 2 --quiet --out " +
+                                 (dir / "log").string());
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const std::string args = "calibrate --config " + (dir / "log" / "robot.yaml").string() +
+                           " --log " + (dir / "log").string() + " --method exact --out " +
+                           (dir / "cal.yaml").string();
+  for (const std::string force : {"", " --force"}) {
+    const auto r = test::run_moa(args + force);
+    EXPECT_EQ(r.exit_code, 1) << force;
+    expect_one_line_error(r, "--method exact: refused, sensor 'm4' calibrated to position");
+    EXPECT_THAT(r.err, HasSubstr("not a sensor mount (a scale must be positive)"));
+    EXPECT_FALSE(fs::exists(dir / "cal.yaml"));
   }
   fs::remove_all(dir);
 }
@@ -271,6 +340,34 @@ TEST_F(CalibrateCliBadInput, SensorThatCountedNothingInAPushIsNamed) {
                                " --distance 1 --turns 5 --out " + out());
   expect_one_line_error(r, "sensor 'c' counted nothing during the push along x");
   EXPECT_FALSE(fs::exists(out()));
+}
+
+TEST_F(CalibrateCliBadInput, ImpossibleCountsAreRefusedWithTheLine) {
+  // Line 40 of mice.csv gets dx = 2e9 (31 km in a row): refused by every
+  // method as moa odometry refuses it, naming the line.
+  std::ifstream in(dir_ / "mice.csv");
+  std::string text, line;
+  for (int n = 1; std::getline(in, line); ++n) {
+    if (n == 40) {
+      const auto first = line.find(',', line.find(',') + 1);  // after t,sensor
+      const auto second = line.find(',', first + 1);
+      line = line.substr(0, first + 1) + "2000000000" + line.substr(second);
+    }
+    text += line + "\n";
+  }
+  in.close();
+  std::ofstream(dir_ / "mice.csv") << text;
+  const std::string guided = "calibrate --config " + config() + " --method guided --push-x " +
+                             dir_.string() + " --spin " + dir_.string() +
+                             " --distance 1 --turns 1 --out " + out();
+  for (const std::string& args :
+       {calibrate_args(dir_, "exact"), calibrate_args(dir_, "kimlee"), guided}) {
+    const auto r = test::run_moa(args);
+    EXPECT_EQ(r.exit_code, 1) << args;
+    expect_one_line_error(r, (dir_ / "mice.csv").string() + ":40: row at t = ");
+    EXPECT_THAT(r.err, HasSubstr("counts imply a speed far beyond what the sensor can track"));
+    EXPECT_FALSE(fs::exists(out()));
+  }
 }
 
 TEST_F(CalibrateCliBadInput, UnknownMethodIsRejected) {

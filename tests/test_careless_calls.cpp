@@ -8,6 +8,8 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "moa/io/error.hpp"
 #include "support/run.hpp"
@@ -55,6 +57,77 @@ TEST(CarelessCalls, OutputOntoItsOwnInputIsRefusedAndTheInputKept) {
   EXPECT_THAT(r2.err, HasSubstr("is an input"));
 }
 
+// Every command that writes refuses an output that names one of its
+// inputs, before it writes anything (issue #20); `what` is the start of
+// the message after the option and path.
+void expect_refused(const std::string& args, const std::string& option, const fs::path& out,
+                    const std::string& what = "is an input of this run") {
+  const std::string before = fs::is_regular_file(out) ? slurp(out) : std::string();
+  const auto r = test::run_moa(args);
+  EXPECT_EQ(r.exit_code, io::kExitBadInput) << args << "\n" << r.err;
+  EXPECT_THAT(r.err, HasSubstr(option + " " + out.string() + ": " + what)) << args;
+  if (fs::is_regular_file(out)) {
+    EXPECT_EQ(slurp(out), before) << args;
+  }
+}
+
+TEST(CarelessCalls, CalibrateAndReportRefuseAnOutputOntoAnInput) {
+  const fs::path dir = example_copy("careless-out-calibrate");
+  const std::string config = (dir / "robot.yaml").string();
+  const std::string calibrate =
+      "calibrate --config " + config + " --log " + dir.string() + " --method exact --out ";
+  expect_refused(calibrate + config, "--out", config);  // the nominal config itself
+  expect_refused(calibrate + (dir / "mice.csv").string(), "--out", dir / "mice.csv");
+  expect_refused(calibrate + (dir / "truth.csv").string(), "--out", dir / "truth.csv");
+  const std::string guided = "calibrate --config " + config + " --method guided --push-x " +
+                             dir.string() + " --spin " + dir.string() +
+                             " --distance 1 --turns 5 --out ";
+  expect_refused(guided + (dir / "mice.csv").string(), "--out", dir / "mice.csv");
+  const std::string live_guided =
+      "calibrate --guided --live --config " + config + " --replay " + dir.string() + " --out ";
+  expect_refused(live_guided + config, "--out", config);
+
+  const std::string report = "report --config " + config + " --log " + dir.string() +
+                             " --odometry " + (dir / "truth.csv").string() + " --out ";
+  for (const char* f : {"robot.yaml", "mice.csv", "truth.csv"}) {
+    expect_refused(report + (dir / f).string(), "--out", dir / f);
+  }
+}
+
+TEST(CarelessCalls, ImportLiveAndSimulateRefuseAnOutputOntoAnInput) {
+  const fs::path dir = example_copy("careless-out-live");
+  const std::string config = (dir / "robot.yaml").string();
+  // import-evemu writes DIR/mice.csv: a recording of that name is refused.
+  const fs::path rec = dir / "rec";
+  fs::create_directories(rec);
+  fs::copy_file(std::string(MOA_TEST_DATA_DIR) + "/evemu/ps2-generic-mouse.events",
+                rec / "mice.csv");
+  expect_refused(
+      "import-evemu --sensor m1=" + (rec / "mice.csv").string() + " --out " + rec.string(), "--out",
+      rec / "mice.csv");
+
+  // live: --record DIR writes DIR/mice.csv and DIR/robot.yaml, --out FILE.
+  const std::string live =
+      "live --config " + config + " --replay " + dir.string() + " --speed 1000 --quiet ";
+  expect_refused(live + "--record " + dir.string(), "--record", dir / "mice.csv");
+  expect_refused(live + "--out " + config, "--out", config);
+  expect_refused(live + "--out " + (dir / "truth.csv").string(), "--out", dir / "truth.csv");
+  expect_refused(
+      live + "--record " + (dir / "r").string() + " --out " + (dir / "r" / "mice.csv").string(),
+      "--out", dir / "r" / "mice.csv", "is written by --record too");
+  EXPECT_FALSE(fs::exists(dir / "r"));
+
+  // simulate replaces its --out directory whole: not one holding the scenario.
+  const fs::path run = dir / "run";
+  const auto first = test::run_moa("simulate --scenario kimlee --quiet --out " + run.string());
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  fs::copy_file(std::string(MOA_SOURCE_DIR) + "/examples/scenarios/kimlee.yaml",
+                run / "kimlee.yaml");
+  expect_refused("simulate --scenario " + (run / "kimlee.yaml").string() + " --out " + run.string(),
+                 "--out", run, "holds " + (run / "kimlee.yaml").string());
+  EXPECT_TRUE(fs::exists(run / "kimlee.yaml"));
+}
+
 TEST(CarelessCalls, NotANumberIsRefusedNamingTheOption) {
   const fs::path out = test::scratch_dir("careless-nan") / "o.csv";
   for (const std::string option : {"--rate", "--max-row-interval", "--alpha", "--e-th"}) {
@@ -72,6 +145,32 @@ TEST(CarelessCalls, NotANumberIsRefusedNamingTheOption) {
   const auto s = test::run_moa("evaluate --truth " + kExample + "/truth.csv --odometry " +
                                kExample + "/truth.csv --json");
   EXPECT_EQ(s.exit_code, 0) << s.err;
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(CarelessCalls, InfinityAndOutOfRangeNumbersGetOneShortMessage) {
+  // CLI11's own ranges printed 1.797...e308 in full, and "(inf is not a
+  // finite number) AND (Value inf not in range ...)".
+  const std::string out = (test::scratch_dir("careless-range") / "o").string();
+  const std::string odometry_args =
+      "odometry --config " + kExample + "/robot.yaml --log " + kExample + " --out " + out + " ";
+  const std::string guided = "calibrate --config " + kExample + "/robot.yaml --method guided " +
+                             "--push-x " + kExample + " --spin " + kExample +
+                             " --distance 1 --turns 5 --out " + out + " ";
+  const std::vector<std::pair<std::string, std::string>> cases{
+      {odometry_args + "--rate inf", "--rate: inf is not a finite number\n"},
+      {odometry_args + "--rate 0", "--rate: 0: must be within [0.1, 10000]\n"},
+      {odometry_args + "--camera-latency -0.5", "--camera-latency: -0.5: must be >= 0\n"},
+      {guided + "--turn-sd inf", "--turn-sd: inf is not a finite number\n"},
+      {guided + "--max-row-interval -1", "--max-row-interval: -1: must be > 0\n"},
+      {"live --config " + kExample + "/robot.yaml --replay " + kExample + " --speed -1",
+       "--speed: -1: must be > 0\n"},
+  };
+  for (const auto& [args, message] : cases) {
+    const auto r = test::run_moa(args);
+    EXPECT_EQ(r.exit_code, io::kExitUsage) << args;
+    EXPECT_EQ(r.err, message + "Run with --help for more information.\n") << args;
+  }
   EXPECT_FALSE(fs::exists(out));
 }
 

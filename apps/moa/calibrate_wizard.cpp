@@ -24,14 +24,17 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <filesystem>
 #include <limits>
 #include <numbers>
+#include <vector>
 
 #include "moa/calibration/calibrate.hpp"
 #include "moa/calibration/guided_steps.hpp"
 #include "moa/io/config.hpp"
 #include "moa/io/error.hpp"
 #include "moa/io/odometry_run.hpp"
+#include "moa/io/output_path.hpp"
 
 namespace moa::cli {
 namespace {
@@ -175,6 +178,9 @@ int run_wizard(const WizardArgs& args) {
   }
   std::vector<GuidedStep> steps{GuidedStep::kPushX, GuidedStep::kPushY, GuidedStep::kSpin};
   if (args.no_push_y) steps.erase(steps.begin() + 1);
+  std::vector<std::filesystem::path> inputs = source_files(args.source);
+  inputs.emplace_back(args.config);
+  io::refuse_output_onto_inputs(args.out, "--out", inputs);
 
   Terminal terminal;
   io::LiveHooks hooks;

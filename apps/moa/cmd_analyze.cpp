@@ -17,6 +17,7 @@
 #include "moa/io/config.hpp"
 #include "moa/io/error.hpp"
 #include "moa/io/json.hpp"
+#include "odometry_options.hpp"
 
 namespace moa::cli {
 namespace {
@@ -102,7 +103,7 @@ void add_analyze(CLI::App& app, Action& action) {
       ->required()
       ->check(CLI::ExistingFile);
   sens->add_option("--dp", args->dp, "Position error applied to each coordinate in turn, m")
-      ->check(CLI::PositiveNumber)
+      ->check(kPositive)
       ->capture_default_str();
   sens->add_option("--twist", args->twist, "Robot twist VX,VY,OMEGA (m/s, m/s, rad/s)")
       ->expected(3)

@@ -21,6 +21,7 @@
 #include "moa/core/estimate.hpp"
 #include "moa/core/sekimori.hpp"
 #include "moa/io/json.hpp"
+#include "odometry_options.hpp"
 
 namespace moa::cli {
 namespace {
@@ -203,10 +204,10 @@ void add_bench(CLI::App& app, Action& action) {
   auto* cmd = app.add_subcommand(
       "bench", "Cost per update of the estimators against the literal formulations (ns)");
   cmd->add_option("--batches", args->batches, "Timed batches per estimator (median is reported)")
-      ->check(CLI::PositiveNumber)
+      ->check(kPositive)
       ->capture_default_str();
   cmd->add_option("--updates", args->updates, "Updates per batch")
-      ->check(CLI::PositiveNumber)
+      ->check(kPositive)
       ->capture_default_str();
   cmd->add_option("--sizes", args->sizes, "Numbers of sensors to measure (2..16)")
       ->delimiter(',')
@@ -219,13 +220,13 @@ void add_bench(CLI::App& app, Action& action) {
                 "mice.csv (best of --repeats; the log is written to a temporary directory and "
                 "removed)");
   cmd->add_option("--duration", r.duration, "--replay: seconds of log")
-      ->check(CLI::Range(1.0, 3600.0))
+      ->check(finite_within(1.0, 3600.0))
       ->capture_default_str();
   cmd->add_option("--row-rate", r.row_rate, "--replay: mice rows per second per sensor")
-      ->check(CLI::Range(1.0, 10000.0))
+      ->check(finite_within(1.0, 10000.0))
       ->capture_default_str();
   cmd->add_option("--rate", r.epoch_rate, "--replay: epochs per second (moa odometry --rate)")
-      ->check(CLI::Range(1.0, 10000.0))
+      ->check(finite_within(1.0, 10000.0))
       ->capture_default_str();
   cmd->add_option("--estimator", r.estimator, "--replay: ls, sekimori or consensus")
       ->capture_default_str();

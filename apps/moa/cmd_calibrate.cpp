@@ -4,15 +4,21 @@
 // calibrated config and prints the report.
 #include <fmt/core.h>
 
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
+#include <variant>
+#include <vector>
 
 #include "calibrate_wizard.hpp"
 #include "commands.hpp"
 #include "moa/io/calibration_run.hpp"
 #include "moa/io/config.hpp"
 #include "moa/io/error.hpp"
+#include "moa/io/odometry_run.hpp"
+#include "moa/io/output_path.hpp"
+#include "odometry_options.hpp"
 
 namespace moa::cli {
 namespace {
@@ -38,9 +44,23 @@ int run_calibrate(CalibrateArgs args) {
   args.options.spin = args.spin;
   // The options are checked before the config is read, so that a wrong flag is named first.
   io::check_calibration_options(*method, args.log, args.options);
+  std::vector<std::filesystem::path> inputs{args.config};
+  for (const auto& dir : {std::filesystem::path(args.log), args.options.push_x, args.options.push_y,
+                          args.options.spin}) {
+    if (dir.empty()) continue;
+    const auto files = io::resolve_log(dir).files();
+    inputs.insert(inputs.end(), files.begin(), files.end());
+  }
+  io::refuse_output_onto_inputs(args.out, "--out", inputs);
   const io::RobotConfig config = io::read_config(args.config);
   const io::CalibrationSummary summary =
       io::calibrate_log(config, args.config, args.log, *method, args.options);
+  if (const auto* exact = std::get_if<ExactCalibration>(&summary.result);
+      exact != nullptr && exact->check.misfit()) {
+    fmt::print(stderr,
+               "moa calibrate: warning: the calibrated model does not explain the data; written "
+               "anyway (--force), see the report's model check\n");
+  }
   io::write_config(summary.calibrated, args.out);
   if (args.json) {
     fmt::print("{}\n", summary.to_json(args.out));
@@ -79,33 +99,37 @@ void add_calibrate(CLI::App& app, Action& action) {
   cmd->add_option("--turns", args->options.turns, "guided: number of whole turns of the spin");
   cmd->add_option("--max-row-interval", args->options.max_row_interval,
                   "Longest interval one mice.csv row may cover, s")
-      ->check(CLI::PositiveNumber)
+      ->check(kPositive)
       ->capture_default_str();
   cmd->add_option("--min-interval", args->options.min_interval,
                   "kimlee, exact: merge consecutive wheels.csv rows into intervals of at least "
                   "this many seconds (default: 0.05 for exact, 0 for kimlee)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kNonNegative);
   cmd->add_option("--measurements", args->options.measurements,
                   "kimlee, exact: sum the intervals into this many measurements of equal "
                   "duration (default: 10 for kimlee, the paper's M; every interval for exact); 0: "
                   "every interval")
-      ->check(CLI::NonNegativeNumber);
+      ->check(kNonNegative);
   cmd->add_option("--distance-sd", args->options.tolerances.distance_sd,
                   "guided: 1-sigma of the push distance, m")
-      ->check(CLI::NonNegativeNumber)
+      ->check(kNonNegative)
       ->capture_default_str();
   cmd->add_option("--turn-sd", args->options.tolerances.turn_sd,
                   "guided: 1-sigma of the spin's total angle, rad")
-      ->check(CLI::NonNegativeNumber)
+      ->check(kNonNegative)
       ->capture_default_str();
   cmd->add_option("--centre-sd", args->options.tolerances.centre_sd,
                   "guided: 1-sigma of the spin centre per axis, m")
-      ->check(CLI::NonNegativeNumber)
+      ->check(kNonNegative)
       ->capture_default_str();
   cmd->add_option("--heading-sd", args->options.tolerances.heading_sd,
                   "guided: 1-sigma of the robot's turning during a push, rad")
-      ->check(CLI::NonNegativeNumber)
+      ->check(kNonNegative)
       ->capture_default_str();
+  cmd->add_flag("--force", args->options.force,
+                "exact: write a calibration whose model does not explain the data (residual far "
+                "above the counts' noise, information not positive definite) with a warning "
+                "instead of refusing it");
   cmd->add_flag("--json", args->json, "Print the report as one JSON object (SI units)");
   cmd->add_flag("--quiet", args->quiet, "Print nothing on success");
   // --guided [--live]: the live, step-by-step guided calibration (calibrate_wizard.cpp).

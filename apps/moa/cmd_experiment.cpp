@@ -77,6 +77,7 @@ void add_experiment(CLI::App& app, Action& action) {
                   "Also write the report page (HTML, docs/report.md) of one run of the "
                   "experiment's scenario, simulated with --seed");
   cmd->add_option("--seed", args->options.seed, "First seed; run k uses seed + k")
+      ->check(seed_check())
       ->capture_default_str();
   cmd->add_option("--runs", args->options.runs,
                   "Repetitions (Monte Carlo trials or runs); 0: the experiment's default")

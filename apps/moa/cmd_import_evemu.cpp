@@ -15,6 +15,7 @@
 #include "moa/io/error.hpp"
 #include "moa/io/evemu.hpp"
 #include "moa/io/mice_writer.hpp"
+#include "moa/io/output_path.hpp"
 #include "sensor_binding.hpp"
 
 namespace moa::cli {
@@ -36,6 +37,9 @@ int run_import_evemu(const ImportEvemuArgs& args) {
     inputs.push_back({binding.name, binding.target});
     names.push_back(binding.name);
   }
+  std::vector<std::filesystem::path> recordings;
+  for (const auto& in : inputs) recordings.push_back(in.file);
+  io::refuse_output_onto_inputs(std::filesystem::path(args.out) / "mice.csv", "--out", recordings);
   io::EvemuReader reader(inputs);
 
   std::vector<std::string> comments{

@@ -39,6 +39,7 @@
 #include "moa/io/mice_writer.hpp"
 #include "moa/io/odometry_csv.hpp"
 #include "moa/io/odometry_run.hpp"
+#include "moa/io/output_path.hpp"
 #include "odometry_options.hpp"
 #include "sensor_binding.hpp"
 
@@ -132,6 +133,23 @@ int run_live(LiveArgs args) {
   hooks.tick = [&] {
     if (show_status) show_status();
   };
+
+  // No output names an input (nor another output).
+  std::vector<fs::path> inputs = source_files(args.source);
+  inputs.emplace_back(args.config);
+  if (!args.record.empty()) {
+    const fs::path dir(args.record);
+    io::refuse_output_onto_inputs(dir / "mice.csv", "--record", inputs);
+    io::refuse_output_onto_inputs(dir / "robot.yaml", "--record", inputs);
+  }
+  if (!args.out.empty() && !to_stdout) {
+    io::refuse_output_onto_inputs(args.out, "--out", inputs);
+    if (!args.record.empty()) {
+      const fs::path dir(args.record);
+      io::refuse_output_onto_inputs(args.out, "--out", {dir / "mice.csv", dir / "robot.yaml"},
+                                    "written by --record too");
+    }
+  }
 
   LiveSource live = open_source(args.source, config, args.config, hooks);
   io::FrameSource* source = live.source.get();
@@ -290,7 +308,7 @@ void add_live(CLI::App& app, Action& action) {
                   "[HOST:]PORT: serve the dashboard (a page at /, events at /events) while it "
                   "runs; HOST defaults to 127.0.0.1 (docs/live.md)");
   cmd->add_option("--duration", args->duration, "Stop after this many seconds (0: at Ctrl-C)")
-      ->check(kFinite & CLI::NonNegativeNumber);
+      ->check(kNonNegative);
   cmd->add_flag("--quiet", args->quiet, "No status line and no summary");
   cmd->callback([&action, args] { action = [args] { return run_live(*args); }; });
 }

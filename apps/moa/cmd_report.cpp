@@ -1,10 +1,15 @@
 // moa report: one self-contained HTML page with plots of a run.
 #include <fmt/core.h>
 
+#include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "commands.hpp"
+#include "moa/io/error.hpp"
+#include "moa/io/odometry_run.hpp"
+#include "moa/io/output_path.hpp"
 #include "moa/io/report.hpp"
 
 namespace moa::cli {
@@ -29,6 +34,15 @@ int run_report(const ReportArgs& args) {
   if (!args.truth.empty()) inputs.truth = args.truth;
   if (!args.calibration.empty()) inputs.calibration = args.calibration;
   inputs.title = args.title;
+  std::vector<std::filesystem::path> read{inputs.config, inputs.odometry, inputs.truth.value_or(""),
+                                          inputs.calibration.value_or("")};
+  try {
+    const auto log_files = io::resolve_log(inputs.log).files();
+    read.insert(read.end(), log_files.begin(), log_files.end());
+  } catch (const io::Error&) {
+    // No log to overwrite: write_report says what is wrong with it.
+  }
+  io::refuse_output_onto_inputs(args.out, "--out", read);
   io::ReportOptions options;
   options.max_points = args.max_points;
   io::write_report(inputs, args.out, options);

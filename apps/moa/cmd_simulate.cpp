@@ -6,10 +6,12 @@
 #include <charconv>
 #include <chrono>
 #include <cstdint>
+#include <filesystem>
 #include <string>
 #include <system_error>
 
 #include "commands.hpp"
+#include "moa/io/output_path.hpp"
 #include "moa/sim/log_writer.hpp"
 #include "moa/sim/scenario.hpp"
 
@@ -25,6 +27,11 @@ struct SimulateArgs {
 
 int run_simulate(const SimulateArgs& args) {
   const sim::Scenario scenario = sim::load_scenario(args.scenario);
+  // The log directory is replaced whole: it must not hold the scenario file.
+  std::error_code ec;
+  if (std::filesystem::is_regular_file(args.scenario, ec)) {
+    io::refuse_output_onto_inputs(args.out, "--out", {args.scenario});
+  }
 
   // A progress line only where someone watches (a terminal) and only once
   // the run has taken long enough to wonder about.
@@ -55,7 +62,14 @@ int run_simulate(const SimulateArgs& args) {
   return 0;
 }
 
-// Digits only: CLI11 alone reads "-1" and "1e23" as 2^64 - 1.
+std::string scenario_help() {
+  std::string names;
+  for (const auto& n : sim::builtin_scenarios()) names += (names.empty() ? "" : ", ") + n;
+  return "A built-in scenario (" + names + ") or a scenario YAML file (docs/simulator.md)";
+}
+
+}  // namespace
+
 CLI::Validator seed_check() {
   return CLI::Validator(
       [](const std::string& text) -> std::string {
@@ -68,14 +82,6 @@ CLI::Validator seed_check() {
       },
       "SEED");
 }
-
-std::string scenario_help() {
-  std::string names;
-  for (const auto& n : sim::builtin_scenarios()) names += (names.empty() ? "" : ", ") + n;
-  return "A built-in scenario (" + names + ") or a scenario YAML file (docs/simulator.md)";
-}
-
-}  // namespace
 
 void add_simulate(CLI::App& app, Action& action) {
   auto args = std::make_shared<SimulateArgs>();

@@ -23,4 +23,8 @@ void add_calibrate(CLI::App& app, Action& action);
 void add_experiment(CLI::App& app, Action& action);
 void add_config(CLI::App& app, Action& action);
 
+/// --seed: digits only, 0 to 2^64 - 1 (CLI11 alone reads "-1" and "1e23"
+/// as 2^64 - 1). Defined in cmd_simulate.cpp.
+CLI::Validator seed_check();
+
 }  // namespace moa::cli

@@ -3,6 +3,7 @@
 #include <fmt/core.h>
 
 #include "moa/io/error.hpp"
+#include "moa/io/odometry_run.hpp"
 #include "odometry_options.hpp"
 #include "sensor_binding.hpp"
 
@@ -24,11 +25,11 @@ void add_source_flags(CLI::App* cmd, SourceFlags& f) {
   cmd->add_option("--baud", f.baud, "Baud rate of --serial")->needs(serial)->capture_default_str();
   cmd->add_option("--speed", f.speed, "Playback speed of --replay (2: twice real time)")
       ->needs(replay)
-      ->check(kFinite & CLI::PositiveNumber)
+      ->check(kPositive)
       ->capture_default_str();
   cmd->add_option("--start-timeout", f.start_timeout,
                   "Seconds to wait for the serial device's HELLO and first DATA")
-      ->check(kFinite & CLI::PositiveNumber)
+      ->check(kPositive)
       ->capture_default_str();
   cmd->add_flag("--no-grab", f.no_grab,
                 "Do not grab the mice (EVIOCGRAB): the desktop cursor follows them too");
@@ -86,6 +87,17 @@ LiveSource open_source(const SourceFlags& f, const io::RobotConfig& config,
     s.origin = fmt::format("a replay of {}", f.replay);
   }
   return s;
+}
+
+std::vector<std::filesystem::path> source_files(const SourceFlags& f) {
+  std::vector<std::filesystem::path> files;
+  for (const auto& binding : parse_bindings(f.mice, "--mouse")) files.emplace_back(binding.target);
+  if (!f.serial.empty()) files.emplace_back(f.serial);
+  if (!f.replay.empty()) {
+    const auto log = io::resolve_log(f.replay).files();
+    files.insert(files.end(), log.begin(), log.end());
+  }
+  return files;
 }
 
 std::string LiveSource::alive(const io::RobotConfig& config) const {

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -42,6 +43,10 @@ struct LiveSource {
   /// Status text: how many sensors are alive, frames lost.
   std::string alive(const io::RobotConfig& config) const;
 };
+
+/// The files the source flags name (the mice's devices, the serial port,
+/// the replayed log's files): what no output of the run may name.
+std::vector<std::filesystem::path> source_files(const SourceFlags& flags);
 
 /// Opens the one source the flags name; throws io::Error when none or more
 /// than one is given, or the source cannot be opened.

@@ -3,6 +3,7 @@
 #include <fmt/core.h>
 
 #include <cmath>
+#include <limits>
 
 #include "moa/io/odometry_run.hpp"
 
@@ -16,6 +17,26 @@ const CLI::Validator kFinite(
       return {};
     },
     "FINITE", "finite");
+
+CLI::Validator finite_within(double lo, double hi, bool open_low) {
+  return CLI::Validator(
+      [lo, hi, open_low](std::string& text) -> std::string {
+        double x = 0.0;
+        if (!CLI::detail::lexical_cast(text, x)) return fmt::format("'{}' is not a number", text);
+        if (!std::isfinite(x)) return fmt::format("{} is not a finite number", text);
+        if (std::isinf(hi) && (open_low ? !(x > lo) : !(x >= lo))) {
+          return fmt::format("{}: must be {} {}", text, open_low ? ">" : ">=", lo);
+        }
+        if ((open_low ? !(x > lo) : !(x >= lo)) || !(x <= hi)) {
+          return fmt::format("{}: must be within {}{}, {}]", text, open_low ? "(" : "[", lo, hi);
+        }
+        return {};
+      },
+      "NUMBER", "finite_within");
+}
+
+const CLI::Validator kPositive = finite_within(0.0, std::numeric_limits<double>::infinity(), true);
+const CLI::Validator kNonNegative = finite_within(0.0, std::numeric_limits<double>::infinity());
 
 void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
   OdometryOptions& o = f.options;
@@ -35,7 +56,7 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
   cmd->add_option("--e-th", o.sekimori.e_th,
                   "sekimori: E_th of eq. (7), m^2, threshold on a pair's displacement residual "
                   "per epoch ((0.2 mm)^2 at 100 Hz; core/sekimori.hpp says why)")
-      ->check(kFinite & CLI::PositiveNumber)
+      ->check(kPositive)
       ->capture_default_str();
   cmd->add_option("--r-th", o.sekimori.r_th,
                   "sekimori: r_th of eq. (7), agreeing pairs a sensor needs to be reliable "
@@ -43,23 +64,23 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
       ->check(CLI::Range(1, kMaxSensors));
   cmd->add_option("--alpha", o.consensus.alpha,
                   "consensus: false-rejection rate of the chi-square consistency test, in (0, 0.5)")
-      ->check(kFinite & CLI::Range(1e-12, 0.5))
+      ->check(finite_within(1e-12, 0.5))
       ->capture_default_str();
   cmd->add_flag("--no-motion-prior", f.no_motion_prior,
                 "consensus: no motion prior (the robot's limits, config key limits); a minority "
                 "subset is then judged against the wheels with its own covariance added");
   cmd->add_option("--rate", o.rate, "Epoch rate of the synchroniser, Hz (0.1 to 10000)")
-      ->check(kFinite & CLI::Range(0.1, 10000.0))
+      ->check(finite_within(0.1, 10000.0))
       ->capture_default_str();
   cmd->add_option("--max-row-interval", o.max_row_interval,
                   "Longest interval one mice.csv row may cover, s (a sensor silent for longer "
                   "was still before its row); at most 61 epochs")
-      ->check(kFinite & CLI::Range(1e-4, 10.0))
+      ->check(finite_within(1e-4, 10.0))
       ->capture_default_str();
   cmd->add_option("--max-gap", o.max_gap,
                   "Longest time all sensors may stay silent, s (a gap is no motion, written "
                   "epoch by epoch; a longer one is an error)")
-      ->check(kFinite & CLI::PositiveNumber)
+      ->check(kPositive)
       ->capture_default_str();
   cmd->add_option("--initial-pose", f.initial_pose,
                   "Initial pose X,Y,THETA in the world frame (m, m, rad)")
@@ -75,11 +96,11 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
   cmd->add_option("--camera-latency", o.camera_latency,
                   "Delay from a fix's capture (camera.csv t) to its arrival, s: late fixes are "
                   "applied at their capture time")
-      ->check(kFinite & CLI::NonNegativeNumber)
+      ->check(kNonNegative)
       ->capture_default_str();
   cmd->add_option("--camera-sigma", o.camera_sigma,
                   "Std. dev. of a camera fix, m, when camera.csv has no sx, sy")
-      ->check(kFinite & CLI::PositiveNumber)
+      ->check(kPositive)
       ->capture_default_str();
   cmd->add_flag("--ekf-scale", o.ekf.estimate_scale,
                 "With --fuse-camera: estimate the dead reckoning's linear and rotation scales "

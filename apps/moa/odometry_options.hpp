@@ -14,6 +14,15 @@ namespace moa::cli {
 /// A CLI11 check that refuses NaN and infinities ("--rate: nan is not a
 /// finite number"): CLI11's ranges let NaN through.
 extern const CLI::Validator kFinite;
+/// A finite number within [lo, hi] (`lo` excluded when `open_low`), its
+/// message short and first: "inf is not a finite number", "0: must be > 0",
+/// "20000: must be within [0.1, 10000]" (CLI11's own ranges print
+/// 1.797...e308 in full and add "AND" to kFinite's message).
+CLI::Validator finite_within(double lo, double hi, bool open_low = false);
+/// finite_within(0, inf, open): a positive number.
+extern const CLI::Validator kPositive;
+/// finite_within(0, inf): zero or more.
+extern const CLI::Validator kNonNegative;
 
 struct OdometryFlags {
   std::string estimator = "consensus";

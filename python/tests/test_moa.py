@@ -209,6 +209,21 @@ def test_calibrate_reports_observability_and_sigma(logs):
     assert kimlee.sensors[0]["sd_yaw"] == 0
 
 
+def test_calibrate_refuses_a_misfit_unless_forced(logs, tmp_path):
+    # wheels.csv with omega zeroed: not the robot's twist (docs/calibration.md).
+    d = tmp_path / "misfit"
+    d.mkdir()
+    for f in ["mice.csv", "robot.yaml"]:
+        (d / f).write_bytes((logs["calibration"] / f).read_bytes())
+    rows = (logs["calibration"] / "wheels.csv").read_text().splitlines()
+    zeroed = [r if r.startswith(("#", "t")) else r.rsplit(",", 1)[0] + ",0" for r in rows]
+    (d / "wheels.csv").write_text("\n".join(zeroed) + "\n")
+    with pytest.raises(moa.Error, match="refused, the calibrated model does not explain"):
+        moa.calibrate(d / "robot.yaml", d, method="exact")
+    cal = moa.calibrate(d / "robot.yaml", d, method="exact", force=True)
+    assert any("does not explain the data" in w for w in cal.warnings)
+
+
 def test_errors_carry_the_command_lines_message(logs, tmp_path):
     d = logs["calibration"]
     cfg = d / "robot.yaml"

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <unsupported/Eigen/NonLinearOptimization>
 #include <utility>
 
@@ -359,6 +360,49 @@ double chi_square_quantile(double dof, double z_p) {
 // Normal quantile of 1 - kOutlierProbability (1e-6).
 constexpr double kOutlierZ = 4.753424;
 
+// The model check (ExactModelCheck in the header). Counts are integers: no
+// model predicts them better than their rounding, 1/12 count^2 per axis
+// (the floor also keeps noise-free synthetic counts from dividing by ~0).
+constexpr double kCountRoundingVariance = 1.0 / 12.0;
+// A residual variance more than this many times the counts' own noise is
+// a misfit whatever the sample size: the RMS is twice the noise.
+constexpr double kMisfitVarianceRatio = 4.0;
+// Fewest degrees of freedom of the noise s0^2 to test against (its
+// relative 1-sigma sqrt(2 / 30) = 0.26 is far below the factor 4).
+constexpr double kMinNoiseDof = 30.0;
+
+ExactModelCheck check_model(const std::vector<SensorMount>& mounts, const Data& d,
+                            const std::vector<SensorObservability>& obs) {
+  ExactModelCheck check;
+  const auto kk = static_cast<double>(d.size());
+  const double per_sample = 2.0 * d.n - 3.0;  // count rows beyond the twist's 3
+  // s^2: the mice-only least-squares residual at the mounts.
+  const HMatrix h = stack_h(mounts);
+  const Eigen::MatrixXd z = (h.transpose() * h).inverse() * h.transpose() * d.c;
+  check.residual_variance = (d.c - h * z).squaredNorm() / (kk * per_sample);
+  // s0^2: the 2N - 3 smallest eigenvalues of C C^T (C the 2N x K counts)
+  // are what no rank-3 fit (no rigid motion seen through any H) explains.
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(d.c * d.c.transpose(),
+                                                           Eigen::EigenvaluesOnly);
+  const Eigen::VectorXd lambda = eig.eigenvalues();  // ascending
+  const double free_residual = lambda.head(2 * d.n - 3).cwiseMax(0.0).sum();
+  const double noise_dof = (kk - 3.0) * per_sample;
+  check.noise_variance =
+      std::max(noise_dof > 0.0 ? free_residual / noise_dof : 0.0, kCountRoundingVariance);
+  const double dof = kk * per_sample;
+  check.bound = std::max(kMisfitVarianceRatio, chi_square_quantile(dof, kOutlierZ) / dof);
+  check.tested = noise_dof >= kMinNoiseDof;
+  check.min_eigenvalue = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < obs.size(); ++i) {
+    const double lambda_min = obs[i].scaled_eigenvalues.minCoeff();
+    if (lambda_min < check.min_eigenvalue) {
+      check.min_eigenvalue = lambda_min;
+      check.min_eigenvalue_sensor = static_cast<int>(i);
+    }
+  }
+  return check;
+}
+
 Data select(const Data& d, const std::vector<bool>& keep) {
   Data out;
   out.n = d.n;
@@ -679,6 +723,7 @@ std::variant<ExactCalibration, CalibrationError> calibrate_exact(
     s.residual_rms = std::sqrt(sum / static_cast<double>(data.size()));
     result.sensors.push_back(s);
   }
+  result.check = check_model(current.mounts, data, obs);
   result.calibrated = SensorArray(out_mounts);
   result.noise = current.noise;
   result.samples_used = static_cast<int>(data.size());

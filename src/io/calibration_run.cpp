@@ -9,8 +9,10 @@
 #include <iterator>
 #include <numbers>
 #include <utility>
+#include <vector>
 
 #include "moa/calibration/reference.hpp"
+#include "moa/core/odometry.hpp"
 #include "moa/io/error.hpp"
 #include "moa/io/json.hpp"
 #include "moa/io/log.hpp"
@@ -35,6 +37,39 @@ std::string list_kept(const std::array<bool, kMountParameters>& estimated) {
 }
 
 // ------------------------------------------------------------ reading
+
+// A row whose counts imply a speed far beyond what its sensor can track is
+// a corrupt value (2e9 counts), refused as `moa odometry` refuses it
+// (core/odometry.hpp: 10 x max_speed, 50 m/s unrated). The row's interval
+// is taken as at least max_row_interval (odometry: one epoch, shorter), so
+// nothing odometry accepts is refused here.
+class CountsCheck {
+ public:
+  CountsCheck(const RobotConfig& config, double t0, double max_row_interval)
+      : max_row_interval_(max_row_interval),
+        last_(static_cast<std::size_t>(config.array.size()), t0) {
+    for (int i = 0; i < config.array.size(); ++i) {
+      to_velocity_.push_back(config.array[i].robot_velocity_from_counts());
+      const auto& rated = config.array[i].max_speed;
+      limit_.push_back(rated ? kImpossibleSpeedFactor * *rated : kImpossibleUnratedSpeed);
+    }
+  }
+  void check(const SensorRow& row, const MiceReader& reader) {
+    const auto i = static_cast<std::size_t>(row.sensor);
+    const double dt = std::max(row.t - last_[i], max_row_interval_);  // s
+    last_[i] = std::max(last_[i], row.t);
+    if (!((to_velocity_[i] * row.counts).norm() <= limit_[i] * dt)) {
+      throw Error(fmt::format("{}:{}: row at t = {} s: {}", reader.file(), reader.line(), row.t,
+                              describe(OdometryError::kImpossibleCounts)));
+    }
+  }
+
+ private:
+  double max_row_interval_;
+  std::vector<double> last_;                  // s, per sensor
+  std::vector<Eigen::Matrix2d> to_velocity_;  // counts -> m of the sensor point
+  std::vector<double> limit_;                 // m/s
+};
 
 struct ReferenceData {
   std::vector<CalibrationSample> samples;
@@ -93,9 +128,11 @@ ReferenceData read_reference(const RobotConfig& config, const fs::path& log,
   MiceReader reader(files.mice, config);
   const double t0 = reader.start_time();
   IntervalAccumulator intervals(config.array.size(), t0, reference.times, options.max_row_interval);
+  CountsCheck counts(config, t0, options.max_row_interval);
   std::size_t n_rows = 0;
   while (const auto row = reader.next()) {
     ++n_rows;
+    counts.check(*row, reader);
     if (const auto error = intervals.add(*row)) {
       throw Error(
           fmt::format("{}: row {} (t = {} s): {}", log.string(), n_rows, row->t, describe(*error)));
@@ -121,12 +158,14 @@ struct Totals {
   std::vector<std::uint8_t> flags;
 };
 
-Totals count_totals(const fs::path& dir, const RobotConfig& config) {
+Totals count_totals(const fs::path& dir, const RobotConfig& config, double max_row_interval) {
   MiceReader reader(resolve_log(dir).mice, config);
+  CountsCheck counts(config, reader.start_time(), max_row_interval);
   Totals t;
   t.counts.assign(static_cast<std::size_t>(config.array.size()), Eigen::Vector2d::Zero());
   t.flags.assign(static_cast<std::size_t>(config.array.size()), 0);
   while (const auto row = reader.next()) {
+    counts.check(*row, reader);
     const auto i = static_cast<std::size_t>(row->sensor);
     t.counts[i] += row->counts;
     t.flags[i] |= row->flags;
@@ -233,6 +272,50 @@ void run_kimlee(CalibrationSummary& r, const RobotConfig& config, const fs::path
   r.result = cal;
 }
 
+// The model check of the exact method (ExactModelCheck): a fact line
+// always; a misfit is refused (io::Error) unless forced, then a warning.
+void model_check(CalibrationSummary& r, const ExactModelCheck& check, const RobotConfig& config,
+                 const fs::path& log, bool force) {
+  const std::string residual =
+      check.tested
+          ? fmt::format(
+                "residual {:.3g} counts per interval and axis against the counts' own noise {:.3g} "
+                "(best rigid-motion fit): variance ratio {:.3g}, accepted up to {:.3g}",
+                std::sqrt(check.residual_variance), std::sqrt(check.noise_variance),
+                check.variance_ratio(), check.bound)
+          : std::string("residual not tested (too few samples to know the counts' noise)");
+  const std::string& worst = config.names[static_cast<std::size_t>(check.min_eigenvalue_sensor)];
+  r.facts.push_back(fmt::format(
+      "model check: {}; smallest information eigenvalue {:.3g} ({}), accepted down to -1", residual,
+      check.min_eigenvalue, worst));
+  if (!check.misfit()) return;
+  std::vector<std::string> why;
+  if (check.residual_too_large()) {
+    why.push_back(fmt::format(
+        "at the calibrated mounts the counts disagree with a rigid motion by {:.3g} counts per "
+        "interval and axis, {:.3g} times their own noise of {:.3g} (accepted up to {:.3g} times)",
+        std::sqrt(check.residual_variance), std::sqrt(check.variance_ratio()),
+        std::sqrt(check.noise_variance), std::sqrt(check.bound)));
+  }
+  if (check.information_indefinite()) {
+    why.push_back(fmt::format(
+        "the information of sensor '{}' is not positive definite (eigenvalue {:.3g}): wheels.csv "
+        "and mice.csv disagree about the motion",
+        worst, check.min_eigenvalue));
+  }
+  const std::string reason = fmt::format("{}", fmt::join(why, "; "));
+  if (force) {
+    r.warnings.push_back(fmt::format(
+        "the calibrated model does not explain the data, kept as forced (--force): {}", reason));
+    return;
+  }
+  throw Error(fmt::format(
+      "{}: --method exact: refused, the calibrated model does not explain the data: {}; is "
+      "wheels.csv the twist of this robot in its frame (vx, vy in m/s, omega in rad/s) over the "
+      "same time as mice.csv? Nothing written (--force writes it anyway)",
+      log.string(), reason));
+}
+
 void run_exact(CalibrationSummary& r, const RobotConfig& config, const fs::path& log,
                const CalibrationOptions& options) {
   const ReferenceData ref = read_reference(config, log, r.method, options);
@@ -301,6 +384,7 @@ void run_exact(CalibrationSummary& r, const RobotConfig& config, const fs::path&
         "{} samples skipped: a sensor reported lift or counter overflow", cal.samples_unusable));
   }
   if (!cal.converged) r.warnings.push_back("the optimiser did not converge: the result is rough");
+  model_check(r, cal.check, config, log, options.force);
   if (ref.samples.size() < 30) {
     r.warnings.push_back(fmt::format(
         "only {} samples: the noise levels (and so the 1-sigma) are rough", ref.samples.size()));
@@ -312,7 +396,7 @@ void run_exact(CalibrationSummary& r, const RobotConfig& config, const fs::path&
 void run_guided(CalibrationSummary& r, const RobotConfig& config, const std::string& config_path,
                 const CalibrationOptions& options) {
   const auto read = [&](const fs::path& dir, const char* what, bool all_must_count) {
-    const Totals t = count_totals(dir, config);
+    const Totals t = count_totals(dir, config, options.max_row_interval);
     for (std::size_t i = 0; i < t.counts.size(); ++i) {
       if (all_must_count && t.counts[i].isZero()) {
         throw Error(fmt::format(
@@ -486,6 +570,18 @@ CalibrationSummary calibrate_log(const RobotConfig& config, const std::string& c
       break;
   }
   for (const auto& s : r.sensors) {
+    // A fit that ran away (a scale through zero: a flipped axis) gives no
+    // sensor a config can hold: refused, --force or not.
+    const MountVector p = mount_parameters(s.calibrated);
+    if (!p.allFinite() || !(s.calibrated.scale.minCoeff() > 0.0)) {
+      throw Error(fmt::format(
+          "{}: --method {}: refused, sensor '{}' calibrated to position ({:.4g}, {:.4g}) m, yaw "
+          "{:.4g} rad, scale ({:.4g}, {:.4g}): not a sensor mount (a scale must be positive); the "
+          "data do not fit "
+          "the model. Nothing written",
+          method == CalibrationMethod::kGuided ? config_path : log.string(), describe(method),
+          s.name, p(0), p(1), p(2), p(3), p(4)));
+    }
     for (auto& w : plausibility_warnings(s.name, s.nominal, s.calibrated)) {
       r.warnings.push_back(std::move(w));
     }

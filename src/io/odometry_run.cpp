@@ -43,6 +43,14 @@ OdometryOptions resolve_odometry_options(OdometryOptions o, std::string_view est
   return o;
 }
 
+std::vector<fs::path> LogFiles::files() const {
+  std::vector<fs::path> out{mice};
+  for (const auto& f : {wheels, camera, truth, faults}) {
+    if (f) out.push_back(*f);
+  }
+  return out;
+}
+
 LogFiles resolve_log(const fs::path& log) {
   std::error_code ec;
   LogFiles files;

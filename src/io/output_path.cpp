@@ -20,7 +20,7 @@ fs::path resolved(const fs::path& p) {
 }  // namespace
 
 void refuse_output_onto_inputs(const fs::path& out, std::string_view option,
-                               const std::vector<fs::path>& inputs) {
+                               const std::vector<fs::path>& inputs, std::string_view what) {
   const fs::path o = resolved(out);
   for (const auto& input : inputs) {
     if (input.empty()) continue;
@@ -29,14 +29,13 @@ void refuse_output_onto_inputs(const fs::path& out, std::string_view option,
     const bool same =
         o == i || (fs::exists(o, ec) && fs::exists(i, ec) && fs::equivalent(o, i, ec));
     if (same) {
-      throw Error(
-          fmt::format("{} {}: is an input of this run; choose another file", option, out.string()));
+      throw Error(fmt::format("{} {}: is {}; choose another file", option, out.string(), what));
     }
     // An output directory must not hold an input either (it is replaced).
     const auto [end, ignored] = std::mismatch(o.begin(), o.end(), i.begin(), i.end());
     if (end == o.end() && fs::is_directory(o, ec)) {
-      throw Error(fmt::format("{} {}: holds {}, an input of this run; choose another directory",
-                              option, out.string(), input.string()));
+      throw Error(fmt::format("{} {}: holds {}, {}; choose another directory", option, out.string(),
+                              input.string(), what));
     }
   }
 }

@@ -95,6 +95,37 @@ struct SensorCalibration {
   MountVector scaled_eigenvalues = MountVector::Zero();  ///< see observability.hpp
 };
 
+/// Whether the calibrated model explains the data (docs/calibration.md,
+/// "Refused calibrations"). The counts alone say how noisy they are: a
+/// rigid robot's 2N count rows span only the 3-dimensional space of its
+/// twist, so the residual of the best rank-3 fit of the 2N x K counts
+/// (any 2N x 3 H, not only the mounts' form) is noise, s0^2 per count axis
+/// and sample with (K - 3)(2N - 3) degrees of freedom. At the calibrated
+/// mounts, the counts' own (mice-only) least-squares residual is s^2 with
+/// K (2N - 3) degrees of freedom; if the model holds, K (2N - 3) s^2 / s0^2
+/// is about chi-square(K (2N - 3)), and s^2 / s0^2 about 1.
+struct ExactModelCheck {
+  double residual_variance = 0.0;  ///< s^2, counts^2 per axis and sample, at the calibrated mounts
+  /// s0^2, counts^2 per axis and sample, at least 1/12 (a count's rounding).
+  double noise_variance = 0.0;
+  /// Largest s^2 / s0^2 accepted: 4 (twice the noise in RMS), or the
+  /// chi-square(K (2N - 3)) quantile 1 - 1e-6 over K (2N - 3) when larger.
+  double bound = 0.0;
+  /// false: too few samples to know the noise ((K - 3)(2N - 3) < 30): not tested.
+  bool tested = false;
+  /// Smallest scaled information eigenvalue of any sensor (the report's
+  /// "information"); the information is positive semi-definite, so one
+  /// below -1 (the excitation threshold, mirrored) is no estimation noise.
+  double min_eigenvalue = 0.0;
+  int min_eigenvalue_sensor = 0;  ///< whose information has it
+
+  double variance_ratio() const { return residual_variance / noise_variance; }
+  bool residual_too_large() const { return tested && !(variance_ratio() <= bound); }
+  bool information_indefinite() const { return !(min_eigenvalue >= -1.0); }
+  /// The calibration should not be used (moa calibrate refuses it without --force).
+  bool misfit() const { return residual_too_large() || information_indefinite(); }
+};
+
 struct ExactCalibration {
   std::vector<SensorCalibration> sensors;
   SensorArray calibrated;
@@ -104,6 +135,7 @@ struct ExactCalibration {
   int samples_rejected = 0;   ///< outliers
   int samples_unusable = 0;   ///< flags, non-finite values
   bool model_misfit = false;  ///< too many outliers to reject
+  ExactModelCheck check;      ///< does the calibrated model explain the data?
   bool converged = false;
   int iterations = 0;
 };

@@ -61,6 +61,9 @@ struct CalibrationOptions {
   std::optional<double> distance;  ///< guided: m, length of each push
   std::optional<double> turns;     ///< guided: whole turns of the spin (negative: clockwise)
   GuidedTolerances tolerances;     ///< guided: 1-sigma of the procedure
+  /// exact: return a calibration whose model does not explain the data
+  /// (ExactModelCheck::misfit()) with a warning instead of refusing it.
+  bool force = false;
 };
 
 /// Checks that the options fit the method (`log` empty: none given); throws
@@ -104,8 +107,9 @@ struct CalibrationSummary {
 /// Calibrates `config` (read from `config_path`) with `method` from the log
 /// `log` (kimlee, exact: a directory with mice.csv and wheels.csv; guided:
 /// empty, the recordings are in `options`). Throws io::Error naming the
-/// file, row or option on anything wrong, and when the method cannot
-/// compute a result.
+/// file, row or option on anything wrong, when the method cannot compute a
+/// result, and (exact, unless options.force) when the calibrated model does
+/// not explain the data (docs/calibration.md, "Refused calibrations").
 CalibrationSummary calibrate_log(const RobotConfig& config, const std::string& config_path,
                                  const std::filesystem::path& log, CalibrationMethod method,
                                  const CalibrationOptions& options = {});

@@ -23,6 +23,8 @@ struct LogFiles {
   std::filesystem::path dir;
   std::filesystem::path mice;
   std::optional<std::filesystem::path> wheels, camera, truth, faults;
+  /// mice and the optional files present: what an output must not name.
+  std::vector<std::filesystem::path> files() const;
 };
 /// Throws io::Error when `log` is neither a directory with mice.csv nor a file.
 LogFiles resolve_log(const std::filesystem::path& log);

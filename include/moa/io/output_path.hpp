@@ -14,7 +14,9 @@ namespace moa::io {
 /// mice.csv); choose another file") when `out` is the same file as one of
 /// `inputs` (compared after resolving ., .., and symbolic links), or when
 /// `out` is a directory that holds one (for outputs that are directories).
+/// `what` names the files in the message ("another output of this run").
 void refuse_output_onto_inputs(const std::filesystem::path& out, std::string_view option,
-                               const std::vector<std::filesystem::path>& inputs);
+                               const std::vector<std::filesystem::path>& inputs,
+                               std::string_view what = "an input of this run");
 
 }  // namespace moa::io
