@@ -40,6 +40,7 @@
 #include "moa/io/odometry_csv.hpp"
 #include "moa/io/odometry_run.hpp"
 #include "moa/io/output_path.hpp"
+#include "moa/io/self_calibration_csv.hpp"
 #include "odometry_options.hpp"
 #include "sensor_binding.hpp"
 
@@ -189,11 +190,18 @@ int run_live(LiveArgs args) {
     if (!args.quiet) fmt::print(stderr, "moa live: dashboard at {}\n", dashboard->url());
   }
 
+  std::unique_ptr<io::SelfCalibrationCsvWriter> calibration_out;
+  if (!args.odometry.self_calibration_out.empty()) {
+    calibration_out = std::make_unique<io::SelfCalibrationCsvWriter>(
+        args.odometry.self_calibration_out, config.names,
+        odometry_options.sensors & all_sensors(config.array.size()));
+  }
   const auto odometry = io::make_odometry(config, args.config, t0, odometry_options);
   Pose2 pose = odometry_options.initial.value_or(Pose2{});
   const auto on_step = [&](const OdometryStep& step) {
     pose = step.pose;
     if (odometry_out) odometry_out->write(step);
+    if (calibration_out) calibration_out->write(step);
     if (dashboard) dashboard->publish(step);
   };
 
@@ -244,6 +252,7 @@ int run_live(LiveArgs args) {
   odometry->finish(t_last, on_step);
   if (recording) recording->commit();
   if (odometry_out) odometry_out->commit();
+  if (calibration_out) calibration_out->commit();
   if (status_shown) fmt::print(stderr, "\r\033[K");
 
   if (!args.quiet) {

@@ -34,6 +34,12 @@ int run_odometry(const OdometryArgs& args) {
       args.out, "--out",
       {args.config, log.mice, log.wheels.value_or(""), log.camera.value_or(""),
        log.truth.value_or(""), log.faults.value_or("")});
+  if (!args.flags.self_calibration_out.empty()) {
+    io::refuse_output_onto_inputs(
+        args.flags.self_calibration_out, "--self-calibration",
+        {args.config, log.mice, log.wheels.value_or(""), log.camera.value_or(""),
+         log.truth.value_or(""), log.faults.value_or(""), args.out});
+  }
 
   const bool progress = !args.quiet && isatty(STDERR_FILENO);
   auto last_report = std::chrono::steady_clock::now();
@@ -47,8 +53,8 @@ int run_odometry(const OdometryArgs& args) {
       }
     };
   }
-  const io::OdometryRun run =
-      io::write_odometry(config, args.config, log, options, args.out, on_progress);
+  const io::OdometryRun run = io::write_odometry(config, args.config, log, options, args.out,
+                                                 on_progress, args.flags.self_calibration_out);
   if (progress) fmt::print(stderr, "\r\033[K");
   for (const auto& w : run.warnings) fmt::print(stderr, "moa odometry: warning: {}\n", w);
   if (!args.quiet) {

@@ -69,6 +69,13 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
   cmd->add_flag("--no-motion-prior", f.no_motion_prior,
                 "consensus: no motion prior (the robot's limits, config key limits); a minority "
                 "subset is then judged against the wheels with its own covariance added");
+  cmd->add_flag("--self-calibrate", f.self_calibrate,
+                "Online self-calibration: each sensor's scale (both axes) and yaw offset "
+                "estimated from the others while driving and applied to its counts "
+                "(docs/self-calibration.md); a sensor whose estimate runs away is excluded");
+  cmd->add_option("--self-calibration", f.self_calibration_out,
+                  "With --self-calibrate (implied): write the estimates to this CSV "
+                  "(t,sensor,scale_x,scale_y,yaw_offset, about once a second per sensor)");
   cmd->add_option("--rate", o.rate, "Epoch rate of the synchroniser, Hz (0.1 to 10000)")
       ->check(finite_within(0.1, 10000.0))
       ->capture_default_str();
@@ -112,6 +119,7 @@ OdometryOptions resolve_odometry_flags(const OdometryFlags& f, const io::RobotCo
                                        const std::string& config_path) {
   OdometryOptions o = f.options;
   o.consensus.motion_prior = !f.no_motion_prior;
+  o.self_calibration.enabled = f.self_calibrate || !f.self_calibration_out.empty();
   if (f.initial_pose.size() == 3) {
     o.initial = Pose2{{f.initial_pose[0], f.initial_pose[1]}, f.initial_pose[2]};
   }

@@ -30,6 +30,8 @@ struct OdometryFlags {
   std::vector<double> initial_pose;  ///< x, y, theta
   bool no_wheels = false;
   bool no_motion_prior = false;
+  bool self_calibrate = false;
+  std::string self_calibration_out;  ///< --self-calibration FILE.csv
   OdometryOptions options;
 };
 

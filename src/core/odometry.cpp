@@ -85,6 +85,7 @@ const char* OdometryOptions::validate() const {
     return "sekimori.r_th: must be -1 (automatic) or 1 to 16";
   if (const char* e = consensus.limits.validate(); *e) return e;
   if (const char* e = consensus.health.validate(); *e) return e;
+  if (const char* e = self_calibration.validate(); *e) return e;
   if (!(std::isfinite(consensus.alpha) && consensus.alpha > 0.0 && consensus.alpha < 0.5))
     return "consensus.alpha: must be in (0, 0.5)";
   const NoiseModelOptions& n = consensus.noise;
@@ -141,6 +142,9 @@ Odometry::Odometry(const SensorArray& array, double t0, const OdometryOptions& o
   sub_array_ =
       SensorArray(std::span<const SensorMount>(mounts.data(), static_cast<std::size_t>(m_)));
   noise_ = NoiseModel(sub_array_, options_.consensus.noise);
+  if (options_.self_calibration.enabled) {
+    self_calibration_.emplace(sub_array_, options_.self_calibration);
+  }
   const double period = 1.0 / options_.rate;
   const auto take = [&](auto built) {
     using T = std::decay_t<decltype(std::get<0>(built))>;
@@ -297,9 +301,10 @@ void Odometry::apply_fixes(double t) {
 
 bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& wheels,
                         RobustEstimate& out) {
-  // All sensors selected (the usual case): the epoch and the estimate are
-  // the estimator's own, with no copy into the selection's indices and back.
-  const bool all = m_ == n_;
+  // All sensors selected and no self-calibration (the usual case): the
+  // epoch and the estimate are the estimator's own, with no copy into the
+  // selection's indices and back.
+  const bool all = m_ == n_ && !self_calibration_;
   if (!all) {
     // The selected sensors' part of the epoch.
     compact_.t = sample.t;
@@ -314,6 +319,15 @@ bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& 
       compact_.faults[u] = sample.faults[i];
     }
     selected_estimate_ = RobustEstimate{};
+    if (self_calibration_) {
+      // The counts as the sensors would read with their estimated calibration;
+      // a sensor whose estimate ran away is left out as if lifted.
+      raw_ = compact_;
+      self_calibration_->correct(compact_);
+      for (int k = 0; k < m_; ++k) {
+        if (self_calibration_->runaway(k)) compact_.flags[static_cast<std::size_t>(k)] |= kFlagLift;
+      }
+    }
   }
   const ArraySample& in = all ? sample : compact_;
   RobustEstimate& e = all ? out : selected_estimate_;  // out comes default-constructed
@@ -364,6 +378,18 @@ bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& 
     for (int k = 0; k < m_; ++k) e.excluded[static_cast<std::size_t>(k)] = Exclusion::kUnselected;
   }
   if (!ok) return false;
+  if (self_calibration_) {
+    for (int k = 0; k < m_; ++k) {
+      if (self_calibration_->runaway(k) && !contains(e.estimate.used, k)) {
+        e.excluded[static_cast<std::size_t>(k)] = Exclusion::kCalibration;
+      }
+    }
+    self_calibration_->observe(raw_, e);
+    for (int k = 0; k < m_; ++k) {
+      calibration_[static_cast<std::size_t>(selected_[static_cast<std::size_t>(k)])] =
+          self_calibration_->calibration(k);
+    }
+  }
   if (all) {
     // What the mapping below leaves past the array's sensors.
     for (auto i = static_cast<std::size_t>(n_); i < kMaxSensors; ++i) {
@@ -394,6 +420,7 @@ void Odometry::process(const ArraySample& sample, StepSink sink) {
                                            : std::nullopt;
   OdometryStep step;
   step.sample = &sample;
+  if (self_calibration_) step.calibration = &calibration_;
   if (!estimate(sample, wheels, step.estimate)) {
     deferred_error_ = OdometryError::kNoInterval;
     return;

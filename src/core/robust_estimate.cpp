@@ -38,6 +38,8 @@ const char* describe(Exclusion exclusion) {
       return "drift";
     case Exclusion::kProbation:
       return "probation";
+    case Exclusion::kCalibration:
+      return "calibration";
   }
   return "?";
 }

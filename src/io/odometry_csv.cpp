@@ -274,7 +274,7 @@ struct OdometryCsvReader::Impl {
       for (const auto x :
            {Exclusion::kLift, Exclusion::kInconsistent, Exclusion::kUnreliable,
             Exclusion::kFallback, Exclusion::kUnselected, Exclusion::kFaulty, Exclusion::kFrozen,
-            Exclusion::kZero, Exclusion::kDrift, Exclusion::kProbation}) {
+            Exclusion::kZero, Exclusion::kDrift, Exclusion::kProbation, Exclusion::kCalibration}) {
         if (reason == describe(x)) {
           r.excluded[u] = x;
           known = true;

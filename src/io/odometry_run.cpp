@@ -1,5 +1,7 @@
 #include "moa/io/odometry_run.hpp"
 
+#include "moa/io/self_calibration_csv.hpp"
+
 #include <fmt/core.h>
 
 #include <memory>
@@ -158,7 +160,25 @@ OdometryRun run_odometry(const RobotConfig& config, const std::string& config_pa
   run.t0 = mice.start_time();
   run.t_end = run.t0;
   const auto odometry = make_odometry(config, config_path, run.t0, options);
-  const auto sink = [&](const OdometryStep& step) { on_step(step); };
+  SensorMask runaway_seen = 0;
+  const auto sink = [&](const OdometryStep& step) {
+    if (step.calibration != nullptr) {
+      for (int i = 0; i < config.array.size(); ++i) {
+        if (step.estimate.excluded[static_cast<std::size_t>(i)] != Exclusion::kCalibration ||
+            contains(runaway_seen, i)) {
+          continue;
+        }
+        runaway_seen |= SensorMask{1} << i;
+        const auto& c = (*step.calibration)[static_cast<std::size_t>(i)];
+        run.warnings.push_back(fmt::format(
+            "sensor '{}': its self-calibration ran away (scale {:.3f}, {:.3f}, yaw offset {:.3f} "
+            "rad at t = {} s; bounds {} and {} rad): excluded as 'calibration' while beyond",
+            config.names[static_cast<std::size_t>(i)], c.scale_x, c.scale_y, c.yaw_offset, step.t(),
+            options.self_calibration.runaway_scale, options.self_calibration.runaway_yaw));
+      }
+    }
+    on_step(step);
+  };
 
   std::optional<WheelRow> wheel = wheels ? wheels->next() : std::nullopt;
   std::optional<CameraRow> fix = camera ? camera->next() : std::nullopt;
@@ -221,13 +241,23 @@ OdometryRun run_odometry(const RobotConfig& config, const std::string& config_pa
 
 OdometryRun write_odometry(const RobotConfig& config, const std::string& config_path,
                            const LogFiles& log, const OdometryOptions& options, const fs::path& out,
-                           const ProgressCallback& progress) {
+                           const ProgressCallback& progress, const fs::path& calibration_out) {
+  std::unique_ptr<SelfCalibrationCsvWriter> calibration;
+  if (!calibration_out.empty() && options.self_calibration.enabled) {
+    calibration = std::make_unique<SelfCalibrationCsvWriter>(
+        calibration_out, config.names, options.sensors & all_sensors(config.array.size()));
+  }
   OdometryCsvWriter writer(out, config.names, options.fuse_camera,
                            options.fuse_camera && options.ekf.estimate_scale);
   const OdometryRun run = run_odometry(
-      config, config_path, log, options, [&](const OdometryStep& step) { writer.write(step); },
+      config, config_path, log, options,
+      [&](const OdometryStep& step) {
+        writer.write(step);
+        if (calibration) calibration->write(step);
+      },
       progress);
   writer.commit();
+  if (calibration) calibration->commit();
   return run;
 }
 

@@ -47,6 +47,7 @@
 #include "moa/core/robust_estimate.hpp"
 #include "moa/core/se2.hpp"
 #include "moa/core/sekimori.hpp"
+#include "moa/core/self_calibration.hpp"
 #include "moa/core/subset.hpp"
 #include "moa/core/synchronise.hpp"
 #include "moa/core/wheels.hpp"
@@ -84,6 +85,10 @@ struct OdometryOptions {
   SekimoriOptions sekimori;
   ConsensusOptions consensus;
   EkfOptions ekf;
+  /// Online self-calibration of the selected sensors (self_calibration.hpp):
+  /// off unless self_calibration.enabled; corrects the counts before the
+  /// estimator, for every estimator.
+  SelfCalibrationOptions self_calibration;
 
   /// Empty when the options can be used, else what is wrong, naming the
   /// field ("rate: must be positive and finite (Hz)"), in the manner of
@@ -117,6 +122,9 @@ struct OdometryStep {
   /// The EKF's dead-reckoning scales (s_v, s_w) (PoseEkf::scale()); (1, 1) unless scaled.
   Eigen::Vector2d scale{1.0, 1.0};
   Eigen::Matrix2d scale_covariance = Eigen::Matrix2d::Zero();  ///< of (s_v, s_w)
+  /// With self_calibration.enabled: each configured sensor's calibration
+  /// (1, 1, 0 for one not selected), by configured index; else null.
+  const std::array<SelfCalibrationEstimate, kMaxSensors>* calibration = nullptr;
   double t() const { return sample->t; }
 };
 
@@ -235,6 +243,9 @@ class Odometry {
   /// Per configured sensor: m/s per count (G_i^-1), the speed refused.
   std::array<Eigen::Matrix2d, kMaxSensors> velocity_from_counts_ = zeros<Eigen::Matrix2d>();
   std::array<double, kMaxSensors> impossible_speed_{};
+  std::optional<SelfCalibration> self_calibration_;
+  ArraySample raw_;  ///< the selected sensors' counts before the self-calibration's correction
+  std::array<SelfCalibrationEstimate, kMaxSensors> calibration_{};  ///< by configured index
 };
 
 }  // namespace moa

@@ -32,6 +32,7 @@ enum class Exclusion : std::uint8_t {
   kZero,          ///< health: zero counts while the array moves
   kDrift,         ///< health: its residual against the others drifts (scale or yaw)
   kProbation,     ///< health: was excluded; kept out until it behaves for a while
+  kCalibration,   ///< self-calibration: its estimate ran away from 1 (self_calibration.hpp)
 };
 const char* describe(Exclusion exclusion);
 

@@ -63,10 +63,13 @@ OdometryRun run_odometry(const RobotConfig& config, const std::string& config_pa
                          const LogFiles& log, const OdometryOptions& options,
                          const StepCallback& on_step, const ProgressCallback& progress = {});
 
-/// run_odometry writing odometry.csv (written whole on success, else not at all).
+/// run_odometry writing odometry.csv (written whole on success, else not at all)
+/// and, when `calibration_out` is not empty and options.self_calibration is
+/// enabled, the self-calibration's estimates (io/self_calibration_csv.hpp).
 OdometryRun write_odometry(const RobotConfig& config, const std::string& config_path,
                            const LogFiles& log, const OdometryOptions& options,
-                           const std::filesystem::path& out, const ProgressCallback& progress = {});
+                           const std::filesystem::path& out, const ProgressCallback& progress = {},
+                           const std::filesystem::path& calibration_out = {});
 
 /// Builds the pipeline in place on the heap (it is large), or throws
 /// io::Error naming `config_path` for a geometry the estimator refuses and

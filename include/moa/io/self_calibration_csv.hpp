@@ -1,0 +1,33 @@
+// The self-calibration's estimates over time (docs/formats/log.md,
+// self-calibration.csv): `t,sensor,scale_x,scale_y,yaw_offset`, one row per
+// selected sensor about once a second (the first epoch at or after each
+// whole second since the first epoch, and the last epoch), relative to the
+// config (1, 1, 0: as configured; yaw_offset in rad).
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "moa/core/odometry.hpp"
+
+namespace moa::io {
+
+class SelfCalibrationCsvWriter {
+ public:
+  /// `names`: the sensor names in config order; `selected`: the sensors written.
+  SelfCalibrationCsvWriter(const std::filesystem::path& file, std::vector<std::string> names,
+                           SensorMask selected, double period = 1.0);
+  ~SelfCalibrationCsvWriter();
+  /// Writes the step's estimates when a period has passed (steps without them are ignored).
+  void write(const OdometryStep& step);
+  /// Writes the last step's estimates (if not written) and renames the file into place.
+  void commit();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace moa::io

@@ -1,0 +1,235 @@
+#include "moa/core/self_calibration.hpp"
+
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+
+#include "moa/core/se2.hpp"
+
+namespace moa {
+
+const char* SelfCalibrationOptions::validate() const {
+  const auto positive = [](double x) { return std::isfinite(x) && x > 0.0; };
+  if (!positive(block)) return "self_calibration.block: must be positive and finite (s)";
+  if (!(std::isfinite(min_speed) && min_speed >= 0.0))
+    return "self_calibration.min_speed: must be finite and not negative (m/s)";
+  if (!(std::isfinite(scale_walk) && scale_walk >= 0.0 && std::isfinite(yaw_walk) &&
+        yaw_walk >= 0.0))
+    return "self_calibration.scale_walk, yaw_walk: must be finite and not negative";
+  if (!positive(prior_scale_sd) || !positive(prior_yaw_sd))
+    return "self_calibration.prior_scale_sd, prior_yaw_sd: must be positive and finite";
+  if (!(std::isfinite(relative_noise) && relative_noise >= 0.0))
+    return "self_calibration.relative_noise: must be finite and not negative";
+  if (!positive(gate)) return "self_calibration.gate: must be positive and finite";
+  if (!(positive(runaway_scale) && runaway_scale < 1.0))
+    return "self_calibration.runaway_scale: must be in (0, 1)";
+  if (!positive(runaway_yaw)) return "self_calibration.runaway_yaw: must be positive (rad)";
+  if (!(std::isfinite(deadband) && deadband >= 0.0))
+    return "self_calibration.deadband: must be finite and not negative";
+  if (!(std::isfinite(apply_step) && apply_step >= 0.0))
+    return "self_calibration.apply_step: must be finite and not negative";
+  return "";
+}
+
+SelfCalibration::SelfCalibration(const SensorArray& array, SelfCalibrationOptions options)
+    : options_(options), n_(std::min(array.size(), kMaxSensors)), array_(array), solver_(array) {
+  const Eigen::Vector3d prior(options_.prior_scale_sd, options_.prior_scale_sd,
+                              options_.prior_yaw_sd);
+  for (int i = 0; i < n_; ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    velocity_from_counts_[u] = array[i].robot_velocity_from_counts();
+    metres_per_count_[u] =
+        1.0 / (array[i].counts_per_metre() * std::min(array[i].scale.x(), array[i].scale.y()));
+    state_[u].p = prior.cwiseAbs2().asDiagonal();
+  }
+  points_.size = n_;
+}
+
+Eigen::Vector3d SelfCalibration::sd(int i) const {
+  return state_[static_cast<std::size_t>(i)].p.diagonal().cwiseMax(0.0).cwiseSqrt();
+}
+
+SensorMask SelfCalibration::runaways() const {
+  SensorMask m = 0;
+  for (int i = 0; i < n_; ++i) {
+    if (state_[static_cast<std::size_t>(i)].runaway) m |= SensorMask{1} << i;
+  }
+  return m;
+}
+
+void SelfCalibration::correct(ArraySample& sample) const {
+  for (int i = 0; i < std::min(n_, sample.size); ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    sample.counts[u] = state_[u].correction * sample.counts[u];
+  }
+}
+
+void SelfCalibration::renew(int i) {
+  SensorState& s = state_[static_cast<std::size_t>(i)];
+  const double change = std::max({std::abs(s.theta.scale_x - s.applied.scale_x),
+                                  std::abs(s.theta.scale_y - s.applied.scale_y),
+                                  std::abs(s.theta.yaw_offset - s.applied.yaw_offset)});
+  if (change < options_.apply_step) return;
+  s.applied = s.theta;
+  // Within the deadband the configured value stands: the estimate's own
+  // errors (mount positions read as scale in rotation) would cost more.
+  const auto band = [&](double x, double one) {
+    return std::abs(x - one) > options_.deadband ? x : one;
+  };
+  const SelfCalibrationEstimate used{band(s.theta.scale_x, 1.0), band(s.theta.scale_y, 1.0),
+                                     band(s.theta.yaw_offset, 0.0)};
+  // counts -> robot velocity (configured), into the configured sensor frame,
+  // C^-1 = R(delta) diag(1/s), back to the robot frame and to counts.
+  const Eigen::Matrix2d& v = velocity_from_counts_[static_cast<std::size_t>(i)];
+  const Eigen::Matrix2d r = rotation(array_[i].yaw);
+  const Eigen::Matrix2d c_inv =
+      rotation(used.yaw_offset) *
+      Eigen::Vector2d(1.0 / used.scale_x, 1.0 / used.scale_y).asDiagonal();
+  s.correction = v.inverse() * r * c_inv * r.transpose() * v;
+}
+
+void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& estimate) {
+  if (estimate.source != Source::kMice || !(std::isfinite(raw.dt) && raw.dt > 0.0)) return;
+  const double dt = raw.dt;
+  // Corrected point velocities of every sensor, weighed by their
+  // quantisation and a relative term (not the estimators' 2 %: that term
+  // stands for calibration errors, which are what is estimated here).
+  for (int k = 0; k < n_; ++k) {
+    const auto u = static_cast<std::size_t>(k);
+    points_.u[u] = velocity_from_counts_[u] * (state_[u].correction * raw.counts[u]) / dt;
+    const double q = metres_per_count_[u] / dt;
+    const double rel = options_.relative_noise * points_.u[u].norm();
+    points_.info[u] = Eigen::Matrix2d::Identity() / (q * q / 6.0 + rel * rel + 1e-12);
+  }
+  const SensorMask used = estimate.estimate.used;
+  for (int i = 0; i < n_; ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    switch (estimate.excluded[u]) {
+      case Exclusion::kNone:
+      case Exclusion::kInconsistent:
+      case Exclusion::kUnreliable:
+      case Exclusion::kDrift:
+      case Exclusion::kProbation:
+      case Exclusion::kCalibration:
+        break;
+      default:
+        continue;  // lift, frozen, zero, faulty, unselected, fallback
+    }
+    if (raw.flags[u] & (kFlagLift | kFlagOverflow)) continue;
+    if (raw.squal[u] < 16) continue;
+    if (raw.counts[u].isZero()) continue;
+    const SensorMask others = used & ~(SensorMask{1} << i);
+    if (count_sensors(others) < 2) continue;
+    const auto fit = solver_.fit(others, points_);
+    if (!fit) continue;
+    const Eigen::Vector2d p = solver_.jacobian(i) * fit->twist.vector();
+    // Over (or near) its rating a sensor under-reads by random fractions: a
+    // fault, not a calibration.
+    if (array_[i].max_speed && p.norm() > 0.8 * *array_[i].max_speed) continue;
+    const Eigen::Matrix2d rt = rotation(array_[i].yaw).transpose();
+    SensorState& s = state_[u];
+    s.sum_pred += rt * p * dt;
+    s.sum_meas += rt * velocity_from_counts_[u] * raw.counts[u];
+    const Eigen::Matrix<double, 2, 3>& a = solver_.jacobian(i);
+    s.sum_var += 0.5 * (a * fit->covariance * a.transpose()).trace() * dt * dt;
+    s.time += dt;
+    if (s.time >= options_.block - 1e-9) {
+      update(i, raw.t);
+      s.sum_pred.setZero();
+      s.sum_meas.setZero();
+      s.sum_var = 0.0;
+      s.time = 0.0;
+    }
+  }
+}
+
+void SelfCalibration::update(int i, double t) {
+  SensorState& s = state_[static_cast<std::size_t>(i)];
+  const Eigen::Vector2d w = s.sum_pred;
+  if (w.norm() < options_.min_speed * s.time) return;  // nothing excited
+  // Forgetting: the random walk since the last update, capped at the prior.
+  if (s.last_update >= 0.0) {
+    const double e = t - s.last_update;
+    s.p.diagonal() += e * Eigen::Vector3d(options_.scale_walk * options_.scale_walk,
+                                          options_.scale_walk * options_.scale_walk,
+                                          options_.yaw_walk * options_.yaw_walk);
+    const Eigen::Vector3d cap(options_.prior_scale_sd * options_.prior_scale_sd,
+                              options_.prior_scale_sd * options_.prior_scale_sd,
+                              options_.prior_yaw_sd * options_.prior_yaw_sd);
+    for (int k = 0; k < 3; ++k) {
+      if (s.p(k, k) > cap(k)) {
+        const double f = std::sqrt(cap(k) / s.p(k, k));
+        s.p.row(k) *= f;
+        s.p.col(k) *= f;
+      }
+    }
+  }
+  s.last_update = t;
+  const double c = std::cos(s.theta.yaw_offset), sn = std::sin(s.theta.yaw_offset);
+  const Eigen::Vector2d rw(c * w.x() + sn * w.y(), -sn * w.x() + c * w.y());  // R(-delta) w
+  const Eigen::Vector2d h(s.theta.scale_x * rw.x(), s.theta.scale_y * rw.y());
+  Eigen::Matrix<double, 2, 3> hj;
+  hj << rw.x(), 0.0, s.theta.scale_x * (-sn * w.x() + c * w.y()),  //
+      0.0, rw.y(), s.theta.scale_y * (-c * w.x() - sn * w.y());
+  const Eigen::Vector2d r = s.sum_meas - h;
+  if (r.norm() > options_.gate * w.norm()) return;  // a gross error, not a calibration
+  const double mpc = metres_per_count_[static_cast<std::size_t>(i)];
+  const double rel = options_.relative_noise * w.norm();
+  double var = mpc * mpc / 3.0 + s.sum_var + rel * rel;
+  // Huber: a block far out weighs as one at three standard deviations.
+  const double nu2 = r.squaredNorm() / var;
+  if (nu2 > 18.0) var *= nu2 / 18.0;
+  const Eigen::Matrix2d sm = hj * s.p * hj.transpose() + var * Eigen::Matrix2d::Identity();
+  const Eigen::Matrix<double, 3, 2> k = s.p * hj.transpose() * sm.inverse();
+  const Eigen::Vector3d dx = k * r;
+  s.theta.scale_x += dx(0);
+  s.theta.scale_y += dx(1);
+  s.theta.yaw_offset += dx(2);
+  const Eigen::Matrix3d ikh = Eigen::Matrix3d::Identity() - k * hj;
+  s.p = ikh * s.p * ikh.transpose() + var * k * k.transpose();  // Joseph form
+  s.p = 0.5 * (s.p + s.p.transpose()).eval();
+  ++s.updates;
+  fix_gauge();
+  for (int j = 0; j < n_; ++j) {
+    SensorState& o = state_[static_cast<std::size_t>(j)];
+    const double ex = std::abs(o.theta.scale_x - 1.0), ey = std::abs(o.theta.scale_y - 1.0);
+    const double ed = std::abs(o.theta.yaw_offset);
+    if (!o.runaway) {
+      o.runaway =
+          ex > options_.runaway_scale || ey > options_.runaway_scale || ed > options_.runaway_yaw;
+    } else {
+      o.runaway = !(ex < 0.8 * options_.runaway_scale && ey < 0.8 * options_.runaway_scale &&
+                    ed < 0.8 * options_.runaway_yaw);
+    }
+    renew(j);
+  }
+}
+
+void SelfCalibration::fix_gauge() {
+  // The median over the sensors not run away of log sqrt(s_x s_y) and of
+  // delta: the majority keeps its configured scale and yaw.
+  std::array<double, kMaxSensors> logs{}, yaws{};
+  int m = 0;
+  for (int j = 0; j < n_; ++j) {
+    const SensorState& o = state_[static_cast<std::size_t>(j)];
+    if (o.runaway) continue;
+    logs[static_cast<std::size_t>(m)] = 0.5 * std::log(o.theta.scale_x * o.theta.scale_y);
+    yaws[static_cast<std::size_t>(m)] = o.theta.yaw_offset;
+    ++m;
+  }
+  if (m < 3) return;
+  const auto median = [m](std::array<double, kMaxSensors>& v) {
+    std::sort(v.begin(), v.begin() + m);
+    const auto h = static_cast<std::size_t>(m / 2);
+    return m % 2 == 1 ? v[h] : 0.5 * (v[h - 1] + v[h]);
+  };
+  const double g = std::exp(-median(logs)), d = median(yaws);
+  for (int j = 0; j < n_; ++j) {
+    SensorState& o = state_[static_cast<std::size_t>(j)];
+    o.theta.scale_x *= g;
+    o.theta.scale_y *= g;
+    o.theta.yaw_offset -= d;
+  }
+}
+
+}  // namespace moa
