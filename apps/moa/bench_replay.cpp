@@ -7,6 +7,7 @@
 #include <charconv>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
@@ -20,6 +21,7 @@
 #include "moa/core/odometry.hpp"
 #include "moa/core/sensor.hpp"
 #include "moa/io/config.hpp"
+#include "moa/io/json.hpp"
 #include "moa/io/mice_writer.hpp"
 #include "moa/io/odometry_run.hpp"
 
@@ -213,14 +215,26 @@ int run_replay_bench(const ReplayBenchArgs& args) {
   const double ratio = replay.wall / parse.wall;
   const double cpu_ratio = replay.cpu / parse.cpu;
   if (args.json) {
-    fmt::print(
-        "{{\"duration_s\": {}, \"mice_rows\": {}, \"mice_bytes\": {}, \"epochs\": {}, "
-        "\"odometry_bytes\": {}, \"estimator\": \"{}\", \"rate_hz\": {}, \"repeats\": {}, "
-        "\"parse_only_s\": {:.4f}, \"parse_only_cpu_s\": {:.4f}, \"replay_s\": {:.4f}, "
-        "\"replay_cpu_s\": {:.4f}, \"real_time_factor\": {:.1f}, \"replay_over_parse\": {:.2f}, "
-        "\"replay_over_parse_cpu\": {:.2f}}}\n",
-        args.duration, rows, mice_bytes, steps, out_bytes, args.estimator, args.epoch_rate,
-        args.repeats, parse.wall, parse.cpu, replay.wall, replay.cpu, real_time, ratio, cpu_ratio);
+    // Units in the keys: s, bytes, Hz; ratios and counts are plain numbers.
+    io::JsonWriter json;
+    json.begin_object()
+        .member("duration_s", args.duration)
+        .member("mice_rows", static_cast<std::uint64_t>(rows))
+        .member("mice_bytes", static_cast<std::uint64_t>(mice_bytes))
+        .member("epochs", static_cast<std::uint64_t>(steps))
+        .member("odometry_bytes", static_cast<std::uint64_t>(out_bytes))
+        .member("estimator", args.estimator)
+        .member("rate_hz", args.epoch_rate)
+        .member("repeats", args.repeats)
+        .member("parse_only_s", parse.wall)
+        .member("parse_only_cpu_s", parse.cpu)
+        .member("replay_s", replay.wall)
+        .member("replay_cpu_s", replay.cpu)
+        .member("real_time_factor", real_time)
+        .member("replay_over_parse", ratio)
+        .member("replay_over_parse_cpu", cpu_ratio)
+        .end_object();
+    fmt::print("{}\n", json.str());
     return 0;
   }
   fmt::print("log: {} s, {} mice rows ({:.1f} MB), 4 sensors at {} Hz\n", args.duration, rows,
