@@ -57,6 +57,25 @@ TEST(CarelessCalls, OutputOntoItsOwnInputIsRefusedAndTheInputKept) {
   EXPECT_THAT(r2.err, HasSubstr("is an input"));
 }
 
+TEST(CarelessCalls, SelfCalibrationFileOntoAnInputOrTheOdometryIsRefused) {
+  const fs::path dir = example_copy("careless-self-calibration");
+  const fs::path out = dir / "odometry.csv";
+  for (const fs::path& target : {dir / "mice.csv", dir / "robot.yaml"}) {
+    const std::string before = slurp(target);
+    const auto r = test::run_moa(
+        odometry(dir, "--out " + out.string() + " --self-calibration " + target.string()));
+    EXPECT_EQ(r.exit_code, io::kExitBadInput) << r.err;
+    EXPECT_THAT(r.err, HasSubstr("--self-calibration " + target.string() + ": is an input"));
+    EXPECT_EQ(slurp(target), before);
+  }
+  const auto r =
+      test::run_moa(odometry(dir, "--out " + out.string() + " --self-calibration " + out.string()));
+  EXPECT_EQ(r.exit_code, io::kExitBadInput) << r.err;
+  EXPECT_THAT(r.err,
+              HasSubstr("--self-calibration " + out.string() + ": is the --out of this run"));
+  EXPECT_FALSE(fs::exists(out));
+}
+
 // Every command that writes refuses an output that names one of its
 // inputs, before it writes anything (issue #20); `what` is the start of
 // the message after the option and path.

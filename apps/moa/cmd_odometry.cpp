@@ -38,7 +38,9 @@ int run_odometry(const OdometryArgs& args) {
     io::refuse_output_onto_inputs(
         args.flags.self_calibration_out, "--self-calibration",
         {args.config, log.mice, log.wheels.value_or(""), log.camera.value_or(""),
-         log.truth.value_or(""), log.faults.value_or(""), args.out});
+         log.truth.value_or(""), log.faults.value_or("")});
+    io::refuse_output_onto_inputs(args.flags.self_calibration_out, "--self-calibration", {args.out},
+                                  "the --out of this run");
   }
 
   const bool progress = !args.quiet && isatty(STDERR_FILENO);
