@@ -1,20 +1,10 @@
 #include "support/browser.hpp"
 
 #include <cstdlib>
-#include <fstream>
-#include <sstream>
+
+#include "support/run.hpp"
 
 namespace moa::test {
-namespace {
-
-std::string file_text(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-}  // namespace
 
 std::optional<std::string> find_chromium() {
   for (const char* name : {"chromium", "chromium-browser", "google-chrome"}) {
@@ -41,8 +31,8 @@ BrowserPage load_page(const std::string& chromium, const std::string& url,
       log.string();
   BrowserPage page;
   page.exit_code = std::system(command.c_str());
-  page.dom = file_text(dom);
-  page.console = file_text(log);
+  page.dom = read_text(dom);
+  page.console = read_text(log);
   return page;
 }
 

@@ -10,14 +10,12 @@
 
 namespace moa::test {
 
-namespace {
-std::string slurp(const std::filesystem::path& p) {
-  std::ifstream in(p);
+std::string read_text(const std::filesystem::path& file) {
+  std::ifstream in(file);
   std::stringstream s;
   s << in.rdbuf();
   return s.str();
 }
-}  // namespace
 
 RunResult run_moa(const std::string& args) {
   const auto dir = scratch_dir("run");
@@ -26,8 +24,8 @@ RunResult run_moa(const std::string& args) {
   const int status = std::system(cmd.c_str());
   RunResult r;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = slurp(dir / "out");
-  r.err = slurp(dir / "err");
+  r.out = read_text(dir / "out");
+  r.err = read_text(dir / "err");
   std::filesystem::remove_all(dir);
   return r;
 }
