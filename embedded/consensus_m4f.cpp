@@ -48,7 +48,7 @@ moa::SensorArray square_array() {
   prototype.cpi = moa::kAdns3080.cpi;
   prototype.max_speed = moa::kAdns3080.max_speed;
   prototype.noise = 0.002;
-  return moa::regular_polygon(kSensors, 0.06, std::numbers::pi / 4.0, prototype);
+  return moa::regular_polygon(kSensors, 0.06, std::numbers::pi_v<moa::real> / 4, prototype);
 }
 
 }  // namespace
@@ -81,8 +81,8 @@ extern "C" [[noreturn]] void moa_m4f_main() {
       moa::SensorRow row;
       row.t = t;
       row.sensor = i;
-      row.counts = Eigen::Vector2d(static_cast<double>(g_sensors[u].dx),
-                                   static_cast<double>(g_sensors[u].dy));
+      row.counts = moa::Vec2(static_cast<moa::real>(g_sensors[u].dx),
+                             static_cast<moa::real>(g_sensors[u].dy));
       row.squal = g_sensors[u].squal;
       row.flags = g_sensors[u].flags;
       (void)g_odometry->push(row, sink);  // a refused row is dropped: no error channel here

@@ -25,6 +25,21 @@ ExternalProject_Add(
   INSTALL_COMMAND ""
   BUILD_BYPRODUCTS ${MOA_M4F_BINARY_DIR}/consensus_m4f.elf ${MOA_M4F_BINARY_DIR}/odometry_qemu.elf)
 
+# The same programs with the core in single precision (MOA_M4F_SCALAR=float,
+# include/moa/core/real.hpp), for the M4F's float-only FPU.
+set(MOA_M4F_FLOAT_BINARY_DIR ${PROJECT_BINARY_DIR}/embedded-float)
+ExternalProject_Add(
+  moa_m4f_float
+  SOURCE_DIR ${PROJECT_SOURCE_DIR}/embedded
+  BINARY_DIR ${MOA_M4F_FLOAT_BINARY_DIR}
+  CMAKE_ARGS -DCMAKE_TOOLCHAIN_FILE=${PROJECT_SOURCE_DIR}/embedded/cortex-m4f.cmake
+             -DMOA_WARNINGS_AS_ERRORS=${MOA_WARNINGS_AS_ERRORS} -DEigen3_DIR=${Eigen3_DIR}
+             -DMOA_M4F_SCALAR=float
+  BUILD_ALWAYS TRUE
+  INSTALL_COMMAND ""
+  BUILD_BYPRODUCTS ${MOA_M4F_FLOAT_BINARY_DIR}/consensus_m4f.elf
+                   ${MOA_M4F_FLOAT_BINARY_DIR}/odometry_qemu.elf)
+
 # The pipeline on an emulated Cortex-M4F (run_qemu.cmake), where Debian's
 # qemu-system-arm is installed (make deps installs it).
 find_program(MOA_QEMU_SYSTEM_ARM qemu-system-arm)
@@ -44,7 +59,8 @@ if(MOA_BUILD_TESTS)
                                                                  RESOURCE_LOCK moa_m4f_build)
   if(MOA_QEMU_SYSTEM_ARM)
     add_test(NAME embedded_qemu_odometry
-             COMMAND ${CMAKE_COMMAND} -DBINARY_DIR=${MOA_M4F_BINARY_DIR} -DMOA=$<TARGET_FILE:moa_cli>
+             COMMAND ${CMAKE_COMMAND} -DBINARY_DIR=${MOA_M4F_BINARY_DIR}
+                     -DFLOAT_BINARY_DIR=${MOA_M4F_FLOAT_BINARY_DIR} -DMOA=$<TARGET_FILE:moa_cli>
                      -DSTREAM=$<TARGET_FILE:qemu_stream> -DQEMU=${MOA_QEMU_SYSTEM_ARM}
                      -DWORK_DIR=${CMAKE_CURRENT_BINARY_DIR}/embedded_qemu
                      -P ${PROJECT_SOURCE_DIR}/embedded/run_qemu.cmake)

@@ -200,13 +200,13 @@ Files files_from_command_line() {
 
 moa::SensorMount mount_from(const q::StreamMount& m) {
   moa::SensorMount mount;
-  mount.position = Eigen::Vector2d(m.x, m.y);
-  mount.yaw = m.yaw;
-  mount.cpi = m.cpi;
-  mount.scale = Eigen::Vector2d(m.scale_x, m.scale_y);
+  mount.position = moa::Vec2(static_cast<moa::real>(m.x), static_cast<moa::real>(m.y));
+  mount.yaw = static_cast<moa::real>(m.yaw);
+  mount.cpi = static_cast<moa::real>(m.cpi);
+  mount.scale = moa::Vec2(static_cast<moa::real>(m.scale_x), static_cast<moa::real>(m.scale_y));
   mount.mirrored = m.mirrored != 0;
-  if (m.has_max_speed != 0) mount.max_speed = m.max_speed;
-  if (m.has_noise != 0) mount.noise = m.noise;
+  if (m.has_max_speed != 0) mount.max_speed = static_cast<moa::real>(m.max_speed);
+  if (m.has_noise != 0) mount.noise = static_cast<moa::real>(m.noise);
   return mount;
 }
 
@@ -258,6 +258,7 @@ extern "C" [[noreturn]] void moa_m4f_main() {
   options.estimator = static_cast<moa::EstimatorKind>(header.estimator);
   options.use_wheels = header.use_wheels != 0;
   options.fuse_camera = header.fuse_camera != 0;
+  options.sensors = header.selected;
   options.rate = header.rate;
   options.max_row_interval = header.max_row_interval;
   options.max_gap = header.max_gap;
@@ -297,21 +298,27 @@ extern "C" [[noreturn]] void moa_m4f_main() {
         moa::SensorRow row;
         row.t = r.t;
         row.sensor = r.sensor;
-        row.counts = Eigen::Vector2d(r.a, r.b);
+        row.counts = moa::Vec2(static_cast<moa::real>(r.a), static_cast<moa::real>(r.b));
         if (r.has_squal != 0) row.squal = r.squal;
         row.flags = r.flags;
+        row.faults = r.faults;
         error = g_odometry->push(row, sink);
         break;
       }
       case q::RecordKind::kWheels:
-        error = g_odometry->push_wheels(r.t, moa::Twist2{{r.a, r.b}, r.c}, sink);
+        error = g_odometry->push_wheels(
+            r.t,
+            moa::Twist2{{static_cast<moa::real>(r.a), static_cast<moa::real>(r.b)},
+                        static_cast<moa::real>(r.c)},
+            sink);
         break;
       case q::RecordKind::kFix: {
         moa::CameraFix fix;
         fix.t = r.t;
-        fix.position = Eigen::Vector2d(r.a, r.b);
-        if (r.has_theta != 0) fix.theta = r.c;
-        if (r.has_sigma != 0) fix.sigma = Eigen::Vector2d(r.sx, r.sy);
+        fix.position = moa::Vec2(static_cast<moa::real>(r.a), static_cast<moa::real>(r.b));
+        if (r.has_theta != 0) fix.theta = static_cast<moa::real>(r.c);
+        if (r.has_sigma != 0)
+          fix.sigma = moa::Vec2(static_cast<moa::real>(r.sx), static_cast<moa::real>(r.sy));
         error = g_odometry->push_fix(fix);
         break;
       }

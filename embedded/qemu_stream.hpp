@@ -28,12 +28,14 @@ struct StreamHeader {
   std::uint32_t estimator;  ///< moa::EstimatorKind
   std::uint32_t use_wheels;
   std::uint32_t fuse_camera;
+  std::uint32_t selected;  ///< OdometryOptions::sensors (bit i: sensor i)
+  std::uint32_t pad;
   double rate;              ///< Hz
   double max_row_interval;  ///< s
   double max_gap;           ///< s
   double t0;                ///< s, the first epoch's start (the log's first row)
 };
-static_assert(sizeof(StreamHeader) == 56);
+static_assert(sizeof(StreamHeader) == 64);
 
 /// moa::SensorMount, field by field.
 struct StreamMount {
@@ -48,7 +50,7 @@ struct StreamMount {
 static_assert(sizeof(StreamMount) == 72);
 
 enum class RecordKind : std::uint32_t {
-  kMice = 1,    ///< a mice row: sensor, a = dx, b = dy (counts), squal, flags
+  kMice = 1,    ///< a mice row: sensor, a = dx, b = dy (counts), squal, flags, faults
   kWheels = 2,  ///< a wheel row: a, b, c = vx, vy (m/s), omega (rad/s), robot frame
   kFix = 3,     ///< a camera fix: a, b = x, y (m), c = theta (rad, when has_theta),
                 ///< sx, sy (m, when has_sigma)
@@ -61,7 +63,9 @@ struct StreamRecord {
   double t;  ///< s
   double a, b, c;
   double sx, sy;
-  std::uint8_t has_squal, squal, flags, has_theta, has_sigma, pad[3];
+  std::uint8_t has_squal, squal, flags, has_theta, has_sigma;
+  std::uint8_t faults;  ///< the simulator's fault bits (faults.csv), for the oracle
+  std::uint8_t pad[2];
 };
 static_assert(sizeof(StreamRecord) == 64);
 static_assert(offsetof(StreamRecord, t) == 8);

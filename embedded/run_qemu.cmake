@@ -1,8 +1,9 @@
-# cmake -DBINARY_DIR=... -DMOA=moa -DSTREAM=qemu_stream -DQEMU=qemu-system-arm
-#       -DWORK_DIR=... -P run_qemu.cmake
+# cmake -DBINARY_DIR=... [-DFLOAT_BINARY_DIR=...] -DMOA=moa -DSTREAM=qemu_stream
+#       -DQEMU=qemu-system-arm -DWORK_DIR=... -P run_qemu.cmake
 # The test embedded_qemu_odometry: the library pipeline (moa::Odometry) run on
 # an emulated Cortex-M4F against the host's `moa odometry` on the same log.
-#  1. brings the Cortex-M4F build (BINARY_DIR) up to date;
+#  1. brings the Cortex-M4F builds up to date: BINARY_DIR (the core in
+#     double, as on the host) and FLOAT_BINARY_DIR if given (MOA_M4F_SCALAR=float);
 #  2. simulates a log on the host (`moa simulate --scenario faults-dirty`:
 #     four HDNS-2051 sensors, 17 s at 100 Hz, a dirty floor patch, wheels and
 #     camera);
@@ -11,7 +12,8 @@
 #     odometry_qemu.elf on mps2-an386 (Cortex-M4 with FPU) under -icount
 #     shift=0 (1 instruction = 1 ns of virtual time) with semihosting; and
 #     `qemu_stream compare` checks the device's steps against odometry.csv and
-#     prints the instructions per step the device counted.
+#     prints the instructions per step the device counted; each case runs
+#     with both builds.
 #
 # Tolerance: the device and the host both compute in IEEE binary64 from the
 # same source, so the results are nearly exact. What differs: Eigen's SSE2
@@ -26,8 +28,17 @@
 # (about 1 m). 1e-12 (m, rad, m/s, rad/s) covers that with margin and is
 # nine orders of magnitude below one count (32 um at 800 cpi); the epoch
 # times and the sensors each estimate used must be identical.
-set(pose_tolerance 1e-12)
-set(twist_tolerance 1e-12)
+set(double_pose_tolerance 1e-12)
+set(double_twist_tolerance 1e-12)
+# The float core against the host's doubles: the same argument with float's
+# u = 2^-24 = 6e-8 gives twists within 10 * 100 * u = 6e-5 (relative, and
+# absolute below 1 m/s); the pose adds one float rounding of its ~1 m
+# coordinates per step, 1702 * 6e-8 = 1e-4 m at worst (times stay double in
+# both, so the epochs are the same). 1e-4 m (rad, m/s, rad/s) is 3 counts and
+# 1/85 of this log's odometry error against the truth (8.6 mm); the sensors
+# used must still be the same.
+set(float_pose_tolerance 1e-4)
+set(float_twist_tolerance 1e-4)
 # mps2-an386 clocks the SysTick at 25 MHz: one tick is 40 ns, 40 instructions.
 set(instructions_per_tick 40)
 
@@ -37,12 +48,19 @@ foreach(var BINARY_DIR MOA STREAM QEMU WORK_DIR)
   endif()
 endforeach()
 
-execute_process(COMMAND ${CMAKE_COMMAND} --build ${BINARY_DIR} --target odometry_qemu
-                RESULT_VARIABLE built)
-if(NOT built EQUAL 0)
-  message(FATAL_ERROR "building ${BINARY_DIR} failed")
+set(scalars double)
+set(double_elf ${BINARY_DIR}/odometry_qemu.elf)
+if(FLOAT_BINARY_DIR)
+  list(APPEND scalars float)
+  set(float_elf ${FLOAT_BINARY_DIR}/odometry_qemu.elf)
 endif()
-set(elf ${BINARY_DIR}/odometry_qemu.elf)
+foreach(dir ${BINARY_DIR} ${FLOAT_BINARY_DIR})
+  execute_process(COMMAND ${CMAKE_COMMAND} --build ${dir} --target odometry_qemu
+                  RESULT_VARIABLE built)
+  if(NOT built EQUAL 0)
+    message(FATAL_ERROR "building ${dir} failed")
+  endif()
+endforeach()
 
 file(REMOVE_RECURSE ${WORK_DIR})
 file(MAKE_DIRECTORY ${WORK_DIR})
@@ -61,31 +79,36 @@ foreach(case IN LISTS cases)
                           --out ${dir}/odometry.csv --quiet COMMAND_ERROR_IS_FATAL ANY)
   execute_process(COMMAND ${STREAM} pack ${log}/robot.yaml ${log} ${dir}/in.bin ${case}
                   COMMAND_ERROR_IS_FATAL ANY)
-  # The device's console (semihosting) is QEMU's stdout; a fault or an error
-  # ends the emulation with status 1; TIMEOUT guards against a hang.
-  execute_process(
-    COMMAND ${QEMU} -machine mps2-an386 -cpu cortex-m4 -nographic -monitor none -serial null
-            -semihosting-config enable=on,target=native,arg=odometry_qemu,arg=in.bin,arg=out.bin
-            -icount shift=0 -kernel ${elf}
-    WORKING_DIRECTORY ${dir}
-    RESULT_VARIABLE ran
-    OUTPUT_VARIABLE console
-    ERROR_VARIABLE console
-    TIMEOUT 120)
-  string(STRIP "${console}" console)
-  message("[${name}] ${console}")
-  if(NOT ran EQUAL 0)
-    message(FATAL_ERROR "[${name}] QEMU: ${ran}")
-  endif()
-  execute_process(
-    COMMAND ${STREAM} compare ${log}/robot.yaml ${dir}/odometry.csv ${dir}/out.bin
-            ${pose_tolerance} ${twist_tolerance} ${instructions_per_tick}
-    RESULT_VARIABLE compared
-    OUTPUT_VARIABLE report
-    ERROR_VARIABLE report)
-  string(STRIP "${report}" report)
-  message("[${name}] ${report}")
-  if(NOT compared EQUAL 0)
-    message(FATAL_ERROR "[${name}] the device's steps differ from odometry.csv")
-  endif()
+  foreach(scalar ${scalars})
+    # The device's console (semihosting) is QEMU's stdout; a fault or an
+    # error ends the emulation with status 1; TIMEOUT guards against a hang.
+    set(tag "${name}, ${scalar}")
+    execute_process(
+      COMMAND
+        ${QEMU} -machine mps2-an386 -cpu cortex-m4 -nographic -monitor none -serial null
+        -semihosting-config
+        enable=on,target=native,arg=odometry_qemu,arg=in.bin,arg=${scalar}.bin -icount shift=0
+        -kernel ${${scalar}_elf}
+      WORKING_DIRECTORY ${dir}
+      RESULT_VARIABLE ran
+      OUTPUT_VARIABLE console
+      ERROR_VARIABLE console
+      TIMEOUT 120)
+    string(STRIP "${console}" console)
+    message("[${tag}] ${console}")
+    if(NOT ran EQUAL 0)
+      message(FATAL_ERROR "[${tag}] QEMU: ${ran}")
+    endif()
+    execute_process(
+      COMMAND ${STREAM} compare ${log}/robot.yaml ${dir}/odometry.csv ${dir}/${scalar}.bin
+              ${${scalar}_pose_tolerance} ${${scalar}_twist_tolerance} ${instructions_per_tick}
+      RESULT_VARIABLE compared
+      OUTPUT_VARIABLE report
+      ERROR_VARIABLE report)
+    string(STRIP "${report}" report)
+    message("[${tag}] ${report}")
+    if(NOT compared EQUAL 0)
+      message(FATAL_ERROR "[${tag}] the device's steps differ from odometry.csv")
+    endif()
+  endforeach()
 endforeach()

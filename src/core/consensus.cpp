@@ -23,9 +23,10 @@ ConsensusEstimator::ConsensusEstimator(const SensorArray& array, ConsensusOption
       prior_(options.limits),
       health_(array.size(), options.health, options.alpha) {
   for (int dof = 1; dof < 2 * kMaxSensors; ++dof) {
-    threshold_[static_cast<std::size_t>(dof)] = chi2_quantile(1.0 - options_.alpha, dof);
+    threshold_[static_cast<std::size_t>(dof)] =
+        static_cast<real>(chi2_quantile(1.0 - options_.alpha, dof));
   }
-  wheel_threshold_ = chi2_quantile(1.0 - options_.alpha, 3);
+  wheel_threshold_ = static_cast<real>(chi2_quantile(1.0 - options_.alpha, 3));
 }
 
 namespace {
@@ -44,15 +45,15 @@ bool ConsensusEstimator::consider(SensorMask mask, const References& refs,
   const auto fit = solver_.fit(mask, measurements_);
   if (!fit || fit->chi2 > threshold_[static_cast<std::size_t>(fit->dof)]) return false;
   const bool minority = 2 * count_sensors(mask) <= n_;
-  double cost = fit->chi2;
+  real cost = fit->chi2;
   for (int k = 0; k < refs.size; ++k) {
     const Reference& ref = refs.r[static_cast<std::size_t>(k)];
-    const Eigen::Vector3d d = fit->twist.vector() - ref.x;
-    const double joint = d.dot((fit->covariance + ref.covariance).inverse() * d);
+    const Vec3 d = fit->twist.vector() - ref.x;
+    const real joint = d.dot((fit->covariance + ref.covariance).inverse() * d);
     if (minority) {
       // The reference's covariance alone (the subset's own would let a pair
       // that under-reads alike through); before the prior: the joint one.
-      const double own = options_.motion_prior ? d.dot(ref.information * d) : joint;
+      const real own = options_.motion_prior ? d.dot(ref.information * d) : joint;
       if (own > wheel_threshold_) return false;
     }
     cost += joint;
@@ -83,12 +84,12 @@ std::optional<ConsensusEstimator::Candidate> ConsensusEstimator::search(
     const auto fit = solver_.fit(mask, measurements_);
     if (!fit) return std::nullopt;
     int worst = -1;
-    double worst_r2 = -1.0;
+    real worst_r2 = -1.0;
     for (int i = 0; i < n_; ++i) {
       if (!contains(mask, i)) continue;
       const auto s = static_cast<std::size_t>(i);
-      const Eigen::Vector2d r = measurements_.u[s] - solver_.jacobian(i) * fit->twist.vector();
-      const double r2 = r.dot(measurements_.info[s] * r);
+      const Vec2 r = measurements_.u[s] - solver_.jacobian(i) * fit->twist.vector();
+      const real r2 = r.dot(measurements_.info[s] * r);
       if (r2 > worst_r2) worst_r2 = r2, worst = i;
     }
     mask &= ~(SensorMask{1} << worst);
@@ -111,7 +112,7 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
     }
   }
   References refs;
-  const auto add = [&](const Twist2& x, const Eigen::Matrix3d& covariance) {
+  const auto add = [&](const Twist2& x, const Mat3& covariance) {
     Reference& r = refs.r[static_cast<std::size_t>(refs.size++)];
     r.x = x.vector();
     r.covariance = covariance;

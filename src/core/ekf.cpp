@@ -21,39 +21,38 @@ const char* describe(FixResult result) {
   return "?";
 }
 
-Eigen::Matrix3d exact_step_pose_jacobian(const Pose2& pose, const Twist2& twist, double dt) {
+Mat3 exact_step_pose_jacobian(const Pose2& pose, const Twist2& twist, real dt) {
   const VTerms v = v_terms(twist.omega * dt);
-  const Eigen::Vector2d d = v_matrix(v.s, v.c) * twist.v * dt;
-  Eigen::Matrix3d f = Eigen::Matrix3d::Identity();
+  const Vec2 d = v_matrix(v.s, v.c) * twist.v * dt;
+  Mat3 f = Mat3::Identity();
   f.block<2, 1>(0, 2) = rotation(pose.theta) * skew_unit() * d;
   return f;
 }
 
-Eigen::Matrix3d exact_step_twist_jacobian(const Pose2& pose, const Twist2& twist, double dt) {
+Mat3 exact_step_twist_jacobian(const Pose2& pose, const Twist2& twist, real dt) {
   const VTerms v = v_terms(twist.omega * dt);
-  const Eigen::Matrix2d r = rotation(pose.theta);
-  Eigen::Matrix3d g = Eigen::Matrix3d::Zero();
+  const Mat2 r = rotation(pose.theta);
+  Mat3 g = Mat3::Zero();
   g.block<2, 2>(0, 0) = r * v_matrix(v.s, v.c) * dt;
   g.block<2, 1>(0, 2) = r * v_matrix(v.ds, v.dc) * twist.v * dt * dt;
   g(2, 2) = dt;
   return g;
 }
 
-Twist2 scaled_twist(const Twist2& twist, const Eigen::Vector2d& scale) {
+Twist2 scaled_twist(const Twist2& twist, const Vec2& scale) {
   return Twist2{twist.v * scale(0), twist.omega * scale(1)};
 }
 
-Eigen::Matrix<double, 3, 2> exact_step_scale_jacobian(const Pose2& pose, const Twist2& twist,
-                                                      const Eigen::Vector2d& scale, double dt) {
-  const Eigen::Matrix3d g = exact_step_twist_jacobian(pose, scaled_twist(twist, scale), dt);
-  Eigen::Matrix<double, 3, 2> out;
+Mat<3, 2> exact_step_scale_jacobian(const Pose2& pose, const Twist2& twist, const Vec2& scale,
+                                    real dt) {
+  const Mat3 g = exact_step_twist_jacobian(pose, scaled_twist(twist, scale), dt);
+  Mat<3, 2> out;
   out.col(0) = g.leftCols<2>() * twist.v;
   out.col(1) = g.col(2) * twist.omega;
   return out;
 }
 
-PoseEkf::PoseEkf(double t0, const Pose2& initial, const Eigen::Matrix3d& covariance,
-                 EkfOptions options)
+PoseEkf::PoseEkf(double t0, const Pose2& initial, const Mat3& covariance, EkfOptions options)
     : options_(options), t_(t0), pose_(initial) {
   cov_.topLeftCorner<3, 3>() = covariance;
   if (options_.estimate_scale) {
@@ -61,26 +60,26 @@ PoseEkf::PoseEkf(double t0, const Pose2& initial, const Eigen::Matrix3d& covaria
   }
 }
 
-void PoseEkf::propagate(const Twist2& twist, const Eigen::Matrix3d& q, double dt) {
+void PoseEkf::propagate(const Twist2& twist, const Mat3& q, real dt) {
   if (!options_.estimate_scale) {
     // The pose filter alone, on its 3x3 block: the same arithmetic as ever.
-    const Eigen::Matrix3d f = exact_step_pose_jacobian(pose_, twist, dt);
-    const Eigen::Matrix3d g = exact_step_twist_jacobian(pose_, twist, dt);
+    const Mat3 f = exact_step_pose_jacobian(pose_, twist, dt);
+    const Mat3 g = exact_step_twist_jacobian(pose_, twist, dt);
     pose_ = integrate_exact(pose_, twist, dt);
-    const Eigen::Matrix3d p = cov_.topLeftCorner<3, 3>();
+    const Mat3 p = cov_.topLeftCorner<3, 3>();
     cov_.topLeftCorner<3, 3>() = f * p * f.transpose() + g * q * g.transpose();
     return;
   }
   // Scale states: the twist integrated is S xi, S = diag(s_v, s_v, s_w);
   // its noise S Q S. The scales follow a random walk.
   const Twist2 used = scaled_twist(twist, scale_);
-  const Eigen::Matrix3d g = exact_step_twist_jacobian(pose_, used, dt);
+  const Mat3 g = exact_step_twist_jacobian(pose_, used, dt);
   StateCovariance f = StateCovariance::Identity();
   f.topLeftCorner<3, 3>() = exact_step_pose_jacobian(pose_, used, dt);
   f.block<3, 1>(0, 3) = g.leftCols<2>() * twist.v;
   f.block<3, 1>(0, 4) = g.col(2) * twist.omega;
-  const Eigen::Vector3d s(scale_(0), scale_(0), scale_(1));
-  const Eigen::Matrix3d gs = g * s.asDiagonal();
+  const Vec3 s(scale_(0), scale_(0), scale_(1));
+  const Mat3 gs = g * s.asDiagonal();
   StateCovariance noise = StateCovariance::Zero();
   noise.topLeftCorner<3, 3>() = gs * q * gs.transpose();
   noise.bottomRightCorner<2, 2>() = (options_.scale_random_walk.cwiseAbs2() * dt).asDiagonal();
@@ -88,16 +87,13 @@ void PoseEkf::propagate(const Twist2& twist, const Eigen::Matrix3d& q, double dt
   cov_ = f * cov_ * f.transpose() + noise;
 }
 
-void PoseEkf::predict(double t, const Twist2& twist, const Eigen::Matrix3d& twist_covariance,
-                      double dt) {
-  constexpr double kFloorInterval = 0.01;  // s, see EkfOptions::twist_noise_floor
-  const Eigen::Vector3d relative =
-      options_.twist_noise_relative *
-      Eigen::Vector3d(twist.v.norm(), twist.v.norm(), std::abs(twist.omega));
-  const Eigen::Vector3d floor =
+void PoseEkf::predict(double t, const Twist2& twist, const Mat3& twist_covariance, real dt) {
+  constexpr real kFloorInterval = 0.01;  // s, see EkfOptions::twist_noise_floor
+  const Vec3 relative =
+      options_.twist_noise_relative * Vec3(twist.v.norm(), twist.v.norm(), std::abs(twist.omega));
+  const Vec3 floor =
       (options_.twist_noise_floor.cwiseAbs2() + relative.cwiseAbs2()) * (kFloorInterval / dt);
-  Step step{t - dt, t,      twist, twist_covariance + Eigen::Matrix3d(floor.asDiagonal()),
-            pose_,  scale_, cov_};
+  Step step{t - dt, t, twist, twist_covariance + Mat3(floor.asDiagonal()), pose_, scale_, cov_};
   if (history_.full()) history_.pop_front();
   history_.push_back(step);
   propagate(step.twist, step.q, dt);
@@ -105,30 +101,27 @@ void PoseEkf::predict(double t, const Twist2& twist, const Eigen::Matrix3d& twis
 }
 
 template <int M>
-FixResult PoseEkf::correct(const Eigen::Matrix<double, M, 1>& z,
-                           const Eigen::Matrix<double, M, M>& r, double gate) {
+FixResult PoseEkf::correct(const Mat<M, 1>& z, const Mat<M, M>& r, real gate) {
   return options_.estimate_scale ? correct_states<kStates, M>(z, r, gate)
                                  : correct_states<3, M>(z, r, gate);
 }
 
 // N: the states updated, the pose (3) or the pose and the scales (5).
 template <int N, int M>
-FixResult PoseEkf::correct_states(const Eigen::Matrix<double, M, 1>& z,
-                                  const Eigen::Matrix<double, M, M>& r, double gate) {
-  using HMatrix = Eigen::Matrix<double, M, N>;
-  using Covariance = Eigen::Matrix<double, N, N>;
+FixResult PoseEkf::correct_states(const Mat<M, 1>& z, const Mat<M, M>& r, real gate) {
+  using HMatrix = Mat<M, N>;
+  using Covariance = Mat<N, N>;
   const HMatrix h = HMatrix::Identity();
   Covariance cov = cov_.topLeftCorner<N, N>();
   // 1. innovation, heading wrapped
-  Eigen::Matrix<double, M, 1> y =
-      z - h.template leftCols<3>() * Eigen::Vector3d(pose_.t.x(), pose_.t.y(), pose_.theta);
+  Mat<M, 1> y = z - h.template leftCols<3>() * Vec3(pose_.t.x(), pose_.t.y(), pose_.theta);
   if constexpr (M == 3) y(2) = wrap_angle(y(2));
   // 2. innovation covariance
-  const Eigen::Matrix<double, M, M> s = h * cov * h.transpose() + r;
-  const Eigen::Matrix<double, M, M> s_inv = s.inverse();
+  const Mat<M, M> s = h * cov * h.transpose() + r;
+  const Mat<M, M> s_inv = s.inverse();
   // 3. gate (with recovery after too many rejections in a row)
   last_distance_ = y.dot(s_inv * y);
-  Eigen::Matrix<double, M, M> s_used_inv = s_inv;
+  Mat<M, M> s_used_inv = s_inv;
   if (!(last_distance_ <= gate)) {
     if (++consecutive_rejections_ <= options_.max_consecutive_rejections) {
       return FixResult::kRejected;
@@ -139,9 +132,9 @@ FixResult PoseEkf::correct_states(const Eigen::Matrix<double, M, 1>& z,
   }
   consecutive_rejections_ = 0;
   // 4. gain
-  const Eigen::Matrix<double, N, M> k = cov * h.transpose() * s_used_inv;
+  const Mat<N, M> k = cov * h.transpose() * s_used_inv;
   // 5. state
-  const Eigen::Matrix<double, N, 1> dx = k * y;
+  const Mat<N, 1> dx = k * y;
   pose_.t += dx.template head<2>();
   pose_.theta += dx(2);
   if constexpr (N == kStates) scale_ += dx.template tail<2>();
@@ -152,8 +145,7 @@ FixResult PoseEkf::correct_states(const Eigen::Matrix<double, M, 1>& z,
 }
 
 template <int M>
-FixResult PoseEkf::update(double t, const Eigen::Matrix<double, M, 1>& z,
-                          const Eigen::Matrix<double, M, M>& r, double gate) {
+FixResult PoseEkf::update(double t, const Mat<M, 1>& z, const Mat<M, M>& r, real gate) {
   constexpr double kSameTime = 1e-9;  // s: a fix this close to a step boundary is on it
   if (!std::isfinite(t) || !z.allFinite() || !r.allFinite() || !(r.determinant() > 0.0)) {
     return FixResult::kInvalid;
@@ -169,7 +161,7 @@ FixResult PoseEkf::update(double t, const Eigen::Matrix<double, M, 1>& z,
   if (k == 0) return FixResult::kTooOld;
   const std::size_t index = k - 1;
   const Pose2 saved_pose = pose_;
-  const Eigen::Vector2d saved_scale = scale_;
+  const Vec2 saved_scale = scale_;
   const StateCovariance saved_cov = cov_;
   Step& step = history_[index];
   pose_ = step.pose_before;
@@ -180,7 +172,8 @@ FixResult PoseEkf::update(double t, const Eigen::Matrix<double, M, 1>& z,
   const bool split = step.t_end - t > kSameTime;
   // A twist averaged over part of the step is noisier by dt / dt_part (white
   // noise), which keeps the pose covariance of the whole step unchanged.
-  propagate(step.twist, split ? Eigen::Matrix3d(step.q * (dt / dt1)) : step.q, dt1);
+  propagate(step.twist, split ? Mat3(step.q * static_cast<real>(dt / dt1)) : step.q,
+            static_cast<real>(dt1));
   const FixResult result = correct<M>(z, r, gate);
   if (result != FixResult::kApplied) {
     pose_ = saved_pose;
@@ -191,15 +184,16 @@ FixResult PoseEkf::update(double t, const Eigen::Matrix<double, M, 1>& z,
   std::size_t next = index + 1;
   if (split) {
     // Replace the step by its two parts; the second starts from the fixed state.
-    Step second{t, step.t_end, step.twist, step.q * (dt / (step.t_end - t)), pose_, scale_, cov_};
+    Step second{t,     step.t_end, step.twist, step.q * static_cast<real>(dt / (step.t_end - t)),
+                pose_, scale_,     cov_};
     step.t_end = t;
-    step.q *= dt / dt1;
+    step.q *= static_cast<real>(dt / dt1);
     if (history_.full()) {  // make room by dropping the oldest step
       history_.pop_front();
       --next;
     }
     history_.insert(next, second);
-    propagate(second.twist, second.q, second.t_end - second.t_begin);
+    propagate(second.twist, second.q, static_cast<real>(second.t_end - second.t_begin));
     ++next;
   }
   // Re-predict the later steps from the corrected state.
@@ -208,16 +202,16 @@ FixResult PoseEkf::update(double t, const Eigen::Matrix<double, M, 1>& z,
     later.pose_before = pose_;
     later.scale_before = scale_;
     later.cov_before = cov_;
-    propagate(later.twist, later.q, later.t_end - later.t_begin);
+    propagate(later.twist, later.q, static_cast<real>(later.t_end - later.t_begin));
   }
   return FixResult::kApplied;
 }
 
-FixResult PoseEkf::update_position(double t, const Eigen::Vector2d& z, const Eigen::Matrix2d& r) {
+FixResult PoseEkf::update_position(double t, const Vec2& z, const Mat2& r) {
   return update<2>(t, z, r, options_.gate_position);
 }
 
-FixResult PoseEkf::update_pose(double t, const Eigen::Vector3d& z, const Eigen::Matrix3d& r) {
+FixResult PoseEkf::update_pose(double t, const Vec3& z, const Mat3& r) {
   return update<3>(t, z, r, options_.gate_pose);
 }
 

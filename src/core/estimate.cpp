@@ -21,9 +21,9 @@ const char* describe(GeometryError error) {
   return "unknown geometry error";
 }
 
-std::array<Eigen::Vector2d, kMaxSensors> point_velocities(const SensorArray& array,
-                                                          const ArraySample& sample) {
-  std::array<Eigen::Vector2d, kMaxSensors> u = zeros<Eigen::Vector2d>();
+std::array<Vec2, kMaxSensors> point_velocities(const SensorArray& array,
+                                               const ArraySample& sample) {
+  std::array<Vec2, kMaxSensors> u = zeros<Vec2>();
   for (int i = 0; i < sample.size && i < array.size(); ++i) {
     u[static_cast<std::size_t>(i)] = array[i].robot_velocity_from_counts() *
                                      sample.counts[static_cast<std::size_t>(i)] / sample.dt;
@@ -33,7 +33,7 @@ std::array<Eigen::Vector2d, kMaxSensors> point_velocities(const SensorArray& arr
 
 namespace {
 bool valid_mount(const SensorMount& m) {
-  const auto positive = [](double x) { return std::isfinite(x) && x > 0.0; };
+  const auto positive = [](real x) { return std::isfinite(x) && x > 0.0; };
   return positive(m.cpi) && positive(m.scale.x()) && positive(m.scale.y()) &&
          m.position.allFinite() && std::isfinite(m.yaw) &&
          (!m.noise || (std::isfinite(*m.noise) && *m.noise >= 0.0));
@@ -41,7 +41,7 @@ bool valid_mount(const SensorMount& m) {
 }  // namespace
 
 std::variant<LsEstimator, GeometryError> LsEstimator::create(const SensorArray& array,
-                                                             SensorMask used, double reference_dt) {
+                                                             SensorMask used, real reference_dt) {
   const int n = array.size();
   if (n > kMaxSensors || (n < 32 && (used >> n) != 0)) return GeometryError::kTooManySensors;
   if (count_sensors(used) < 2) return GeometryError::kTooFewSensors;
@@ -50,23 +50,22 @@ std::variant<LsEstimator, GeometryError> LsEstimator::create(const SensorArray& 
   }
 
   // Normal matrices: unweighted for the rank test, weighted for the gain.
-  Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
-  Eigen::Matrix3d atwa = Eigen::Matrix3d::Zero();
-  std::array<double, kMaxSensors> weight{};
-  std::array<Eigen::Matrix2d, kMaxSensors> quant =
-      zeros<Eigen::Matrix2d>();  // C_i C_i^T / 6, m^2 per count^2
+  Mat3 ata = Mat3::Zero();
+  Mat3 atwa = Mat3::Zero();
+  std::array<real, kMaxSensors> weight{};
+  std::array<Mat2, kMaxSensors> quant = zeros<Mat2>();  // C_i C_i^T / 6, m^2 per count^2
   for (int i = 0; i < n; ++i) {
     if (!contains(used, i)) continue;
     const auto k = static_cast<std::size_t>(i);
-    const Eigen::Matrix2d c = array[i].robot_velocity_from_counts();
+    const Mat2 c = array[i].robot_velocity_from_counts();
     quant[k] = c * c.transpose() / 6.0;
-    const double noise2 = array[i].noise ? *array[i].noise * *array[i].noise : 0.0;
+    const real noise2 = array[i].noise ? *array[i].noise * *array[i].noise : 0.0;
     weight[k] = 1.0 / (noise2 + quant[k].trace() / 2.0 / (reference_dt * reference_dt));
-    const Eigen::Matrix<double, 2, 3> a = array[i].point_jacobian();
+    const Mat<2, 3> a = array[i].point_jacobian();
     ata += a.transpose() * a;
     atwa += weight[k] * a.transpose() * a;
   }
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(ata, Eigen::EigenvaluesOnly);
+  const Eigen::SelfAdjointEigenSolver<Mat3> eig(ata, Eigen::EigenvaluesOnly);
   if (!(eig.eigenvalues()(0) > kMinConditionReciprocal * eig.eigenvalues()(2))) {
     return GeometryError::kRankDeficient;
   }
@@ -76,14 +75,14 @@ std::variant<LsEstimator, GeometryError> LsEstimator::create(const SensorArray& 
   est.size_ = n;
   est.gain_.setZero(3, 2 * n);
   est.counts_gain_.setZero(3, 2 * n);
-  const Eigen::Matrix3d inv = atwa.inverse();
+  const Mat3 inv = atwa.inverse();
   for (int i = 0; i < n; ++i) {
     if (!contains(used, i)) continue;
     const auto k = static_cast<std::size_t>(i);
-    const Eigen::Matrix<double, 3, 2> b = weight[k] * inv * array[i].point_jacobian().transpose();
+    const Mat<3, 2> b = weight[k] * inv * array[i].point_jacobian().transpose();
     est.gain_.middleCols<2>(2 * i) = b;
     est.counts_gain_.middleCols<2>(2 * i) = b * array[i].robot_velocity_from_counts();
-    const double noise2 = array[i].noise ? *array[i].noise * *array[i].noise : 0.0;
+    const real noise2 = array[i].noise ? *array[i].noise * *array[i].noise : 0.0;
     est.noise_cov_ += noise2 * b * b.transpose();
     est.quantisation_cov_ += b * quant[k] * b.transpose();
   }
@@ -92,7 +91,7 @@ std::variant<LsEstimator, GeometryError> LsEstimator::create(const SensorArray& 
 
 std::optional<TwistEstimate> LsEstimator::estimate(const ArraySample& sample) const {
   if (!(std::isfinite(sample.dt) && sample.dt > 0.0) || sample.size != size_) return std::nullopt;
-  Eigen::Vector3d x = Eigen::Vector3d::Zero();
+  Vec3 x = Vec3::Zero();
   for (int i = 0; i < size_; ++i) {
     if (contains(used_, i)) {
       x += counts_gain_.middleCols<2>(2 * i) * sample.counts[static_cast<std::size_t>(i)];
@@ -105,11 +104,12 @@ std::optional<TwistEstimate> LsEstimator::estimate(const ArraySample& sample) co
   return out;
 }
 
-Twist2 average_regular_polygon(std::span<const Eigen::Vector2d> u, double r, double theta) {
-  const auto n = static_cast<double>(u.size());
+Twist2 average_regular_polygon(std::span<const Vec2> u, real r, real theta) {
+  const auto n = static_cast<real>(u.size());
   Twist2 out;
   for (std::size_t i = 0; i < u.size(); ++i) {
-    const double a = theta + static_cast<double>(i) * 2.0 * std::numbers::pi / n;
+    const real a =
+        theta + static_cast<real>(i) * 2.0 * std::numbers::pi_v<real> / static_cast<real>(n);
     out.v += u[i] / n;
     out.omega += (-std::sin(a) * u[i].x() + std::cos(a) * u[i].y()) / (r * n);
   }

@@ -4,15 +4,15 @@
 
 namespace moa {
 
-Eigen::Matrix3d WheelNoise::covariance(const Twist2& wheels) const {
-  const double sv = base_v + relative * wheels.v.norm();
-  const double sw = base_omega + relative * std::abs(wheels.omega);
-  return Eigen::Vector3d(sv * sv, sv * sv, sw * sw).asDiagonal();
+Mat3 WheelNoise::covariance(const Twist2& wheels) const {
+  const real sv = base_v + relative * wheels.v.norm();
+  const real sw = base_omega + relative * std::abs(wheels.omega);
+  return Vec3(sv * sv, sv * sv, sw * sw).asDiagonal();
 }
 
-Eigen::Matrix3d HoldModel::grown(const Eigen::Matrix3d& covariance, double elapsed) const {
-  const double v = accel * elapsed, w = angular_accel * elapsed;
-  return covariance + Eigen::Vector3d(v * v, v * v, w * w).asDiagonal().toDenseMatrix();
+Mat3 HoldModel::grown(const Mat3& covariance, real elapsed) const {
+  const real v = accel * elapsed, w = angular_accel * elapsed;
+  return covariance + Vec3(v * v, v * v, w * w).asDiagonal().toDenseMatrix();
 }
 
 void Fallback::apply(RobustEstimate& out, const std::optional<Twist2>& wheels,
@@ -26,7 +26,7 @@ void Fallback::apply(RobustEstimate& out, const std::optional<Twist2>& wheels,
   } else {
     out.source = Source::kHold;
     out.estimate.twist = last_twist_;
-    out.estimate.covariance = hold.grown(last_covariance_, t - last_good_t_);
+    out.estimate.covariance = hold.grown(last_covariance_, static_cast<real>(t - last_good_t_));
   }
 }
 

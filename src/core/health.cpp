@@ -11,8 +11,8 @@ const char* HealthOptions::validate() const {
   if (frozen_run < 2) return "health.frozen_run: must be at least 2 epochs";
   if (frozen_long_run < frozen_run) return "health.frozen_long_run: must be at least frozen_run";
   if (zero_run < 1) return "health.zero_run: must be at least 1 epoch";
-  for (const double x : {frozen_min_counts, frozen_change, zero_speed, drift_tau, drift_min_speed,
-                         drift_min_time, drift_suspect, drift_exclude, drift_release, probation}) {
+  for (const real x : {frozen_min_counts, frozen_change, zero_speed, drift_tau, drift_min_speed,
+                       drift_min_time, drift_suspect, drift_exclude, drift_release, probation}) {
     if (!(std::isfinite(x) && x >= 0.0))
       return "health: thresholds and times must be finite and not negative";
   }
@@ -36,20 +36,22 @@ const char* describe(Health health) {
   return "?";
 }
 
-HealthMonitor::HealthMonitor(int sensors, HealthOptions options, double alpha)
-    : options_(options), residual_gate_(chi2_quantile(1.0 - alpha, 2)), n_(sensors) {}
+HealthMonitor::HealthMonitor(int sensors, HealthOptions options, real alpha)
+    : options_(options),
+      residual_gate_(static_cast<real>(chi2_quantile(1.0 - alpha, 2))),
+      n_(sensors) {}
 
-double HealthMonitor::drift(const SensorState& s) const {
+real HealthMonitor::drift(const SensorState& s) const {
   if (s.weight <= 0.0 || s.time < options_.drift_min_time) return 0.0;
   return std::max(std::abs(s.sum_par), std::abs(s.sum_perp)) / s.weight;
 }
 
-double HealthMonitor::drift_scale(int i) const {
+real HealthMonitor::drift_scale(int i) const {
   const SensorState& s = state_[static_cast<std::size_t>(i)];
   return s.weight > 0.0 ? s.sum_par / s.weight : 0.0;
 }
 
-double HealthMonitor::drift_yaw(int i) const {
+real HealthMonitor::drift_yaw(int i) const {
   const SensorState& s = state_[static_cast<std::size_t>(i)];
   return s.weight > 0.0 ? s.sum_perp / s.weight : 0.0;
 }
@@ -59,12 +61,12 @@ SensorMask HealthMonitor::screen(const SubsetSolver& solver, const ArraySample& 
                                  std::array<Exclusion, kMaxSensors>& excluded) {
   SensorMask allowed = candidates;
   if (!options_.enabled) return allowed;
-  const Eigen::Vector3d x = predicted.vector();
+  const Vec3 x = predicted.vector();
   for (int i = 0; i < n_; ++i) {
     const auto k = static_cast<std::size_t>(i);
     SensorState& s = state_[k];
-    const Eigen::Vector2d c = sample.counts[k];
-    const Eigen::Vector2d p = solver.jacobian(i) * x;  // predicted point velocity, m/s
+    const Vec2 c = sample.counts[k];
+    const Vec2 p = solver.jacobian(i) * x;  // predicted point velocity, m/s
     // Frozen: exact repeats of a count large enough to carry noise.
     if (c == s.last_counts && c.cwiseAbs().maxCoeff() >= options_.frozen_min_counts) {
       ++s.repeats;
@@ -80,14 +82,14 @@ SensorMask HealthMonitor::screen(const SubsetSolver& solver, const ArraySample& 
                         (run >= options_.frozen_run &&
                          (was_frozen || (p - s.run_start).norm() >= options_.frozen_change));
     // Zero while the point should move.
-    const double speed = p.norm();
+    const real speed = p.norm();
     if (c.isZero() && speed >= options_.zero_speed) {
       ++s.zeros;
     } else {
       s.zeros = 0;
     }
     if (!contains(candidates, i)) continue;  // lifted: nothing to judge
-    const double d = drift(s);
+    const real d = drift(s);
     Exclusion bad = Exclusion::kNone;
     if (frozen) {
       bad = Exclusion::kFrozen;
@@ -138,14 +140,14 @@ void HealthMonitor::observe(const SubsetSolver& solver, const ArraySample& sampl
                             SensorMask candidates,
                             const std::array<std::uint8_t, kMaxSensors>& noise_flags) {
   if (!options_.enabled) return;
-  const double a = std::min(1.0, sample.dt / options_.drift_tau);  // window weight of this epoch
+  const real a = std::min(1.0, sample.dt / options_.drift_tau);  // window weight of this epoch
   for (int i = 0; i < n_; ++i) {
     const auto k = static_cast<std::size_t>(i);
     if (!contains(candidates, i) || noise_flags[k] != 0) continue;
     // Out for another reason (frozen, zero): its residual says nothing of drift.
     if (state_[k].health == Health::kExcluded && state_[k].reason != Exclusion::kDrift) continue;
     // The twist of the others: leave-one-out when i was used and enough remain.
-    Eigen::Vector3d xi = x.vector();
+    Vec3 xi = x.vector();
     const SensorMask others = used & ~(SensorMask{1} << i);
     if (contains(used, i)) {
       if (count_sensors(others) < 2) continue;
@@ -153,10 +155,10 @@ void HealthMonitor::observe(const SubsetSolver& solver, const ArraySample& sampl
       if (!fit) continue;
       xi = fit->twist.vector();
     }
-    const Eigen::Vector2d p = solver.jacobian(i) * xi;
-    const double p2 = p.squaredNorm();
+    const Vec2 p = solver.jacobian(i) * xi;
+    const real p2 = p.squaredNorm();
     if (p2 < options_.drift_min_speed * options_.drift_min_speed) continue;
-    const Eigen::Vector2d r = m.u[k] - p;
+    const Vec2 r = m.u[k] - p;
     if (r.dot(m.info[k] * r) > residual_gate_) continue;  // a gross error, not drift
     SensorState& s = state_[k];
     s.sum_par = (1.0 - a) * s.sum_par + a * p.dot(r) / p2;

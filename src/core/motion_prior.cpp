@@ -13,11 +13,11 @@ const char* RobotLimits::validate() const {
   return "";
 }
 
-Eigen::Matrix3d MotionPrior::covariance(double t, double min_elapsed) const {
-  const double e = std::max(t - t_, min_elapsed);
-  const double v = limits_.accel * e, w = limits_.angular_accel * e;
-  Eigen::Matrix3d p = covariance_;
-  p.diagonal() += Eigen::Vector3d(v * v, v * v, w * w);
+Mat3 MotionPrior::covariance(double t, real min_elapsed) const {
+  const real e = std::max(static_cast<real>(t - t_), min_elapsed);
+  const real v = limits_.accel * e, w = limits_.angular_accel * e;
+  Mat3 p = covariance_;
+  p.diagonal() += Vec3(v * v, v * v, w * w);
   return p;
 }
 

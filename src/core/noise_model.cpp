@@ -21,21 +21,21 @@ NoiseModel::NoiseModel(const SensorArray& array, NoiseModelOptions options)
 void NoiseModel::measure(const ArraySample& sample, const Twist2& predicted, PointMeasurements& out,
                          std::array<std::uint8_t, kMaxSensors>& flags) const {
   out.size = n_;
-  const Eigen::Vector3d x = predicted.vector();
-  const double inv_dt = 1.0 / sample.dt;
+  const Vec3 x = predicted.vector();
+  const real inv_dt = 1.0 / sample.dt;
   for (int i = 0; i < n_; ++i) {
     const auto s = static_cast<std::size_t>(i);
     out.u[s] = c_[s] * sample.counts[s] * inv_dt;
-    const double predicted_speed = (a_[s] * x).norm();
-    const double speed = std::min(out.u[s].norm(), predicted_speed);
-    const double rel = options_.relative * speed;
-    Eigen::Matrix2d cov = quant_[s] * (inv_dt * inv_dt);
+    const real predicted_speed = (a_[s] * x).norm();
+    const real speed = std::min(out.u[s].norm(), predicted_speed);
+    const real rel = options_.relative * speed;
+    Mat2 cov = quant_[s] * (inv_dt * inv_dt);
     cov.diagonal().array() += noise2_[s] + rel * rel;
-    double factor = 1.0;
+    real factor = 1.0;
     std::uint8_t f = 0;
     if (max_speed_[s] > 0.0) {
-      const double ratio = predicted_speed / (options_.speed_onset * max_speed_[s]);
-      const double r2 = ratio * ratio, r4 = r2 * r2;
+      const real ratio = predicted_speed / (options_.speed_onset * max_speed_[s]);
+      const real r2 = ratio * ratio, r4 = r2 * r2;
       factor *= std::min(options_.speed_cap, 1.0 + r4 * r4);
       if (ratio >= 1.0) f |= kNoiseOverSpeed;
     }

@@ -52,11 +52,16 @@ bool positive_finite(double x) { return std::isfinite(x) && x > 0.0; }
 
 // v.norm() > limit (limit > 0), without the square root when |v|^2 is clear
 // of limit^2 by far more than the rounding of either: the same answer.
-bool beyond(const Eigen::Vector2d& v, double limit) {
-  const double n2 = v.squaredNorm(), l2 = limit * limit;
-  if (l2 > 1e-200 && l2 < 1e200) {
-    if (n2 < l2 * (1.0 - 1e-9)) return false;
-    if (n2 > l2 * (1.0 + 1e-9)) return true;
+bool beyond(const Vec2& v, real limit) {
+#if defined(MOA_SCALAR_FLOAT)
+  constexpr real kTiny = 1e-30f, kHuge = 1e30f, kClear = 1e-5f;
+#else
+  constexpr real kTiny = 1e-200, kHuge = 1e200, kClear = 1e-9;
+#endif
+  const real n2 = v.squaredNorm(), l2 = limit * limit;
+  if (l2 > kTiny && l2 < kHuge) {
+    if (n2 < l2 * (1 - kClear)) return false;
+    if (n2 > l2 * (1 + kClear)) return true;
   }
   return v.norm() > limit;
 }
@@ -156,7 +161,7 @@ Odometry::Odometry(const SensorArray& array, double t0, const OdometryOptions& o
   };
   switch (options_.estimator) {
     case EstimatorKind::kLs:
-      take(LsEstimator::create(sub_array_, all_sensors(m_), period));
+      take(LsEstimator::create(sub_array_, all_sensors(m_), static_cast<real>(period)));
       break;
     case EstimatorKind::kSekimori:
       take(SekimoriEstimator::create(sub_array_, options_.sekimori));
@@ -170,7 +175,8 @@ Odometry::Odometry(const SensorArray& array, double t0, const OdometryOptions& o
       // The same geometry checks as least squares over all selected sensors.
       // std::get_if, not std::get: no exception path (the core builds without
       // exceptions for microcontrollers).
-      if (const auto built = LsEstimator::create(sub_array_, all_sensors(m_), period);
+      if (const auto built =
+              LsEstimator::create(sub_array_, all_sensors(m_), static_cast<real>(period));
           const auto* e = std::get_if<GeometryError>(&built)) {
         geometry_error_ = *e;
       } else {
@@ -182,9 +188,8 @@ Odometry::Odometry(const SensorArray& array, double t0, const OdometryOptions& o
 
 const Pose2& Odometry::pose() const { return ekf_ ? ekf_->pose() : reckoner_.pose(); }
 
-Eigen::Matrix2d Odometry::fix_covariance(const CameraFix& fix) const {
-  const Eigen::Vector2d sd =
-      fix.sigma ? *fix.sigma : Eigen::Vector2d::Constant(options_.camera_sigma);
+Mat2 Odometry::fix_covariance(const CameraFix& fix) const {
+  const Vec2 sd = fix.sigma ? *fix.sigma : Vec2::Constant(options_.camera_sigma);
   return sd.cwiseAbs2().asDiagonal();
 }
 
@@ -194,7 +199,7 @@ std::optional<OdometryError> Odometry::push(const SensorRow& row, StepSink sink)
     // The row's interval as the synchroniser will take it, at least one epoch.
     const auto i = static_cast<std::size_t>(row.sensor);
     const double begin = std::max(sync_.last_time(row.sensor), row.t - options_.max_row_interval);
-    const double dt = std::max(row.t - begin, period_);
+    const real dt = static_cast<real>(std::max(row.t - begin, period_));
     if (beyond(velocity_from_counts_[i] * row.counts, impossible_speed_[i] * dt)) {
       return OdometryError::kImpossibleCounts;
     }
@@ -272,7 +277,7 @@ void Odometry::apply_fixes(double t) {
     if (f.t + options_.camera_latency > t) return;
     FixResult result;
     if (f.theta) {
-      Eigen::Matrix3d r = Eigen::Matrix3d::Zero();
+      Mat3 r = Mat3::Zero();
       r.topLeftCorner<2, 2>() = fix_covariance(f);
       r(2, 2) = options_.camera_heading_sigma * options_.camera_heading_sigma;
       result = ekf_->update_pose(f.t, {f.position.x(), f.position.y(), *f.theta}, r);
@@ -429,7 +434,7 @@ void Odometry::process(const ArraySample& sample, StepSink sink) {
     started_ = true;
     if (options_.fuse_camera) {
       // The filter starts at the given pose, or at the first fix's position.
-      Eigen::Matrix3d p0 = Eigen::Vector3d(1e-8, 1e-8, 1e-8).asDiagonal();
+      Mat3 p0 = Vec3(1e-8, 1e-8, 1e-8).asDiagonal();
       Pose2 initial = options_.initial.value_or(Pose2{});
       if (!options_.initial && !pending_fixes_.empty()) {
         initial.t = pending_fixes_.front().position;

@@ -3,6 +3,7 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace moa {
 
@@ -34,31 +35,31 @@ SekimoriEstimator::SekimoriEstimator(const SensorArray& array, SekimoriOptions o
   }
   for (int i = 0; i < n_; ++i) {
     for (int j = i + 1; j < n_; ++j) {
-      Eigen::Matrix<double, 4, 3> a;
+      Mat<4, 3> a;
       a.topRows<2>() = array[i].point_jacobian();
       a.bottomRows<2>() = array[j].point_jacobian();
       // The orthogonal complement of A's column space: the 4-D cross product
       // of its three columns, n_k = (-1)^k det(A without row k) (no
       // workspace, so nothing is allocated even at construction). A pair
       // whose A has rank < 3 (coincident sensors) gets n = 0: it always agrees.
-      Eigen::Vector4d n;
+      Vec4 n;
       for (int k = 0; k < 4; ++k) {
-        Eigen::Matrix3d minor;
+        Mat3 minor;
         for (int r = 0, row = 0; r < 4; ++r) {
           if (r != k) minor.row(row++) = a.row(r);
         }
         n(k) = (k % 2 == 0 ? 1.0 : -1.0) * minor.determinant();
       }
-      const double norm = n.norm();
+      const real norm = n.norm();
       normals_[static_cast<std::size_t>(pair_index(i, j))] =
-          norm > 1e-300 ? Eigen::Vector4d(n / norm) : Eigen::Vector4d::Zero();
+          norm > std::numeric_limits<real>::min() ? Vec4(n / norm) : Vec4::Zero();
     }
   }
   for (int i = 0; i < n_; ++i) measurements_.info[static_cast<std::size_t>(i)].setIdentity();
   measurements_.size = n_;
 }
 
-double SekimoriEstimator::pair_residual(int i, int j) const {
+real SekimoriEstimator::pair_residual(int i, int j) const {
   if (i > j) std::swap(i, j);
   return residual_[static_cast<std::size_t>(pair_index(i, j))];
 }
@@ -76,10 +77,10 @@ std::optional<RobustEstimate> SekimoriEstimator::estimate(const ArraySample& sam
   for (int i = 0; i < n_; ++i) {
     for (int j = i + 1; j < n_; ++j) {
       const auto p = static_cast<std::size_t>(pair_index(i, j));
-      Eigen::Vector4d a;
+      Vec4 a;
       a << measurements_.u[static_cast<std::size_t>(i)],
           measurements_.u[static_cast<std::size_t>(j)];
-      const double e = normals_[p].dot(a * sample.dt);
+      const real e = normals_[p].dot(a * sample.dt);
       residual_[p] = e * e;
       if (residual_[p] <= options_.e_th) {
         ++votes[static_cast<std::size_t>(i)];
@@ -96,7 +97,7 @@ std::optional<RobustEstimate> SekimoriEstimator::estimate(const ArraySample& sam
   if (fit) {
     // Report the covariance the quantisation gives for this unweighted fit:
     // Cov = N^-1 (sum A_i^T S_i A_i) N^-1 with N = sum A_i^T A_i.
-    Eigen::Matrix3d middle = Eigen::Matrix3d::Zero();
+    Mat3 middle = Mat3::Zero();
     for (int i = 0; i < n_; ++i) {
       if (!contains(reliable, i)) continue;
       const auto& a = solver_.jacobian(i);

@@ -9,7 +9,7 @@
 namespace moa {
 
 const char* SelfCalibrationOptions::validate() const {
-  const auto positive = [](double x) { return std::isfinite(x) && x > 0.0; };
+  const auto positive = [](real x) { return std::isfinite(x) && x > 0.0; };
   if (!positive(block)) return "self_calibration.block: must be positive and finite (s)";
   if (!(std::isfinite(min_speed) && min_speed >= 0.0))
     return "self_calibration.min_speed: must be finite and not negative (m/s)";
@@ -33,8 +33,7 @@ const char* SelfCalibrationOptions::validate() const {
 
 SelfCalibration::SelfCalibration(const SensorArray& array, SelfCalibrationOptions options)
     : options_(options), n_(std::min(array.size(), kMaxSensors)), array_(array), solver_(array) {
-  const Eigen::Vector3d prior(options_.prior_scale_sd, options_.prior_scale_sd,
-                              options_.prior_yaw_sd);
+  const Vec3 prior(options_.prior_scale_sd, options_.prior_scale_sd, options_.prior_yaw_sd);
   for (int i = 0; i < n_; ++i) {
     const auto u = static_cast<std::size_t>(i);
     velocity_from_counts_[u] = array[i].robot_velocity_from_counts();
@@ -45,7 +44,7 @@ SelfCalibration::SelfCalibration(const SensorArray& array, SelfCalibrationOption
   points_.size = n_;
 }
 
-Eigen::Vector3d SelfCalibration::sd(int i) const {
+Vec3 SelfCalibration::sd(int i) const {
   return state_[static_cast<std::size_t>(i)].p.diagonal().cwiseMax(0.0).cwiseSqrt();
 }
 
@@ -66,40 +65,39 @@ void SelfCalibration::correct(ArraySample& sample) const {
 
 void SelfCalibration::renew(int i) {
   SensorState& s = state_[static_cast<std::size_t>(i)];
-  const double change = std::max({std::abs(s.theta.scale_x - s.applied.scale_x),
-                                  std::abs(s.theta.scale_y - s.applied.scale_y),
-                                  std::abs(s.theta.yaw_offset - s.applied.yaw_offset)});
+  const real change = std::max({std::abs(s.theta.scale_x - s.applied.scale_x),
+                                std::abs(s.theta.scale_y - s.applied.scale_y),
+                                std::abs(s.theta.yaw_offset - s.applied.yaw_offset)});
   if (change < options_.apply_step) return;
   s.applied = s.theta;
   // Within the deadband the configured value stands: the estimate's own
   // errors (mount positions read as scale in rotation) would cost more.
-  const auto band = [&](double x, double one) {
+  const auto band = [&](real x, real one) {
     return std::abs(x - one) > options_.deadband ? x : one;
   };
   const SelfCalibrationEstimate used{band(s.theta.scale_x, 1.0), band(s.theta.scale_y, 1.0),
                                      band(s.theta.yaw_offset, 0.0)};
   // counts -> robot velocity (configured), into the configured sensor frame,
   // C^-1 = R(delta) diag(1/s), back to the robot frame and to counts.
-  const Eigen::Matrix2d& v = velocity_from_counts_[static_cast<std::size_t>(i)];
-  const Eigen::Matrix2d r = rotation(array_[i].yaw);
-  const Eigen::Matrix2d c_inv =
-      rotation(used.yaw_offset) *
-      Eigen::Vector2d(1.0 / used.scale_x, 1.0 / used.scale_y).asDiagonal();
+  const Mat2& v = velocity_from_counts_[static_cast<std::size_t>(i)];
+  const Mat2 r = rotation(array_[i].yaw);
+  const Mat2 c_inv =
+      rotation(used.yaw_offset) * Vec2(1.0 / used.scale_x, 1.0 / used.scale_y).asDiagonal();
   s.correction = v.inverse() * r * c_inv * r.transpose() * v;
 }
 
 void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& estimate) {
   if (estimate.source != Source::kMice || !(std::isfinite(raw.dt) && raw.dt > 0.0)) return;
-  const double dt = raw.dt;
+  const real dt = raw.dt;
   // Corrected point velocities of every sensor, weighed by their
   // quantisation and a relative term (not the estimators' 2 %: that term
   // stands for calibration errors, which are what is estimated here).
   for (int k = 0; k < n_; ++k) {
     const auto u = static_cast<std::size_t>(k);
     points_.u[u] = velocity_from_counts_[u] * (state_[u].correction * raw.counts[u]) / dt;
-    const double q = metres_per_count_[u] / dt;
-    const double rel = options_.relative_noise * points_.u[u].norm();
-    points_.info[u] = Eigen::Matrix2d::Identity() / (q * q / 6.0 + rel * rel + 1e-12);
+    const real q = metres_per_count_[u] / dt;
+    const real rel = options_.relative_noise * points_.u[u].norm();
+    points_.info[u] = Mat2::Identity() / (q * q / 6.0 + rel * rel + 1e-12);
   }
   const SensorMask used = estimate.estimate.used;
   for (int i = 0; i < n_; ++i) {
@@ -122,15 +120,15 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
     if (count_sensors(others) < 2) continue;
     const auto fit = solver_.fit(others, points_);
     if (!fit) continue;
-    const Eigen::Vector2d p = solver_.jacobian(i) * fit->twist.vector();
+    const Vec2 p = solver_.jacobian(i) * fit->twist.vector();
     // Over (or near) its rating a sensor under-reads by random fractions: a
     // fault, not a calibration.
     if (array_[i].max_speed && p.norm() > 0.8 * *array_[i].max_speed) continue;
-    const Eigen::Matrix2d rt = rotation(array_[i].yaw).transpose();
+    const Mat2 rt = rotation(array_[i].yaw).transpose();
     SensorState& s = state_[u];
     s.sum_pred += rt * p * dt;
     s.sum_meas += rt * velocity_from_counts_[u] * raw.counts[u];
-    const Eigen::Matrix<double, 2, 3>& a = solver_.jacobian(i);
+    const Mat<2, 3>& a = solver_.jacobian(i);
     s.sum_var += 0.5 * (a * fit->covariance * a.transpose()).trace() * dt * dt;
     s.time += dt;
     if (s.time >= options_.block - 1e-9) {
@@ -145,55 +143,55 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
 
 void SelfCalibration::update(int i, double t) {
   SensorState& s = state_[static_cast<std::size_t>(i)];
-  const Eigen::Vector2d w = s.sum_pred;
+  const Vec2 w = s.sum_pred;
   if (w.norm() < options_.min_speed * s.time) return;  // nothing excited
   // Forgetting: the random walk since the last update, capped at the prior.
   if (s.last_update >= 0.0) {
-    const double e = t - s.last_update;
-    s.p.diagonal() += e * Eigen::Vector3d(options_.scale_walk * options_.scale_walk,
-                                          options_.scale_walk * options_.scale_walk,
-                                          options_.yaw_walk * options_.yaw_walk);
-    const Eigen::Vector3d cap(options_.prior_scale_sd * options_.prior_scale_sd,
-                              options_.prior_scale_sd * options_.prior_scale_sd,
-                              options_.prior_yaw_sd * options_.prior_yaw_sd);
+    const real e = static_cast<real>(t - s.last_update);
+    s.p.diagonal() +=
+        e * Vec3(options_.scale_walk * options_.scale_walk,
+                 options_.scale_walk * options_.scale_walk, options_.yaw_walk * options_.yaw_walk);
+    const Vec3 cap(options_.prior_scale_sd * options_.prior_scale_sd,
+                   options_.prior_scale_sd * options_.prior_scale_sd,
+                   options_.prior_yaw_sd * options_.prior_yaw_sd);
     for (int k = 0; k < 3; ++k) {
       if (s.p(k, k) > cap(k)) {
-        const double f = std::sqrt(cap(k) / s.p(k, k));
+        const real f = std::sqrt(cap(k) / s.p(k, k));
         s.p.row(k) *= f;
         s.p.col(k) *= f;
       }
     }
   }
   s.last_update = t;
-  const double c = std::cos(s.theta.yaw_offset), sn = std::sin(s.theta.yaw_offset);
-  const Eigen::Vector2d rw(c * w.x() + sn * w.y(), -sn * w.x() + c * w.y());  // R(-delta) w
-  const Eigen::Vector2d h(s.theta.scale_x * rw.x(), s.theta.scale_y * rw.y());
-  Eigen::Matrix<double, 2, 3> hj;
+  const real c = std::cos(s.theta.yaw_offset), sn = std::sin(s.theta.yaw_offset);
+  const Vec2 rw(c * w.x() + sn * w.y(), -sn * w.x() + c * w.y());  // R(-delta) w
+  const Vec2 h(s.theta.scale_x * rw.x(), s.theta.scale_y * rw.y());
+  Mat<2, 3> hj;
   hj << rw.x(), 0.0, s.theta.scale_x * (-sn * w.x() + c * w.y()),  //
       0.0, rw.y(), s.theta.scale_y * (-c * w.x() - sn * w.y());
-  const Eigen::Vector2d r = s.sum_meas - h;
+  const Vec2 r = s.sum_meas - h;
   if (r.norm() > options_.gate * w.norm()) return;  // a gross error, not a calibration
-  const double mpc = metres_per_count_[static_cast<std::size_t>(i)];
-  const double rel = options_.relative_noise * w.norm();
-  double var = mpc * mpc / 3.0 + s.sum_var + rel * rel;
+  const real mpc = metres_per_count_[static_cast<std::size_t>(i)];
+  const real rel = options_.relative_noise * w.norm();
+  real var = mpc * mpc / 3.0 + s.sum_var + rel * rel;
   // Huber: a block far out weighs as one at three standard deviations.
-  const double nu2 = r.squaredNorm() / var;
+  const real nu2 = r.squaredNorm() / var;
   if (nu2 > 18.0) var *= nu2 / 18.0;
-  const Eigen::Matrix2d sm = hj * s.p * hj.transpose() + var * Eigen::Matrix2d::Identity();
-  const Eigen::Matrix<double, 3, 2> k = s.p * hj.transpose() * sm.inverse();
-  const Eigen::Vector3d dx = k * r;
+  const Mat2 sm = hj * s.p * hj.transpose() + var * Mat2::Identity();
+  const Mat<3, 2> k = s.p * hj.transpose() * sm.inverse();
+  const Vec3 dx = k * r;
   s.theta.scale_x += dx(0);
   s.theta.scale_y += dx(1);
   s.theta.yaw_offset += dx(2);
-  const Eigen::Matrix3d ikh = Eigen::Matrix3d::Identity() - k * hj;
+  const Mat3 ikh = Mat3::Identity() - k * hj;
   s.p = ikh * s.p * ikh.transpose() + var * k * k.transpose();  // Joseph form
   s.p = 0.5 * (s.p + s.p.transpose()).eval();
   ++s.updates;
   fix_gauge();
   for (int j = 0; j < n_; ++j) {
     SensorState& o = state_[static_cast<std::size_t>(j)];
-    const double ex = std::abs(o.theta.scale_x - 1.0), ey = std::abs(o.theta.scale_y - 1.0);
-    const double ed = std::abs(o.theta.yaw_offset);
+    const real ex = std::abs(o.theta.scale_x - 1.0), ey = std::abs(o.theta.scale_y - 1.0);
+    const real ed = std::abs(o.theta.yaw_offset);
     if (!o.runaway) {
       o.runaway =
           ex > options_.runaway_scale || ey > options_.runaway_scale || ed > options_.runaway_yaw;
@@ -208,7 +206,7 @@ void SelfCalibration::update(int i, double t) {
 void SelfCalibration::fix_gauge() {
   // The median over the sensors not run away of log sqrt(s_x s_y) and of
   // delta: the majority keeps its configured scale and yaw.
-  std::array<double, kMaxSensors> logs{}, yaws{};
+  std::array<real, kMaxSensors> logs{}, yaws{};
   int m = 0;
   for (int j = 0; j < n_; ++j) {
     const SensorState& o = state_[static_cast<std::size_t>(j)];
@@ -218,12 +216,12 @@ void SelfCalibration::fix_gauge() {
     ++m;
   }
   if (m < 3) return;
-  const auto median = [m](std::array<double, kMaxSensors>& v) {
+  const auto median = [m](std::array<real, kMaxSensors>& v) {
     std::sort(v.begin(), v.begin() + m);
     const auto h = static_cast<std::size_t>(m / 2);
     return m % 2 == 1 ? v[h] : 0.5 * (v[h - 1] + v[h]);
   };
-  const double g = std::exp(-median(logs)), d = median(yaws);
+  const real g = std::exp(-median(logs)), d = median(yaws);
   for (int j = 0; j < n_; ++j) {
     SensorState& o = state_[static_cast<std::size_t>(j)];
     o.theta.scale_x *= g;

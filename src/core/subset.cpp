@@ -12,32 +12,32 @@ SubsetSolver::SubsetSolver(const SensorArray& array) : n_(array.size()) {
 std::optional<SubsetFit> SubsetSolver::fit(SensorMask mask, const PointMeasurements& m) const {
   const int k = count_sensors(mask);
   if (k < 2) return std::nullopt;
-  Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
+  Mat3 normal = Mat3::Zero();
+  Vec3 rhs = Vec3::Zero();
   for (int i = 0; i < n_; ++i) {
     if (!contains(mask, i)) continue;
     const auto s = static_cast<std::size_t>(i);
-    const Eigen::Matrix<double, 3, 2> at_info = a_[s].transpose() * m.info[s];
+    const Mat<3, 2> at_info = a_[s].transpose() * m.info[s];
     normal.noalias() += at_info * a_[s];
     rhs.noalias() += at_info * m.u[s];
   }
-  Eigen::Matrix3d inv;
+  Mat3 inv;
   bool invertible = false;
-  double det = 0.0;
+  real det = 0.0;
   normal.computeInverseAndDetWithCheck(inv, det, invertible, 0.0);
   // Relative determinant test: det / (product of the diagonal) measures how
   // close the normal matrix is to singular, independent of the weights' scale.
-  const double scale = normal(0, 0) * normal(1, 1) * normal(2, 2);
+  const real scale = normal(0, 0) * normal(1, 1) * normal(2, 2);
   if (!invertible || !(det > 1e-12 * scale)) return std::nullopt;
   SubsetFit out;
-  const Eigen::Vector3d x = inv * rhs;
+  const Vec3 x = inv * rhs;
   out.twist = Twist2::from_vector(x);
   out.covariance = inv;
   out.dof = 2 * k - 3;
   for (int i = 0; i < n_; ++i) {
     if (!contains(mask, i)) continue;
     const auto s = static_cast<std::size_t>(i);
-    const Eigen::Vector2d r = m.u[s] - a_[s] * x;
+    const Vec2 r = m.u[s] - a_[s] * x;
     out.chi2 += r.dot(m.info[s] * r);
   }
   return out;

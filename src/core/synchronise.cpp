@@ -45,7 +45,7 @@ ArraySample& Synchroniser::slot(std::int64_t k) {
     const std::int64_t j = next_ + static_cast<std::int64_t>(ring_.size());
     ArraySample& s = ring_.push_back();
     s.t = end_of(j);
-    s.dt = options_.period;
+    s.dt = static_cast<real>(options_.period);
     s.size = n_;
     for (int i = 0; i < n_; ++i) {
       const auto u = static_cast<std::size_t>(i);

@@ -18,7 +18,7 @@ bool WheelAverager::push(double t, const Twist2& twist) {
 
 std::optional<Twist2> WheelAverager::average(double a, double b) {
   while (!rows_.empty() && rows_.front().end <= a) rows_.pop_front();
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  Vec3 sum = Vec3::Zero();
   double covered = 0.0;
   for (std::size_t k = 0; k < rows_.size() && rows_[k].begin < b; ++k) {
     const Row& row = rows_[k];

@@ -1,11 +1,12 @@
 // The host side of the Cortex-M4F program under QEMU (embedded/odometry_qemu.cpp):
 //
-//   qemu_stream pack CONFIG LOG OUT.bin [--estimator E] [--rate HZ] [--no-wheels]
-//                                       [--fuse-camera]
+//   qemu_stream pack CONFIG LOG OUT.bin [--estimator E] [--sensors A,B] [--rate HZ]
+//                                       [--no-wheels] [--fuse-camera]
 //     packs a log for the device (embedded/qemu_stream.hpp): the config's
 //     mounts, the options (resolved as `moa odometry` resolves its flags), then
-//     mice rows, wheel rows and camera fixes in exactly the order
-//     io::run_odometry feeds them to the pipeline, and the end time.
+//     mice rows (with faults.csv's fault bits for the oracle), wheel rows and
+//     camera fixes in exactly the order io::run_odometry feeds them to the
+//     pipeline, and the end time.
 //
 //   qemu_stream compare CONFIG ODOMETRY.csv POSES.bin POSE_TOL TWIST_TOL PER_TICK
 //     compares the device's steps with `moa odometry`'s odometry.csv on the
@@ -30,6 +31,7 @@
 #include <vector>
 
 #include "moa/io/config.hpp"
+#include "moa/io/csv.hpp"
 #include "moa/io/log.hpp"
 #include "moa/io/odometry_csv.hpp"
 #include "moa/io/odometry_run.hpp"
@@ -41,8 +43,8 @@ namespace q = moa::qemu;
 
 int usage() {
   std::cerr
-      << "usage: qemu_stream pack CONFIG LOG OUT.bin [--estimator E] [--rate HZ] "
-         "[--no-wheels] [--fuse-camera]\n"
+      << "usage: qemu_stream pack CONFIG LOG OUT.bin [--estimator E] [--sensors A,B] "
+         "[--rate HZ] [--no-wheels] [--fuse-camera]\n"
          "       qemu_stream compare CONFIG ODOMETRY.csv POSES.bin POSE_TOL TWIST_TOL PER_TICK\n"
          "       qemu_stream csv POSES.bin OUT.csv\n";
   return 2;
@@ -59,10 +61,18 @@ int pack(int argc, char** argv) {
   std::string estimator = "consensus";
   double rate = moa::OdometryOptions{}.rate;
   bool no_wheels = false, fuse_camera = false;
+  std::vector<std::string> sensors;
   for (int i = 5; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--estimator" && i + 1 < argc) {
       estimator = argv[++i];
+    } else if (a == "--sensors" && i + 1 < argc) {
+      std::string list = argv[++i];
+      for (std::size_t start = 0; start <= list.size();) {
+        const std::size_t comma = std::min(list.find(',', start), list.size());
+        sensors.push_back(list.substr(start, comma - start));
+        start = comma + 1;
+      }
     } else if (a == "--rate" && i + 1 < argc) {
       rate = std::stod(argv[++i]);
     } else if (a == "--no-wheels") {
@@ -77,13 +87,23 @@ int pack(int argc, char** argv) {
   moa::OdometryOptions o;
   o.rate = rate;
   o.fuse_camera = fuse_camera;
-  o = moa::io::resolve_odometry_options(o, estimator, {}, no_wheels, config, config_path);
-  if (o.estimator == moa::EstimatorKind::kOracle) {
-    std::cerr << "qemu_stream: the oracle (faults.csv) is not packed\n";
-    return 2;
-  }
+  o = moa::io::resolve_odometry_options(o, estimator, sensors, no_wheels, config, config_path);
   const moa::io::LogFiles log = moa::io::resolve_log(argv[3]);
   moa::io::MiceReader mice(log.mice, config);
+  // The oracle's faults.csv: one row per mice.csv row, in the same order
+  // (io::run_odometry checks t and sensor; so does this).
+  std::unique_ptr<moa::io::CsvReader> faults;
+  std::size_t faults_t = 0, faults_sensor = 0, faults_bits = 0;
+  if (o.estimator == moa::EstimatorKind::kOracle) {
+    if (!log.faults) {
+      std::cerr << "qemu_stream: the oracle needs the simulator's faults.csv\n";
+      return 1;
+    }
+    faults = std::make_unique<moa::io::CsvReader>(*log.faults);
+    faults_t = faults->required_column("t");
+    faults_sensor = faults->required_column("sensor");
+    faults_bits = faults->required_column("faults");
+  }
 
   std::ofstream out(argv[4], std::ios::binary);
   q::StreamHeader header{};
@@ -92,6 +112,7 @@ int pack(int argc, char** argv) {
   header.estimator = static_cast<std::uint32_t>(o.estimator);
   header.use_wheels = o.use_wheels ? 1 : 0;
   header.fuse_camera = o.fuse_camera ? 1 : 0;
+  header.selected = o.sensors;
   header.rate = o.rate;
   header.max_row_interval = o.max_row_interval;
   header.max_gap = o.max_gap;
@@ -170,6 +191,14 @@ int pack(int argc, char** argv) {
     r.has_squal = row->squal ? 1 : 0;
     r.squal = row->squal.value_or(0);
     r.flags = row->flags;
+    if (faults) {
+      if (!faults->next() || faults->number(faults_t) != row->t ||
+          config.index_of(faults->field(faults_sensor)) != row->sensor) {
+        std::cerr << "qemu_stream: faults.csv does not match mice.csv row by row\n";
+        return 1;
+      }
+      r.faults = static_cast<std::uint8_t>(faults->integer(faults_bits, 0, 255));
+    }
     put(out, r);
     ++counts[0];
     t_end = row->t;

@@ -80,16 +80,16 @@ class SensorArray {
 /// r (m) centred on the robot, the first at angle theta (rad), each aligned
 /// with the robot axes (yaw 0), other fields copied from `prototype`:
 ///   p_i = r (cos(theta + (i-1) 2 pi/N), sin(theta + (i-1) 2 pi/N)).
-SensorArray regular_polygon(int n, double r, double theta, const SensorMount& prototype = {});
+SensorArray regular_polygon(int n, real r, real theta, const SensorMount& prototype = {});
 
 /// All sensors' counts over one common interval (t - dt, t].
 struct ArraySample {
   double t = 0.0;   ///< s, end of the interval
-  double dt = 0.0;  ///< s, interval length
+  real dt = 0.0;    ///< s, interval length
   int size = 0;     ///< number of sensors
   /// Counts in each sensor's own frame accumulated over the interval. Real
   /// valued: a row spread over several intervals contributes a fraction.
-  std::array<Eigen::Vector2d, kMaxSensors> counts = zeros<Eigen::Vector2d>();
+  std::array<Vec2, kMaxSensors> counts = zeros<Vec2>();
   /// Lowest SQUAL reported in the interval (255 when none was reported).
   std::array<std::uint8_t, kMaxSensors> squal{};
   /// OR of the SensorFlag bits reported in the interval.

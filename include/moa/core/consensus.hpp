@@ -45,7 +45,7 @@
 namespace moa {
 
 struct ConsensusOptions {
-  double alpha = 1e-3;  ///< false-rejection rate of the chi-square tests
+  real alpha = 1e-3;  ///< false-rejection rate of the chi-square tests
   NoiseModelOptions noise;
   WheelNoise wheels;
   HoldModel hold;
@@ -76,13 +76,13 @@ class ConsensusEstimator {
   struct Candidate {
     SubsetFit fit;
     SensorMask mask = 0;
-    double cost = 0.0;
+    real cost = 0.0;
   };
   /// A twist a candidate is checked against: the wheels or the prior.
   struct Reference {
-    Eigen::Vector3d x = Eigen::Vector3d::Zero();
-    Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-    Eigen::Matrix3d information = Eigen::Matrix3d::Zero();  ///< covariance^-1
+    Vec3 x = Vec3::Zero();
+    Mat3 covariance = Mat3::Zero();
+    Mat3 information = Mat3::Zero();  ///< covariance^-1
   };
   struct References {
     std::array<Reference, 2> r;
@@ -95,8 +95,8 @@ class ConsensusEstimator {
   ConsensusOptions options_;
   SubsetSolver solver_;
   NoiseModel noise_;
-  std::array<double, 2 * kMaxSensors> threshold_{};  ///< by dof
-  double wheel_threshold_ = 0.0;
+  std::array<real, 2 * kMaxSensors> threshold_{};  ///< by dof
+  real wheel_threshold_ = 0.0;
   // State carried between samples.
   PointMeasurements measurements_;
   Fallback fallback_;

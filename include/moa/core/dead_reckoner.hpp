@@ -10,7 +10,7 @@ namespace moa {
 class DeadReckoner {
  public:
   explicit DeadReckoner(const Pose2& initial = {}) : pose_(initial) {}
-  const Pose2& step(const Twist2& twist, double dt) {
+  const Pose2& step(const Twist2& twist, real dt) {
     pose_ = integrate_exact(pose_, twist, dt);
     return pose_;
   }

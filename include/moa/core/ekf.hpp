@@ -77,15 +77,15 @@
 namespace moa {
 
 /// d pose' / d pose (3x3) of integrate_exact(pose, twist, dt).
-Eigen::Matrix3d exact_step_pose_jacobian(const Pose2& pose, const Twist2& twist, double dt);
+Mat3 exact_step_pose_jacobian(const Pose2& pose, const Twist2& twist, real dt);
 /// d pose' / d twist (3x3) of integrate_exact(pose, twist, dt).
-Eigen::Matrix3d exact_step_twist_jacobian(const Pose2& pose, const Twist2& twist, double dt);
+Mat3 exact_step_twist_jacobian(const Pose2& pose, const Twist2& twist, real dt);
 /// The twist (s_v vx, s_v vy, s_w omega).
-Twist2 scaled_twist(const Twist2& twist, const Eigen::Vector2d& scale);
+Twist2 scaled_twist(const Twist2& twist, const Vec2& scale);
 /// d pose' / d (s_v, s_w) (3x2) of integrate_exact(pose, scaled_twist(twist, scale), dt):
 /// G(scaled twist) [[vx, 0], [vy, 0], [0, omega]].
-Eigen::Matrix<double, 3, 2> exact_step_scale_jacobian(const Pose2& pose, const Twist2& twist,
-                                                      const Eigen::Vector2d& scale, double dt);
+Mat<3, 2> exact_step_scale_jacobian(const Pose2& pose, const Twist2& twist, const Vec2& scale,
+                                    real dt);
 
 struct EkfOptions {
   /// Augments the state with the dead reckoning's scales (s_v, s_w): the
@@ -94,27 +94,27 @@ struct EkfOptions {
   bool estimate_scale = false;
   /// Prior sd of s_v and s_w around 1 (mice resolutions and radii are a
   /// few % off before calibration).
-  Eigen::Vector2d scale_sd{0.05, 0.05};
+  Vec2 scale_sd{0.05, 0.05};
   /// Random walk of s_v and s_w, sd per sqrt(second): a floor that changes, a
   /// sensor that gets dirty. Over a step of dt the variance grows by
   /// scale_random_walk^2 dt.
-  Eigen::Vector2d scale_random_walk{1e-3, 1e-3};
+  Vec2 scale_random_walk{1e-3, 1e-3};
   /// Process-noise floor added to every twist covariance: sd of vx, vy
   /// (m/s) and omega (rad/s) of a twist averaged over 10 ms; white, so over
   /// a step of dt its variance is floor^2 * (0.01 s / dt).
-  Eigen::Vector3d twist_noise_floor{0.05, 0.05, 0.1};
+  Vec3 twist_noise_floor{0.05, 0.05, 0.1};
   /// Further twist noise in proportion to the twist itself (sd = relative *
   /// |v| or |omega| over 10 ms, white like the floor): resolution and
   /// mounting errors grow with speed.
-  double twist_noise_relative = 0.05;
+  real twist_noise_relative = 0.05;
   /// After this many fixes in a row fail the gate the filter is taken to be
   /// lost, not the camera: the next fix is applied after the position and
   /// heading covariance are widened by its innovation.
   int max_consecutive_rejections = 5;
   /// Mahalanobis gate on the innovation: chi-square 2 dof at 1 - 1e-3.
-  double gate_position = 13.815510557964274;
+  real gate_position = 13.815510557964274;
   /// With heading: chi-square 3 dof at 1 - 1e-3.
-  double gate_pose = 16.26623619623813;
+  real gate_pose = 16.26623619623813;
 };
 
 enum class FixResult {
@@ -135,62 +135,58 @@ class PoseEkf {
   /// State (x, y, theta, s_v, s_w); without estimate_scale s = (1, 1) and
   /// its rows of the covariance are zero.
   static constexpr int kStates = 5;
-  using StateCovariance = Eigen::Matrix<double, kStates, kStates>;
+  using StateCovariance = Mat<kStates, kStates>;
 
   /// `covariance`: of the pose; the scales start at 1 with sd
   /// options.scale_sd (when estimate_scale), uncorrelated with the pose.
-  PoseEkf(double t0, const Pose2& initial, const Eigen::Matrix3d& covariance,
-          EkfOptions options = {});
+  PoseEkf(double t0, const Pose2& initial, const Mat3& covariance, EkfOptions options = {});
 
   /// Predicts over (t - dt, t] with the twist and its covariance.
-  void predict(double t, const Twist2& twist, const Eigen::Matrix3d& twist_covariance, double dt);
+  void predict(double t, const Twist2& twist, const Mat3& twist_covariance, real dt);
 
   /// A position fix captured at t (world frame, m) with covariance r (m^2).
-  FixResult update_position(double t, const Eigen::Vector2d& z, const Eigen::Matrix2d& r);
+  FixResult update_position(double t, const Vec2& z, const Mat2& r);
   /// A position and heading fix (heading rad; r 3x3).
-  FixResult update_pose(double t, const Eigen::Vector3d& z, const Eigen::Matrix3d& r);
+  FixResult update_pose(double t, const Vec3& z, const Mat3& r);
 
   const Pose2& pose() const { return pose_; }
   /// Covariance of (x, y, theta).
-  Eigen::Matrix3d covariance() const { return cov_.topLeftCorner<3, 3>(); }
+  Mat3 covariance() const { return cov_.topLeftCorner<3, 3>(); }
   /// (s_v, s_w): (1, 1) unless estimate_scale.
-  const Eigen::Vector2d& scale() const { return scale_; }
+  const Vec2& scale() const { return scale_; }
   /// Covariance of (s_v, s_w); zero unless estimate_scale.
-  Eigen::Matrix2d scale_covariance() const { return cov_.bottomRightCorner<2, 2>(); }
+  Mat2 scale_covariance() const { return cov_.bottomRightCorner<2, 2>(); }
   /// Covariance of the whole state (x, y, theta, s_v, s_w).
   const StateCovariance& state_covariance() const { return cov_; }
   bool estimates_scale() const { return options_.estimate_scale; }
   double time() const { return t_; }
   /// Squared Mahalanobis distance of the last fix's innovation.
-  double last_distance() const { return last_distance_; }
+  real last_distance() const { return last_distance_; }
 
  private:
   struct Step {
     double t_begin, t_end;
     Twist2 twist;
-    Eigen::Matrix3d q;  ///< twist covariance incl. the floor
+    Mat3 q;             ///< twist covariance incl. the floor
     Pose2 pose_before;  ///< state at t_begin
-    Eigen::Vector2d scale_before;
+    Vec2 scale_before;
     StateCovariance cov_before;
   };
-  void propagate(const Twist2& twist, const Eigen::Matrix3d& q, double dt);
+  void propagate(const Twist2& twist, const Mat3& q, real dt);
   template <int M>
-  FixResult update(double t, const Eigen::Matrix<double, M, 1>& z,
-                   const Eigen::Matrix<double, M, M>& r, double gate);
+  FixResult update(double t, const Mat<M, 1>& z, const Mat<M, M>& r, real gate);
   template <int M>
-  FixResult correct(const Eigen::Matrix<double, M, 1>& z, const Eigen::Matrix<double, M, M>& r,
-                    double gate);
+  FixResult correct(const Mat<M, 1>& z, const Mat<M, M>& r, real gate);
   template <int N, int M>
-  FixResult correct_states(const Eigen::Matrix<double, M, 1>& z,
-                           const Eigen::Matrix<double, M, M>& r, double gate);
+  FixResult correct_states(const Mat<M, 1>& z, const Mat<M, M>& r, real gate);
 
   EkfOptions options_;
   double t_;
   Pose2 pose_;
-  Eigen::Vector2d scale_{1.0, 1.0};
+  Vec2 scale_{1.0, 1.0};
   StateCovariance cov_ = StateCovariance::Zero();
   FixedRing<Step, kHistory> history_;
-  double last_distance_ = 0.0;
+  real last_distance_ = 0.0;
   int consecutive_rejections_ = 0;
 };
 

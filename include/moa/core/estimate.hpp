@@ -40,31 +40,30 @@ const char* describe(GeometryError error);
 /// A twist estimate with its covariance.
 struct TwistEstimate {
   Twist2 twist;
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  ///< (vx, vy, omega), SI
+  Mat3 covariance = Mat3::Zero();  ///< (vx, vy, omega), SI
   SensorMask used = 0;
 };
 
 /// The sensor points' robot-frame velocities u_i = G_i^-1 counts_i / dt (m/s).
-std::array<Eigen::Vector2d, kMaxSensors> point_velocities(const SensorArray& array,
-                                                          const ArraySample& sample);
+std::array<Vec2, kMaxSensors> point_velocities(const SensorArray& array, const ArraySample& sample);
 
 /// Weighted least squares over a fixed set of sensors, gain precomputed.
 class LsEstimator {
  public:
   /// Smallest accepted lambda_min / lambda_max of A^T A (omega column in m):
   /// sensors spread over less than ~10 um are refused as coincident.
-  static constexpr double kMinConditionReciprocal = 1e-10;
+  static constexpr real kMinConditionReciprocal = 1e-10;
 
   /// Builds the estimator for the sensors in `used`, or says why not.
   /// `reference_dt` (s) is the nominal sample interval used for the weights.
   static std::variant<LsEstimator, GeometryError> create(const SensorArray& array, SensorMask used,
-                                                         double reference_dt);
+                                                         real reference_dt);
 
   /// The estimate for one sample, nullopt if dt is not positive and finite.
   std::optional<TwistEstimate> estimate(const ArraySample& sample) const;
 
   /// The 3 x 2N gain B from stacked point velocities u to the twist.
-  const Eigen::Matrix<double, 3, Eigen::Dynamic, 0, 3, 2 * kMaxSensors>& gain() const {
+  const Eigen::Matrix<real, 3, Eigen::Dynamic, 0, 3, 2 * kMaxSensors>& gain() const {
     return gain_;
   }
   SensorMask used() const { return used_; }
@@ -75,11 +74,11 @@ class LsEstimator {
   SensorMask used_ = 0;
   int size_ = 0;
   /// B (3 x 2N): twist from stacked point velocities; unused columns zero.
-  Eigen::Matrix<double, 3, Eigen::Dynamic, 0, 3, 2 * kMaxSensors> gain_;
+  Eigen::Matrix<real, 3, Eigen::Dynamic, 0, 3, 2 * kMaxSensors> gain_;
   /// B blockdiag(C_i): twist * dt from stacked counts.
-  Eigen::Matrix<double, 3, Eigen::Dynamic, 0, 3, 2 * kMaxSensors> counts_gain_;
-  Eigen::Matrix3d noise_cov_ = Eigen::Matrix3d::Zero();         ///< sum B_i noise_i^2 B_i^T
-  Eigen::Matrix3d quantisation_cov_ = Eigen::Matrix3d::Zero();  ///< times 1/dt^2
+  Eigen::Matrix<real, 3, Eigen::Dynamic, 0, 3, 2 * kMaxSensors> counts_gain_;
+  Mat3 noise_cov_ = Mat3::Zero();         ///< sum B_i noise_i^2 B_i^T
+  Mat3 quantisation_cov_ = Mat3::Zero();  ///< times 1/dt^2
 };
 
 /// Kim & Lee eqs. (9)-(10): for mice at the vertices of a regular polygon
@@ -88,6 +87,6 @@ class LsEstimator {
 ///   vx = mean u_ix,  vy = mean u_iy,
 ///   omega = mean (-sin(a_i) u_ix + cos(a_i) u_iy) / r,  a_i = theta + i 2 pi/N.
 /// `u` holds the N point velocities (m/s, robot frame).
-Twist2 average_regular_polygon(std::span<const Eigen::Vector2d> u, double r, double theta);
+Twist2 average_regular_polygon(std::span<const Vec2> u, real r, real theta);
 
 }  // namespace moa

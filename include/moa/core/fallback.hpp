@@ -13,19 +13,19 @@ namespace moa {
 /// Covariance of a wheel-odometry twist: wheels slip, more when fast.
 ///   sd(v) = base_v + rel * |v|,  sd(omega) = base_omega + rel * |omega|.
 struct WheelNoise {
-  double base_v = 0.02;      ///< m/s
-  double base_omega = 0.05;  ///< rad/s
-  double relative = 0.1;
-  Eigen::Matrix3d covariance(const Twist2& wheels) const;
+  real base_v = 0.02;      ///< m/s
+  real base_omega = 0.05;  ///< rad/s
+  real relative = 0.1;
+  Mat3 covariance(const Twist2& wheels) const;
 };
 
 /// The twist to use when nothing can be trusted and there are no wheels:
 /// the last good one, its covariance grown by a random walk in acceleration
 /// (accel m/s^2, angular accel rad/s^2) over the time since it was good.
 struct HoldModel {
-  double accel = 1.0;
-  double angular_accel = 5.0;
-  Eigen::Matrix3d grown(const Eigen::Matrix3d& covariance, double elapsed) const;
+  real accel = 1.0;
+  real angular_accel = 5.0;
+  Mat3 grown(const Mat3& covariance, real elapsed) const;
 };
 
 /// What both robust estimators do when no set of sensors can be trusted:
@@ -34,7 +34,7 @@ struct HoldModel {
 class Fallback {
  public:
   /// Records a twist that came from the mice at time t.
-  void good(const Twist2& twist, const Eigen::Matrix3d& covariance, double t) {
+  void good(const Twist2& twist, const Mat3& covariance, double t) {
     last_twist_ = twist;
     last_covariance_ = covariance;
     last_good_t_ = t;
@@ -47,7 +47,7 @@ class Fallback {
 
  private:
   Twist2 last_twist_;
-  Eigen::Matrix3d last_covariance_ = Eigen::Matrix3d::Zero();
+  Mat3 last_covariance_ = Mat3::Zero();
   double last_good_t_ = 0.0;
 };
 

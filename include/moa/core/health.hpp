@@ -47,19 +47,19 @@ namespace moa {
 struct HealthOptions {
   bool enabled = true;
   int frozen_run = 10;             ///< epochs of identical counts
-  double frozen_min_counts = 4.0;  ///< counts on the larger axis
-  double frozen_change = 0.02;     ///< m/s, change of the predicted point velocity
+  real frozen_min_counts = 4.0;    ///< counts on the larger axis
+  real frozen_change = 0.02;       ///< m/s, change of the predicted point velocity
   int frozen_long_run = 100;       ///< epochs of identical counts, whatever the motion
   int zero_run = 5;                ///< epochs of zero counts while moving
-  double zero_speed = 0.02;        ///< m/s, predicted point speed
-  double drift_tau = 2.0;          ///< s, averaging window of the residual
-  double drift_min_speed = 0.05;   ///< m/s, predicted point speed for a drift sample
-  double drift_min_time = 0.5;     ///< s of drift samples before the test acts
-  double drift_suspect = 0.015;    ///< relative scale or yaw (rad)
-  double drift_exclude = 0.03;
-  double drift_release = 0.01;
+  real zero_speed = 0.02;          ///< m/s, predicted point speed
+  real drift_tau = 2.0;            ///< s, averaging window of the residual
+  real drift_min_speed = 0.05;     ///< m/s, predicted point speed for a drift sample
+  real drift_min_time = 0.5;       ///< s of drift samples before the test acts
+  real drift_suspect = 0.015;      ///< relative scale or yaw (rad)
+  real drift_exclude = 0.03;
+  real drift_release = 0.01;
   /// s; 0.5 s cost 1.1 mm on robust-faults' liftoff, seeds 1-5 (four sensors beat three).
-  double probation = 0.1;
+  real probation = 0.1;
   /// Empty when usable, else what is wrong, naming the field.
   const char* validate() const;
 };
@@ -69,7 +69,7 @@ const char* describe(Health health);
 
 class HealthMonitor {
  public:
-  HealthMonitor(int sensors, HealthOptions options, double alpha);
+  HealthMonitor(int sensors, HealthOptions options, real alpha);
 
   /// Frozen and zero tests on the epoch's counts, then the state machine.
   /// Returns the sensors that may be used; sets `excluded` for the others
@@ -83,23 +83,23 @@ class HealthMonitor {
 
   Health health(int i) const { return state_[static_cast<std::size_t>(i)].health; }
   /// Window means of the relative residual (scale, yaw); 0 before any sample.
-  double drift_scale(int i) const;
-  double drift_yaw(int i) const;
+  real drift_scale(int i) const;
+  real drift_yaw(int i) const;
 
  private:
   struct SensorState {
     Health health = Health::kTrusted;
     Exclusion reason = Exclusion::kNone;
     double since = 0.0;  ///< s, when probation began
-    Eigen::Vector2d last_counts{0.0, 0.0};
-    Eigen::Vector2d run_start{0.0, 0.0};  ///< m/s, predicted point velocity when the run began
+    Vec2 last_counts{0.0, 0.0};
+    Vec2 run_start{0.0, 0.0};  ///< m/s, predicted point velocity when the run began
     int repeats = 0, zeros = 0;
-    double sum_par = 0.0, sum_perp = 0.0, weight = 0.0, time = 0.0;
+    real sum_par = 0.0, sum_perp = 0.0, weight = 0.0, time = 0.0;
   };
-  double drift(const SensorState& s) const;
+  real drift(const SensorState& s) const;
 
   HealthOptions options_;
-  double residual_gate_;
+  real residual_gate_;
   int n_;
   std::array<SensorState, kMaxSensors> state_{};
 };

@@ -20,8 +20,8 @@ namespace moa {
 
 /// Robot limits (config key `limits`, docs/guide.md).
 struct RobotLimits {
-  double accel = 2.0;           ///< m/s^2, linear acceleration
-  double angular_accel = 20.0;  ///< rad/s^2, angular acceleration
+  real accel = 2.0;           ///< m/s^2, linear acceleration
+  real angular_accel = 20.0;  ///< rad/s^2, angular acceleration
   /// Empty when usable, else what is wrong, naming the field.
   const char* validate() const;
 };
@@ -31,7 +31,7 @@ class MotionPrior {
   explicit MotionPrior(RobotLimits limits = {}) : limits_(limits) {}
 
   /// Records a trusted twist at time t (s).
-  void trust(const Twist2& twist, const Eigen::Matrix3d& covariance, double t) {
+  void trust(const Twist2& twist, const Mat3& covariance, double t) {
     twist_ = twist;
     covariance_ = covariance;
     t_ = t;
@@ -40,13 +40,13 @@ class MotionPrior {
   bool valid() const { return valid_; }
   const Twist2& twist() const { return twist_; }
   /// P(e) at time t, e = max(t - t_trusted, min_elapsed).
-  Eigen::Matrix3d covariance(double t, double min_elapsed) const;
+  Mat3 covariance(double t, real min_elapsed) const;
   const RobotLimits& limits() const { return limits_; }
 
  private:
   RobotLimits limits_;
   Twist2 twist_;
-  Eigen::Matrix3d covariance_ = Eigen::Matrix3d::Zero();
+  Mat3 covariance_ = Mat3::Zero();
   double t_ = 0.0;
   bool valid_ = false;
 };

@@ -16,7 +16,7 @@ namespace moa {
 struct NoiseModelOptions {
   /// Std. dev. of a point velocity as a fraction of its speed: a mouse's
   /// resolution varies by a few percent with the surface and the height.
-  double relative = 0.02;
+  real relative = 0.02;
   /// Variance multiplier m = min(speed_cap, 1 + (s / (onset * max_speed))^8)
   /// for the predicted point speed s: a sensor near or over its rating weighs
   /// less than one well under it. The cap matters: over its rating a sensor
@@ -26,13 +26,13 @@ struct NoiseModelOptions {
   /// --runs 5 --seed 1` (seeds 1-5; tests use 101 on, docs 201 on),
   /// speed (b), consensus 151.9 mm uncapped, 26.7 mm with a cap of 4, 23.1 mm
   /// with 2, oracle selection 21.3 mm.
-  double speed_onset = 0.8;
-  double speed_cap = 2.0;
+  real speed_onset = 0.8;
+  real speed_cap = 2.0;
   /// SQUAL below this inflates the variance by low_squal_factor.
   int min_squal = 16;
-  double low_squal_factor = 100.0;
+  real low_squal_factor = 100.0;
   /// Counter overflow inflates the variance by this (the counts are clipped).
-  double overflow_factor = 1e4;
+  real overflow_factor = 1e4;
 };
 
 /// Per-sensor covariance of the point velocity u_i (robot frame, m^2/s^2):
@@ -52,12 +52,11 @@ class NoiseModel {
  private:
   int n_;
   NoiseModelOptions options_;
-  std::array<Eigen::Matrix2d, kMaxSensors> c_ =
-      zeros<Eigen::Matrix2d>();  ///< m per count, robot frame
-  std::array<Eigen::Matrix2d, kMaxSensors> quant_ = zeros<Eigen::Matrix2d>();  ///< C C^T / 6
-  std::array<Eigen::Matrix<double, 2, 3>, kMaxSensors> a_ = zeros<Eigen::Matrix<double, 2, 3>>();
-  std::array<double, kMaxSensors> noise2_{};
-  std::array<double, kMaxSensors> max_speed_{};  ///< 0 when not rated
+  std::array<Mat2, kMaxSensors> c_ = zeros<Mat2>();      ///< m per count, robot frame
+  std::array<Mat2, kMaxSensors> quant_ = zeros<Mat2>();  ///< C C^T / 6
+  std::array<Mat<2, 3>, kMaxSensors> a_ = zeros<Mat<2, 3>>();
+  std::array<real, kMaxSensors> noise2_{};
+  std::array<real, kMaxSensors> max_speed_{};  ///< 0 when not rated
 };
 
 }  // namespace moa

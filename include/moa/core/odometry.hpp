@@ -80,8 +80,8 @@ struct OdometryOptions {
   std::optional<Pose2> initial;
   bool fuse_camera = false;            ///< EKF with camera fixes
   double camera_latency = 0.0;         ///< s from a fix's capture to its arrival
-  double camera_sigma = 0.005;         ///< m, fix sd when the fix gives none
-  double camera_heading_sigma = 0.02;  ///< rad, sd of a fix's heading
+  real camera_sigma = 0.005;           ///< m, fix sd when the fix gives none
+  real camera_heading_sigma = 0.02;    ///< rad, sd of a fix's heading
   SekimoriOptions sekimori;
   ConsensusOptions consensus;
   EkfOptions ekf;
@@ -101,9 +101,9 @@ struct OdometryOptions {
 /// standard deviations (m) when the camera gives them.
 struct CameraFix {
   double t = 0.0;  ///< s, capture time
-  Eigen::Vector2d position{0.0, 0.0};
-  std::optional<double> theta;
-  std::optional<Eigen::Vector2d> sigma;
+  Vec2 position{0.0, 0.0};
+  std::optional<real> theta;
+  std::optional<Vec2> sigma;
 };
 
 /// Counts of what happened to the camera fixes.
@@ -117,11 +117,11 @@ struct OdometryStep {
   RobustEstimate estimate;              ///< twist (robot frame), covariance, selection
   Pose2 pose;                           ///< world_T_robot at sample->t
   bool fused = false;                   ///< pose_covariance is the EKF's
-  Eigen::Matrix3d pose_covariance = Eigen::Matrix3d::Zero();  ///< (x, y, theta), with fuse_camera
+  Mat3 pose_covariance = Mat3::Zero();  ///< (x, y, theta), with fuse_camera
   bool scaled = false;  ///< with fuse_camera and ekf.estimate_scale: scale is estimated
   /// The EKF's dead-reckoning scales (s_v, s_w) (PoseEkf::scale()); (1, 1) unless scaled.
-  Eigen::Vector2d scale{1.0, 1.0};
-  Eigen::Matrix2d scale_covariance = Eigen::Matrix2d::Zero();  ///< of (s_v, s_w)
+  Vec2 scale{1.0, 1.0};
+  Mat2 scale_covariance = Mat2::Zero();  ///< of (s_v, s_w)
   /// With self_calibration.enabled: each configured sensor's calibration
   /// (1, 1, 0 for one not selected), by configured index; else null.
   const std::array<SelfCalibrationEstimate, kMaxSensors>* calibration = nullptr;
@@ -140,8 +140,8 @@ enum class OdometryError : std::uint8_t {
 /// A row whose counts imply a sensor-point speed above this is refused: ten
 /// times the rated max_speed, or 50 m/s for an unrated sensor (optical mouse
 /// sensors track at most a few m/s; a count far beyond is a corrupt value).
-inline constexpr double kImpossibleSpeedFactor = 10.0;
-inline constexpr double kImpossibleUnratedSpeed = 50.0;  ///< m/s
+inline constexpr real kImpossibleSpeedFactor = 10.0;
+inline constexpr real kImpossibleUnratedSpeed = 50.0;  ///< m/s
 const char* describe(OdometryError error);
 
 /// A non-owning reference to a callable, as std::function without the heap:
@@ -211,7 +211,7 @@ class Odometry {
   bool estimate(const ArraySample& sample, const std::optional<Twist2>& wheels,
                 RobustEstimate& out);
   void apply_fixes(double t);
-  Eigen::Matrix2d fix_covariance(const CameraFix& fix) const;
+  Mat2 fix_covariance(const CameraFix& fix) const;
 
   OdometryOptions options_;
   int n_;                                    ///< sensors in the configured array
@@ -241,8 +241,8 @@ class Odometry {
   std::optional<OdometryError> deferred_error_;
   std::optional<GeometryError> geometry_error_;
   /// Per configured sensor: m/s per count (G_i^-1), the speed refused.
-  std::array<Eigen::Matrix2d, kMaxSensors> velocity_from_counts_ = zeros<Eigen::Matrix2d>();
-  std::array<double, kMaxSensors> impossible_speed_{};
+  std::array<Mat2, kMaxSensors> velocity_from_counts_ = zeros<Mat2>();
+  std::array<real, kMaxSensors> impossible_speed_{};
   std::optional<SelfCalibration> self_calibration_;
   ArraySample raw_;  ///< the selected sensors' counts before the self-calibration's correction
   std::array<SelfCalibrationEstimate, kMaxSensors> calibration_{};  ///< by configured index

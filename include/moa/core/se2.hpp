@@ -12,64 +12,66 @@
 #include <Eigen/Core>
 #include <cmath>
 
+#include "moa/core/real.hpp"
+
 namespace moa {
 
 /// J = [[0,-1],[1,0]]: rotation by +90 deg; omega x p = omega * J * p in 2-D.
-inline Eigen::Matrix2d skew_unit() {
-  Eigen::Matrix2d j;
+inline Mat2 skew_unit() {
+  Mat2 j;
   j << 0.0, -1.0, 1.0, 0.0;
   return j;
 }
 
 /// R(a) = [[cos a, -sin a], [sin a, cos a]].
-inline Eigen::Matrix2d rotation(double angle) {
-  const double c = std::cos(angle);
-  const double s = std::sin(angle);
-  Eigen::Matrix2d r;
+inline Mat2 rotation(real angle) {
+  const real c = std::cos(angle);
+  const real s = std::sin(angle);
+  Mat2 r;
   r << c, -s, s, c;
   return r;
 }
 
 /// Wraps an angle to (-pi, pi].
-double wrap_angle(double angle);
+real wrap_angle(real angle);
 
 /// Robot velocity in the robot frame.
 struct Twist2 {
-  Eigen::Vector2d v{0.0, 0.0};  ///< m/s, robot frame
-  double omega = 0.0;           ///< rad/s
+  Vec2 v{0.0, 0.0};  ///< m/s, robot frame
+  real omega = 0.0;  ///< rad/s
 
   /// (vx, vy, omega), the ordering used by every 3-vector and 3x3 covariance.
-  Eigen::Vector3d vector() const { return {v.x(), v.y(), omega}; }
-  static Twist2 from_vector(const Eigen::Vector3d& x) { return {{x(0), x(1)}, x(2)}; }
+  Vec3 vector() const { return {v.x(), v.y(), omega}; }
+  static Twist2 from_vector(const Vec3& x) { return {{x(0), x(1)}, x(2)}; }
 };
 
 /// An element of SE(2): a planar pose.
 struct Pose2 {
-  Eigen::Vector2d t{0.0, 0.0};  ///< m
-  double theta = 0.0;           ///< rad, unwrapped
+  Vec2 t{0.0, 0.0};  ///< m
+  real theta = 0.0;  ///< rad, unwrapped
 
   /// a * b: first b, then a (world_T_b = world_T_a * a_T_b).
   Pose2 operator*(const Pose2& b) const { return {t + rotation(theta) * b.t, theta + b.theta}; }
   /// Maps a point of this pose's frame into the parent frame.
-  Eigen::Vector2d operator*(const Eigen::Vector2d& p) const { return rotation(theta) * p + t; }
+  Vec2 operator*(const Vec2& p) const { return rotation(theta) * p + t; }
   Pose2 inverse() const { return {-(rotation(-theta) * t), -theta}; }
 };
 
 /// Below this |omega * dt| (rad) exp() uses the Taylor series of sin(a)/a and
 /// (1 - cos a)/a; at 1e-4 the truncation error of three terms is ~1e-22.
-inline constexpr double kSmallAngle = 1e-4;
+inline constexpr real kSmallAngle = 1e-4;
 
 /// The coefficients of V(phi) = [[s, -c], [c, s]] that exp() and its
 /// Jacobians use: s = sin(phi)/phi, c = (1 - cos(phi))/phi and their
 /// derivatives ds, dc in phi; Taylor series below kSmallAngle.
 struct VTerms {
-  double s, c, ds, dc;
+  real s, c, ds, dc;
 };
-VTerms v_terms(double phi);
+VTerms v_terms(real phi);
 
 /// [[s, -c], [c, s]].
-inline Eigen::Matrix2d v_matrix(double s, double c) {
-  Eigen::Matrix2d v;
+inline Mat2 v_matrix(real s, real c) {
+  Mat2 v;
   v << s, -c, c, s;
   return v;
 }
@@ -78,7 +80,7 @@ inline Eigen::Matrix2d v_matrix(double s, double c) {
 /// exponential map of twist * dt):
 ///   phi = omega dt,  t = V(phi) v dt,  V = [[s, -c], [c, s]],
 ///   s = sin(phi)/phi,  c = (1 - cos(phi))/phi.
-Pose2 exp(const Twist2& twist, double dt);
+Pose2 exp(const Twist2& twist, real dt);
 
 /// The constant twist that carries `from` to `to` in dt seconds, the inverse
 /// of exp (the SE(2) logarithm of from^-1 to, over dt): with
@@ -86,16 +88,16 @@ Pose2 exp(const Twist2& twist, double dt);
 ///   v = V(phi)^-1 d / dt,  omega = phi / dt,
 ///   V^-1 = [[s, c], [-c, s]] / (s^2 + c^2).
 /// Valid for |phi| < 2 pi.
-Twist2 twist_between(const Pose2& from, const Pose2& to, double dt);
+Twist2 twist_between(const Pose2& from, const Pose2& to, real dt);
 
 /// world_T_robot after dt of constant twist, integrated exactly:
 /// pose * exp(twist, dt).
-Pose2 integrate_exact(const Pose2& pose, const Twist2& twist, double dt);
+Pose2 integrate_exact(const Pose2& pose, const Twist2& twist, real dt);
 
 /// The first-order step of Sekimori & Miyazaki eq. (6): the displacement
 /// (v dt) is rotated by the heading at the start of the step,
 ///   X_t = X_{t-1} + R(Theta_{t-1}) v dt,  Theta_t = Theta_{t-1} + omega dt.
 /// Its position error per step is O(omega v dt^2), so O(dt) over a fixed time.
-Pose2 integrate_euler(const Pose2& pose, const Twist2& twist, double dt);
+Pose2 integrate_euler(const Pose2& pose, const Twist2& twist, real dt);
 
 }  // namespace moa

@@ -28,7 +28,7 @@
 namespace moa {
 
 struct SekimoriOptions {
-  double e_th = 4e-8;  ///< m^2, on the per-sample displacement residual E_ij
+  real e_th = 4e-8;    ///< m^2, on the per-sample displacement residual E_ij
   int r_th = -1;       ///< votes needed; -1 means max(1, N - 2)
   WheelNoise wheels;   ///< only for the covariance reported on wheel samples
   HoldModel hold;
@@ -43,7 +43,7 @@ class SekimoriEstimator {
                                          const std::optional<Twist2>& wheels = std::nullopt);
 
   /// E_ij of eq. (4) for the last sample (m^2).
-  double pair_residual(int i, int j) const;
+  real pair_residual(int i, int j) const;
   int r_th() const { return r_th_; }
 
  private:
@@ -53,12 +53,11 @@ class SekimoriEstimator {
   SekimoriOptions options_;
   int r_th_;
   SubsetSolver solver_;
-  std::array<Eigen::Matrix2d, kMaxSensors> c_ =
-      zeros<Eigen::Matrix2d>();  ///< m per count, robot frame
-  std::array<Eigen::Matrix2d, kMaxSensors> quant_ = zeros<Eigen::Matrix2d>();
+  std::array<Mat2, kMaxSensors> c_ = zeros<Mat2>();  ///< m per count, robot frame
+  std::array<Mat2, kMaxSensors> quant_ = zeros<Mat2>();
   /// Unit normals n_ij (4-vectors), pairs i < j in row-major order.
-  std::array<Eigen::Vector4d, kMaxSensors*(kMaxSensors - 1) / 2> normals_{};
-  std::array<double, kMaxSensors*(kMaxSensors - 1) / 2> residual_{};
+  std::array<Vec4, kMaxSensors*(kMaxSensors - 1) / 2> normals_{};
+  std::array<real, kMaxSensors*(kMaxSensors - 1) / 2> residual_{};
   PointMeasurements measurements_;
   Fallback fallback_;
   int pair_index(int i, int j) const { return i * n_ - i * (i + 1) / 2 + (j - i - 1); }

@@ -64,32 +64,32 @@ namespace moa {
 
 struct SelfCalibrationOptions {
   bool enabled = false;
-  double block = 0.1;       ///< s of epochs summed per update
-  double min_speed = 0.05;  ///< m/s, mean predicted point speed of a block
+  real block = 0.1;       ///< s of epochs summed per update
+  real min_speed = 0.05;  ///< m/s, mean predicted point speed of a block
   /// 1/sqrt(s), random walk of a scale (forgetting). Tuned on faults-drift
   /// and sekimori-a seeds 1-2: 0.003 lagged a 10 % drift over 6 s enough to
   /// cost 30-57 mm (the health monitor no longer excludes the corrected
   /// sensor); 0.01 gave 9.2 / 11.6 mm against 9.1 / 6.6 mm without.
-  double scale_walk = 0.01;
-  double yaw_walk = 0.0003;       ///< rad/sqrt(s), random walk of the yaw offset
-  double prior_scale_sd = 0.05;   ///< sd of the initial scale; the covariance cap
-  double prior_yaw_sd = 0.02;     ///< rad, sd of the initial yaw offset; the cap
-  double relative_noise = 0.003;  ///< sd of a block's displacement, fraction of it
+  real scale_walk = 0.01;
+  real yaw_walk = 0.0003;       ///< rad/sqrt(s), random walk of the yaw offset
+  real prior_scale_sd = 0.05;   ///< sd of the initial scale; the covariance cap
+  real prior_yaw_sd = 0.02;     ///< rad, sd of the initial yaw offset; the cap
+  real relative_noise = 0.003;  ///< sd of a block's displacement, fraction of it
   /// An estimate within this of 1 (scale) or 0 (yaw offset, rad) is not
   /// applied: the configured value stands (docs/self-calibration.md).
-  double deadband = 0.02;
-  double gate = 0.3;            ///< relative residual above which a block is not used
-  double runaway_scale = 0.25;  ///< |s - 1| beyond which a sensor is excluded
-  double runaway_yaw = 0.2;     ///< rad, |delta| beyond which a sensor is excluded
-  double apply_step = 5e-4;     ///< change of an estimate that renews the applied correction
+  real deadband = 0.02;
+  real gate = 0.3;            ///< relative residual above which a block is not used
+  real runaway_scale = 0.25;  ///< |s - 1| beyond which a sensor is excluded
+  real runaway_yaw = 0.2;     ///< rad, |delta| beyond which a sensor is excluded
+  real apply_step = 5e-4;     ///< change of an estimate that renews the applied correction
   /// Empty when usable, else what is wrong, naming the field.
   const char* validate() const;
 };
 
 /// One sensor's calibration relative to its configured mount.
 struct SelfCalibrationEstimate {
-  double scale_x = 1.0, scale_y = 1.0;  ///< 1: as configured
-  double yaw_offset = 0.0;              ///< rad
+  real scale_x = 1.0, scale_y = 1.0;  ///< 1: as configured
+  real yaw_offset = 0.0;              ///< rad
 };
 
 class SelfCalibration {
@@ -109,7 +109,7 @@ class SelfCalibration {
     return state_[static_cast<std::size_t>(i)].theta;
   }
   /// Standard deviations of (scale_x, scale_y, yaw_offset).
-  Eigen::Vector3d sd(int i) const;
+  Vec3 sd(int i) const;
   /// Blocks used for sensor i so far.
   long updates(int i) const { return state_[static_cast<std::size_t>(i)].updates; }
   /// The estimate ran away: the sensor is left out (kCalibration).
@@ -121,14 +121,14 @@ class SelfCalibration {
   struct SensorState {
     SelfCalibrationEstimate theta;
     SelfCalibrationEstimate applied;
-    Eigen::Matrix3d p = Eigen::Matrix3d::Zero();
-    Eigen::Vector2d sum_meas{0.0, 0.0}, sum_pred{0.0, 0.0};  ///< m, configured sensor frame
-    double sum_var = 0.0;                                    ///< m^2, prediction variance
-    double time = 0.0;                                       ///< s in the block
-    double last_update = -1.0;                               ///< s; < 0: never
+    Mat3 p = Mat3::Zero();
+    Vec2 sum_meas{0.0, 0.0}, sum_pred{0.0, 0.0};  ///< m, configured sensor frame
+    real sum_var = 0.0;                           ///< m^2, prediction variance
+    real time = 0.0;                              ///< s in the block
+    double last_update = -1.0;                    ///< s; < 0: never
     long updates = 0;
     bool runaway = false;
-    Eigen::Matrix2d correction = Eigen::Matrix2d::Identity();  ///< counts -> corrected counts
+    Mat2 correction = Mat2::Identity();  ///< counts -> corrected counts
   };
   void update(int i, double t);
   void fix_gauge();
@@ -138,8 +138,8 @@ class SelfCalibration {
   int n_;
   SensorArray array_;
   SubsetSolver solver_;
-  std::array<Eigen::Matrix2d, kMaxSensors> velocity_from_counts_ = zeros<Eigen::Matrix2d>();
-  std::array<double, kMaxSensors> metres_per_count_{};
+  std::array<Mat2, kMaxSensors> velocity_from_counts_ = zeros<Mat2>();
+  std::array<real, kMaxSensors> metres_per_count_{};
   std::array<SensorState, kMaxSensors> state_{};
   PointMeasurements points_;
 };

@@ -18,51 +18,47 @@
 
 namespace moa {
 
-inline constexpr double kMetresPerInch = 0.0254;
+inline constexpr real kMetresPerInch = 0.0254;
 
 struct SensorMount {
-  Eigen::Vector2d position{0.0, 0.0};  ///< m, sensor centre in the robot frame
-  double yaw = 0.0;                    ///< rad, sensor x axis in the robot frame
-  double cpi = 800.0;                  ///< nominal counts per inch
-  Eigen::Vector2d scale{1.0, 1.0};     ///< per-axis correction of cpi
+  Vec2 position{0.0, 0.0};             ///< m, sensor centre in the robot frame
+  real yaw = 0.0;                      ///< rad, sensor x axis in the robot frame
+  real cpi = 800.0;                    ///< nominal counts per inch
+  Vec2 scale{1.0, 1.0};                ///< per-axis correction of cpi
   bool mirrored = false;               ///< sensor y axis clockwise from x
-  std::optional<double> max_speed;     ///< m/s, rated tracking speed
-  std::optional<double> noise;         ///< m/s, std. dev. of each velocity axis
+  std::optional<real> max_speed;       ///< m/s, rated tracking speed
+  std::optional<real> noise;           ///< m/s, std. dev. of each velocity axis
 
   /// k = cpi / 0.0254: counts per metre before the per-axis scale.
-  double counts_per_metre() const { return cpi / kMetresPerInch; }
+  real counts_per_metre() const { return cpi / kMetresPerInch; }
 
   /// G_i: maps the sensor point's robot-frame velocity (m/s) to counts/s.
-  Eigen::Matrix2d counts_from_robot_velocity() const;
+  Mat2 counts_from_robot_velocity() const;
   /// G_i^-1: maps counts/s to the sensor point's robot-frame velocity (m/s).
-  Eigen::Matrix2d robot_velocity_from_counts() const;
+  Mat2 robot_velocity_from_counts() const;
 
   /// A_i = [I | J p_i] (2x3): robot twist to the sensor point's velocity,
   /// robot frame. Kim & Lee eq. (6), two rows per mouse.
-  Eigen::Matrix<double, 2, 3> point_jacobian() const;
+  Mat<2, 3> point_jacobian() const;
 
   /// H_i = G_i A_i (2x3): d(counts_i / dt) / d(vx, vy, omega).
-  Eigen::Matrix<double, 2, 3> twist_jacobian() const {
-    return counts_from_robot_velocity() * point_jacobian();
-  }
+  Mat<2, 3> twist_jacobian() const { return counts_from_robot_velocity() * point_jacobian(); }
 
   /// Counts (real valued, before quantisation) for a constant twist over dt.
-  Eigen::Vector2d counts(const Twist2& twist, double dt) const {
-    return twist_jacobian() * twist.vector() * dt;
-  }
+  Vec2 counts(const Twist2& twist, real dt) const { return twist_jacobian() * twist.vector() * dt; }
 
   /// d(counts_i / dt) / d(px, py, yaw, scale_x, scale_y) at a given twist (2x5):
   /// the Jacobian with respect to the mounting parameters, as a calibration
   /// needs it.
-  Eigen::Matrix<double, 2, 5> parameter_jacobian(const Twist2& twist) const;
+  Mat<2, 5> parameter_jacobian(const Twist2& twist) const;
 };
 
 /// A sensor's rated figures (from the manufacturers' datasheets).
 struct SensorPreset {
   const char* name;
-  double cpi;         ///< counts per inch (the default setting)
-  double max_speed;   ///< m/s
-  double frame_rate;  ///< frames (packets) per second
+  real cpi;         ///< counts per inch (the default setting)
+  real max_speed;   ///< m/s
+  real frame_rate;  ///< frames (packets) per second
 };
 
 /// Agilent HDNS-2051 (Sekimori & Miyazaki): 800 cpi, 14 in/s, 2300 Hz.
@@ -70,14 +66,14 @@ inline constexpr SensorPreset kHdns2051{"HDNS-2051", 800.0, 14.0 * kMetresPerInc
 /// Avago ADNS-3080 (Kim & Lee Table I) at their setting: 1600 cpi (400 also
 /// selectable), 40 in/s at 6400 fps (the sensor allows up to 6469 fps).
 inline constexpr SensorPreset kAdns3080{"ADNS-3080", 1600.0, 40.0 * kMetresPerInch, 6400.0};
-inline constexpr double kAdns3080LowCpi = 400.0;
-inline constexpr double kAdns3080MaxFrameRate = 6469.0;
+inline constexpr real kAdns3080LowCpi = 400.0;
+inline constexpr real kAdns3080MaxFrameRate = 6469.0;
 
 /// Kim & Lee eq. (50): the velocity (m/s) along one sensor axis from the sum
 /// of K packets' counts, each packet one frame of 1/fps s:
 ///   v = (sum CNT_j / CPI) / (K / FPS)  in/s,  times 0.0254 for m/s.
-inline double velocity_from_counts(double count_sum, double cpi, int packets, double fps) {
-  return count_sum / cpi / (static_cast<double>(packets) / fps) * kMetresPerInch;
+inline real velocity_from_counts(real count_sum, real cpi, int packets, real fps) {
+  return count_sum / cpi / (static_cast<real>(packets) / fps) * kMetresPerInch;
 }
 
 /// The acquisition microcontroller of Kim & Lee Section V: accumulates the

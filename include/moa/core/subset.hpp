@@ -20,14 +20,14 @@ namespace moa {
 /// Sensor point velocities and their covariances for one sample.
 struct PointMeasurements {
   int size = 0;
-  std::array<Eigen::Vector2d, kMaxSensors> u = zeros<Eigen::Vector2d>();     ///< m/s, robot frame
-  std::array<Eigen::Matrix2d, kMaxSensors> info = zeros<Eigen::Matrix2d>();  ///< S_i^-1, (s/m)^2
+  std::array<Vec2, kMaxSensors> u = zeros<Vec2>();     ///< m/s, robot frame
+  std::array<Mat2, kMaxSensors> info = zeros<Mat2>();  ///< S_i^-1, (s/m)^2
 };
 
 struct SubsetFit {
   Twist2 twist;
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-  double chi2 = 0.0;  ///< whitened residual
+  Mat3 covariance = Mat3::Zero();
+  real chi2 = 0.0;    ///< whitened residual
   int dof = 0;        ///< 2k - 3
 };
 
@@ -40,14 +40,12 @@ class SubsetSolver {
   std::optional<SubsetFit> fit(SensorMask mask, const PointMeasurements& m) const;
 
   /// A_i (2x3) of sensor i.
-  const Eigen::Matrix<double, 2, 3>& jacobian(int i) const {
-    return a_[static_cast<std::size_t>(i)];
-  }
+  const Mat<2, 3>& jacobian(int i) const { return a_[static_cast<std::size_t>(i)]; }
   int size() const { return n_; }
 
  private:
   int n_ = 0;
-  std::array<Eigen::Matrix<double, 2, 3>, kMaxSensors> a_ = zeros<Eigen::Matrix<double, 2, 3>>();
+  std::array<Mat<2, 3>, kMaxSensors> a_ = zeros<Mat<2, 3>>();
 };
 
 }  // namespace moa

@@ -34,7 +34,7 @@ namespace moa {
 struct SensorRow {
   double t = 0.0;  ///< s
   int sensor = 0;  ///< index in the SensorArray
-  Eigen::Vector2d counts{0.0, 0.0};
+  Vec2 counts{0.0, 0.0};
   std::optional<std::uint8_t> squal;
   std::uint8_t flags = 0;
   std::uint8_t faults = 0;  ///< simulated fault bits (faults.csv), for the oracle
@@ -117,7 +117,7 @@ class Synchroniser {
     while (start_of(next_) < t_end) {
       ArraySample& s = slot(next_);
       if (end_of(next_) > t_end) {
-        s.dt = t_end - start_of(next_);
+        s.dt = static_cast<real>(t_end - start_of(next_));
         s.t = t_end;
       }
       sink(static_cast<const ArraySample&>(s));
