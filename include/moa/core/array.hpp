@@ -84,9 +84,9 @@ SensorArray regular_polygon(int n, real r, real theta, const SensorMount& protot
 
 /// All sensors' counts over one common interval (t - dt, t].
 struct ArraySample {
-  double t = 0.0;   ///< s, end of the interval
-  real dt = 0.0;    ///< s, interval length
-  int size = 0;     ///< number of sensors
+  double t = 0.0;  ///< s, end of the interval
+  real dt = 0.0;   ///< s, interval length
+  int size = 0;    ///< number of sensors
   /// Counts in each sensor's own frame accumulated over the interval. Real
   /// valued: a row spread over several intervals contributes a fraction.
   std::array<Vec2, kMaxSensors> counts = zeros<Vec2>();

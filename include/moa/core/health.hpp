@@ -46,16 +46,16 @@ namespace moa {
 
 struct HealthOptions {
   bool enabled = true;
-  int frozen_run = 10;             ///< epochs of identical counts
-  real frozen_min_counts = 4.0;    ///< counts on the larger axis
-  real frozen_change = 0.02;       ///< m/s, change of the predicted point velocity
-  int frozen_long_run = 100;       ///< epochs of identical counts, whatever the motion
-  int zero_run = 5;                ///< epochs of zero counts while moving
-  real zero_speed = 0.02;          ///< m/s, predicted point speed
-  real drift_tau = 2.0;            ///< s, averaging window of the residual
-  real drift_min_speed = 0.05;     ///< m/s, predicted point speed for a drift sample
-  real drift_min_time = 0.5;       ///< s of drift samples before the test acts
-  real drift_suspect = 0.015;      ///< relative scale or yaw (rad)
+  int frozen_run = 10;           ///< epochs of identical counts
+  real frozen_min_counts = 4.0;  ///< counts on the larger axis
+  real frozen_change = 0.02;     ///< m/s, change of the predicted point velocity
+  int frozen_long_run = 100;     ///< epochs of identical counts, whatever the motion
+  int zero_run = 5;              ///< epochs of zero counts while moving
+  real zero_speed = 0.02;        ///< m/s, predicted point speed
+  real drift_tau = 2.0;          ///< s, averaging window of the residual
+  real drift_min_speed = 0.05;   ///< m/s, predicted point speed for a drift sample
+  real drift_min_time = 0.5;     ///< s of drift samples before the test acts
+  real drift_suspect = 0.015;    ///< relative scale or yaw (rad)
   real drift_exclude = 0.03;
   real drift_release = 0.01;
   /// s; 0.5 s cost 1.1 mm on robust-faults' liftoff, seeds 1-5 (four sensors beat three).

@@ -78,10 +78,10 @@ struct OdometryOptions {
   /// world_T_robot at the first epoch's start. Unset: identity, or with
   /// fuse_camera the first fix fed before the first epoch is processed.
   std::optional<Pose2> initial;
-  bool fuse_camera = false;            ///< EKF with camera fixes
-  double camera_latency = 0.0;         ///< s from a fix's capture to its arrival
-  real camera_sigma = 0.005;           ///< m, fix sd when the fix gives none
-  real camera_heading_sigma = 0.02;    ///< rad, sd of a fix's heading
+  bool fuse_camera = false;          ///< EKF with camera fixes
+  double camera_latency = 0.0;       ///< s from a fix's capture to its arrival
+  real camera_sigma = 0.005;         ///< m, fix sd when the fix gives none
+  real camera_heading_sigma = 0.02;  ///< rad, sd of a fix's heading
   SekimoriOptions sekimori;
   ConsensusOptions consensus;
   EkfOptions ekf;

@@ -28,9 +28,9 @@
 namespace moa {
 
 struct SekimoriOptions {
-  real e_th = 4e-8;    ///< m^2, on the per-sample displacement residual E_ij
-  int r_th = -1;       ///< votes needed; -1 means max(1, N - 2)
-  WheelNoise wheels;   ///< only for the covariance reported on wheel samples
+  real e_th = 4e-8;   ///< m^2, on the per-sample displacement residual E_ij
+  int r_th = -1;      ///< votes needed; -1 means max(1, N - 2)
+  WheelNoise wheels;  ///< only for the covariance reported on wheel samples
   HoldModel hold;
 };
 

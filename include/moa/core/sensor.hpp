@@ -21,13 +21,13 @@ namespace moa {
 inline constexpr real kMetresPerInch = 0.0254;
 
 struct SensorMount {
-  Vec2 position{0.0, 0.0};             ///< m, sensor centre in the robot frame
-  real yaw = 0.0;                      ///< rad, sensor x axis in the robot frame
-  real cpi = 800.0;                    ///< nominal counts per inch
-  Vec2 scale{1.0, 1.0};                ///< per-axis correction of cpi
-  bool mirrored = false;               ///< sensor y axis clockwise from x
-  std::optional<real> max_speed;       ///< m/s, rated tracking speed
-  std::optional<real> noise;           ///< m/s, std. dev. of each velocity axis
+  Vec2 position{0.0, 0.0};        ///< m, sensor centre in the robot frame
+  real yaw = 0.0;                 ///< rad, sensor x axis in the robot frame
+  real cpi = 800.0;               ///< nominal counts per inch
+  Vec2 scale{1.0, 1.0};           ///< per-axis correction of cpi
+  bool mirrored = false;          ///< sensor y axis clockwise from x
+  std::optional<real> max_speed;  ///< m/s, rated tracking speed
+  std::optional<real> noise;      ///< m/s, std. dev. of each velocity axis
 
   /// k = cpi / 0.0254: counts per metre before the per-axis scale.
   real counts_per_metre() const { return cpi / kMetresPerInch; }

@@ -27,8 +27,8 @@ struct PointMeasurements {
 struct SubsetFit {
   Twist2 twist;
   Mat3 covariance = Mat3::Zero();
-  real chi2 = 0.0;    ///< whitened residual
-  int dof = 0;        ///< 2k - 3
+  real chi2 = 0.0;  ///< whitened residual
+  int dof = 0;      ///< 2k - 3
 };
 
 class SubsetSolver {
