@@ -7,9 +7,11 @@
 #include "support/synth.hpp"
 
 int main(int argc, char** argv) {
-  if (argc < 2) {
+  // Any argument that looks like an option (--help, -h) prints the usage
+  // instead of becoming a directory of that name.
+  if (argc < 2 || argv[1][0] == '-') {
     std::cerr << "usage: synth_log DIR [DURATION_S [ROW_PERIOD_S]]\n";
-    return 2;
+    return argc < 2 ? 2 : 0;
   }
   const double duration = argc > 2 ? std::atof(argv[2]) : 20.0;
   const auto array = moa::test::skewed_array();
