@@ -53,17 +53,26 @@ void expect_one_line_error(const test::RunResult& r, const std::string& what) {
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
 }
 
+// The check's robot: errors up to 8 mm, 4 deg, 4 % and one sensor mirrored,
+// mixed motion for 20 s, reference noise 5 mm/s and 0.02 rad/s per 10 ms row.
+struct CheckRobot {
+  SensorArray nominal = test::four_sensor_nominal();
+  SensorArray truth;
+  fs::path dir;
+  explicit CheckRobot(const std::string& tag) {
+    std::mt19937_64 rng(31);
+    truth = test::perturbed(nominal, rng, 0.008, 4.0 * std::numbers::pi / 180.0, 0.04, 1);
+    dir = write_reference_log(tag, nominal, truth, test::mixed_motion, 20.0, 0.01, {0.005, 0.02});
+  }
+};
+
 TEST(CalibrateCli, ExactMeetsTheLimitsOnNoisyMixedMotion) {
-  // The check's robot: errors up to 8 mm, 4 deg, 4 % and one sensor
-  // mirrored, mixed motion, reference noise 5 mm/s and 0.02 rad/s per 10 ms
-  // row. The method's 1-sigma here is ~0.1 mm, 0.02 deg, 0.04 %, so the
-  // check's 0.5 mm, 0.2 deg, 0.3 % hold with wide margins.
-  std::mt19937_64 rng(31);
-  const SensorArray nominal = test::four_sensor_nominal();
-  const SensorArray truth =
-      test::perturbed(nominal, rng, 0.008, 4.0 * std::numbers::pi / 180.0, 0.04, 1);
-  const fs::path dir = write_reference_log("cal-exact", nominal, truth, test::mixed_motion, 20.0,
-                                           0.01, {0.005, 0.02});
+  // The method's 1-sigma here is ~0.1 mm, 0.02 deg, 0.04 %, so the check's
+  // 0.5 mm, 0.2 deg, 0.3 % hold with wide margins.
+  const CheckRobot robot("cal-exact");
+  const SensorArray& nominal = robot.nominal;
+  const SensorArray& truth = robot.truth;
+  const fs::path& dir = robot.dir;
   const auto r = test::run_moa(calibrate_args(dir, "exact"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("b: mirrored in the data but not in the nominal config"));
@@ -98,12 +107,8 @@ void zero_omega(const fs::path& wheels) {
 }
 
 TEST(CalibrateCli, ExactRefusesAModelThatDoesNotExplainTheDataUnlessForced) {
-  std::mt19937_64 rng(31);
-  const SensorArray nominal = test::four_sensor_nominal();
-  const SensorArray truth =
-      test::perturbed(nominal, rng, 0.008, 4.0 * std::numbers::pi / 180.0, 0.04, 1);
-  const fs::path dir = write_reference_log("cal-misfit", nominal, truth, test::mixed_motion, 20.0,
-                                           0.01, {0.005, 0.02});
+  const CheckRobot robot("cal-misfit");
+  const fs::path& dir = robot.dir;
   // The same log as it is passes the check, by far.
   const auto good = test::run_moa(calibrate_args(dir, "exact"));
   ASSERT_EQ(good.exit_code, 0) << good.err;
