@@ -102,6 +102,9 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
   if (!(std::isfinite(sample.dt) && sample.dt > 0.0) || sample.size != n_) return std::nullopt;
   RobustEstimate out;
   noise_.measure(sample, fallback_.last_twist(), measurements_, out.noise_flags);
+  // The subsets below (and the health monitor's leave-one-out fits) sum
+  // these terms instead of recomputing them.
+  solver_.prepare(measurements_);
 
   SensorMask candidates = 0;
   for (int i = 0; i < n_; ++i) {
