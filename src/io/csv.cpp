@@ -173,19 +173,10 @@ char* put_fraction(char* out, std::uint64_t significand, int exponent, int n, in
   return put_last_digits(out + whole + 1, fraction, d0, d1, d2);
 }
 
-// significand * 10^exponent (significand > 0, no trailing zeros, at most 17
-// digits), as fmt's general format without a precision lays it out: fixed
-// notation when the decimal exponent of the first digit is in [-4, upper),
-// upper <= 16, else d.ddde+XX with at least two exponent digits. The text
-// is stored eight bytes at a time: bytes past the returned end, up to
-// out + kMaxNumberText - 1, may be overwritten.
-char* put_decimal(char* out, std::uint64_t significand, int exponent, int upper) {
+// put_decimal() (below) of any layout; n is the number of digits.
+char* put_any_decimal(char* out, std::uint64_t significand, int exponent, int upper, int n) {
   constexpr std::uint64_t kZeros = 0x3030303030303030u;  // "00000000"
-  const int n = count_digits(significand);
-  const int first = exponent + n - 1;  // decimal exponent of the first digit
-  if (exponent < 0 && first >= -4 && first < upper) {
-    if (char* end = put_fraction(out, significand, exponent, n, first + 1)) return end;
-  }
+  const int first = exponent + n - 1;                    // decimal exponent of the first digit
   // The digits right-aligned in bytes [0, 24), '0's after them.
   std::uint64_t w[6] = {kZeros, kZeros, kZeros, kZeros, kZeros, kZeros};
   w[2] = digits8(static_cast<std::uint32_t>(significand % 100000000));
@@ -243,6 +234,22 @@ char* put_decimal(char* out, std::uint64_t significand, int exponent, int upper)
   store8(digits, window(w, s));
   store8(digits + 8, window(w, s + 8));
   return digits + n;
+}
+
+// significand * 10^exponent (significand > 0, no trailing zeros, at most 17
+// digits), as fmt's general format without a precision lays it out: fixed
+// notation when the decimal exponent of the first digit is in [-4, upper),
+// upper <= 16, else d.ddde+XX with at least two exponent digits. The text
+// is stored eight bytes at a time: bytes past the returned end, up to
+// out + kMaxNumberText - 1, may be overwritten. The common layouts first,
+// in a function small enough to be inlined into the writers.
+inline char* put_decimal(char* out, std::uint64_t significand, int exponent, int upper) {
+  const int n = count_digits(significand);
+  const int first = exponent + n - 1;  // decimal exponent of the first digit
+  if (exponent < 0 && first >= -4 && first < upper) {
+    if (char* end = put_fraction(out, significand, exponent, n, first + 1)) return end;
+  }
+  return put_any_decimal(out, significand, exponent, upper, n);
 }
 
 // value > 0 as m * 10^-6 when that reads back as value: the shortest text
