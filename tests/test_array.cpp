@@ -2,6 +2,7 @@
 // search at the largest array it searches exhaustively.
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <variant>
 #include <vector>
 
@@ -26,6 +27,13 @@ TEST(SensorArray, HoldsTheMountsItIsGivenInOrder) {
     const auto k = static_cast<std::size_t>(i);
     EXPECT_EQ(a[i].position, given[k].position);
     EXPECT_EQ(a.mounts()[k].cpi, given[k].cpi);
+  }
+}
+
+TEST(SensorMask, CountSensorsIsThePopulationCount) {
+  for (std::uint32_t m = 0; m < (1u << 16); ++m) ASSERT_EQ(count_sensors(m), std::popcount(m)) << m;
+  for (const std::uint32_t m : {0xFFFFFFFFu, 0x80000000u, 0xAAAAAAAAu, 0x12345678u, 0xFFFF0001u}) {
+    EXPECT_EQ(count_sensors(m), std::popcount(m)) << m;
   }
 }
 

@@ -1,11 +1,8 @@
 #include "moa/core/array.hpp"
 
-#include <bit>
 #include <numbers>
 
 namespace moa {
-
-int count_sensors(SensorMask mask) { return std::popcount(mask); }
 
 SensorArray regular_polygon(int n, real r, real theta, const SensorMount& prototype) {
   SensorArray out(n, prototype);

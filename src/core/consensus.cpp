@@ -40,20 +40,33 @@ SensorMask next_same_size(SensorMask m) {
 }
 }  // namespace
 
-bool ConsensusEstimator::consider(SensorMask mask, const References& refs,
+bool ConsensusEstimator::consider(SensorMask mask, References& refs, bool alone,
                                   std::optional<Candidate>& best) const {
   const auto fit = solver_.fit(mask, measurements_);
   if (!fit || fit->chi2 > threshold_[static_cast<std::size_t>(fit->dof)]) return false;
   const bool minority = 2 * count_sensors(mask) <= n_;
+  const bool own_test = minority && options_.motion_prior;
+  if (own_test && !refs.informed) {
+    for (int k = 0; k < refs.size; ++k) {
+      Reference& ref = refs.r[static_cast<std::size_t>(k)];
+      ref.information = ref.covariance.inverse();
+    }
+    refs.informed = true;
+  }
   real cost = fit->chi2;
   for (int k = 0; k < refs.size; ++k) {
     const Reference& ref = refs.r[static_cast<std::size_t>(k)];
     const Vec3 d = fit->twist.vector() - ref.x;
-    const real joint = d.dot((fit->covariance + ref.covariance).inverse() * d);
+    // The joint term ranks the subsets of one size, and tests a minority
+    // without the prior.
+    real joint = 0.0;
+    if (!alone || (minority && !options_.motion_prior)) {
+      joint = d.dot((fit->covariance + ref.covariance).inverse() * d);
+    }
     if (minority) {
       // The reference's covariance alone (the subset's own would let a pair
       // that under-reads alike through); before the prior: the joint one.
-      const real own = options_.motion_prior ? d.dot(ref.information * d) : joint;
+      const real own = own_test ? d.dot(ref.information * d) : joint;
       if (own > wheel_threshold_) return false;
     }
     cost += joint;
@@ -62,25 +75,27 @@ bool ConsensusEstimator::consider(SensorMask mask, const References& refs,
   return true;
 }
 
-std::optional<ConsensusEstimator::Candidate> ConsensusEstimator::search(
-    SensorMask candidates, const References& refs) const {
+std::optional<ConsensusEstimator::Candidate> ConsensusEstimator::search(SensorMask candidates,
+                                                                        References& refs) const {
   std::optional<Candidate> best;
+  const int largest = count_sensors(candidates);
   if (n_ <= kMaxExhaustive) {
     // Largest subsets first; the first size with a consistent subset wins.
     const SensorMask end = SensorMask{1} << n_;
-    for (int k = count_sensors(candidates); k >= 2; --k) {
+    for (int k = largest; k >= 2; --k) {
       for (SensorMask m = all_sensors(k); m < end; m = next_same_size(m)) {
-        if ((m & ~candidates) == 0) consider(m, refs, best);
+        if ((m & ~candidates) == 0) consider(m, refs, k == largest, best);
       }
       if (best) return best;
     }
     return best;
   }
   // Greedy for large arrays: drop the sensor with the largest whitened
-  // residual until the rest is consistent.
+  // residual until the rest is consistent (the first that is wins: no
+  // ranking).
   SensorMask mask = candidates;
   while (count_sensors(mask) >= 2) {
-    if (consider(mask, refs, best)) return best;
+    if (consider(mask, refs, true, best)) return best;
     const auto fit = solver_.fit(mask, measurements_);
     if (!fit) return std::nullopt;
     int worst = -1;
@@ -102,6 +117,9 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
   if (!(std::isfinite(sample.dt) && sample.dt > 0.0) || sample.size != n_) return std::nullopt;
   RobustEstimate out;
   noise_.measure(sample, fallback_.last_twist(), measurements_, out.noise_flags);
+  // The subsets below (and the health monitor's leave-one-out fits) sum
+  // these terms instead of recomputing them.
+  solver_.prepare(measurements_);
 
   SensorMask candidates = 0;
   for (int i = 0; i < n_; ++i) {
@@ -116,7 +134,6 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
     Reference& r = refs.r[static_cast<std::size_t>(refs.size++)];
     r.x = x.vector();
     r.covariance = covariance;
-    r.information = covariance.inverse();
   };
   if (wheels) add(*wheels, options_.wheels.covariance(*wheels));
   if (options_.motion_prior && prior_.valid()) {

@@ -21,6 +21,7 @@ NoiseModel::NoiseModel(const SensorArray& array, NoiseModelOptions options)
 void NoiseModel::measure(const ArraySample& sample, const Twist2& predicted, PointMeasurements& out,
                          std::array<std::uint8_t, kMaxSensors>& flags) const {
   out.size = n_;
+  out.prepared_by = nullptr;
   const Vec3 x = predicted.vector();
   const real inv_dt = 1.0 / sample.dt;
   for (int i = 0; i < n_; ++i) {

@@ -23,10 +23,27 @@ VTerms v_terms(real phi) {
   return {s, c, (std::cos(phi) - s) / phi, (sn - c) / phi};
 }
 
+namespace {
+// s and c of v_terms() alone, by the same operations: exp() has no use for
+// the derivatives, whose cos(phi) is a library call.
+void v_terms_sc(real phi, real& s, real& c) {
+  if (std::abs(phi) < kSmallAngle) {
+    const real p2 = phi * phi;
+    s = 1.0 - p2 / 6.0 + p2 * p2 / 120.0;
+    c = phi / 2.0 - phi * p2 / 24.0 + phi * p2 * p2 / 720.0;
+    return;
+  }
+  const real half = std::sin(phi / 2.0);
+  s = std::sin(phi) / phi;
+  c = 2.0 * half * half / phi;
+}
+}  // namespace
+
 Pose2 exp(const Twist2& twist, real dt) {
   const real phi = twist.omega * dt;
-  const VTerms v = v_terms(phi);
-  return {v_matrix(v.s, v.c) * twist.v * dt, phi};
+  real s = 0.0, c = 0.0;
+  v_terms_sc(phi, s, c);
+  return {v_matrix(s, c) * twist.v * dt, phi};
 }
 
 Twist2 twist_between(const Pose2& from, const Pose2& to, real dt) {

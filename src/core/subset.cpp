@@ -9,17 +9,36 @@ SubsetSolver::SubsetSolver(const SensorArray& array) : n_(array.size()) {
     a_[static_cast<std::size_t>(i)] = array[i].point_jacobian();
 }
 
+void SubsetSolver::prepare(PointMeasurements& m) const {
+  for (int i = 0; i < n_; ++i) {
+    const auto s = static_cast<std::size_t>(i);
+    const Mat<3, 2> at_info = a_[s].transpose() * m.info[s];
+    m.normal[s].noalias() = at_info * a_[s];
+    m.rhs[s].noalias() = at_info * m.u[s];
+  }
+  m.prepared_by = this;
+}
+
 std::optional<SubsetFit> SubsetSolver::fit(SensorMask mask, const PointMeasurements& m) const {
   const int k = count_sensors(mask);
   if (k < 2) return std::nullopt;
   Mat3 normal = Mat3::Zero();
   Vec3 rhs = Vec3::Zero();
-  for (int i = 0; i < n_; ++i) {
-    if (!contains(mask, i)) continue;
-    const auto s = static_cast<std::size_t>(i);
-    const Mat<3, 2> at_info = a_[s].transpose() * m.info[s];
-    normal.noalias() += at_info * a_[s];
-    rhs.noalias() += at_info * m.u[s];
+  if (m.prepared_by == this) {
+    for (int i = 0; i < n_; ++i) {
+      if (!contains(mask, i)) continue;
+      const auto s = static_cast<std::size_t>(i);
+      normal += m.normal[s];
+      rhs += m.rhs[s];
+    }
+  } else {
+    for (int i = 0; i < n_; ++i) {
+      if (!contains(mask, i)) continue;
+      const auto s = static_cast<std::size_t>(i);
+      const Mat<3, 2> at_info = a_[s].transpose() * m.info[s];
+      normal.noalias() += at_info * a_[s];
+      rhs.noalias() += at_info * m.u[s];
+    }
   }
   Mat3 inv;
   bool invertible = false;

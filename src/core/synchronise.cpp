@@ -101,7 +101,9 @@ void Synchroniser::add(const SensorRow& row) {
 
 double Synchroniser::final_time(double t_row) const {
   if (n_ == 0) return t_row;
-  const double oldest = *std::min_element(last_t_.begin(), last_t_.begin() + n_);
+  // The first of the smallest, as std::min_element, without its branches.
+  double oldest = last_t_[0];
+  for (int i = 1; i < n_; ++i) oldest = std::min(oldest, last_t_[static_cast<std::size_t>(i)]);
   return std::max(t_row - options_.max_row_interval, oldest);
 }
 

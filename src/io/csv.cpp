@@ -130,16 +130,53 @@ std::uint64_t window(const std::uint64_t* w, int offset) {
   return w[q] >> r | (w[q + 1] << 1) << (63 - r);
 }
 
-// significand * 10^exponent (significand > 0, no trailing zeros, at most 17
-// digits), as fmt's general format without a precision lays it out: fixed
-// notation when the decimal exponent of the first digit is in [-4, upper),
-// upper <= 16, else d.ddde+XX with at least two exponent digits. The text
-// is stored eight bytes at a time: bytes past the returned end, up to
-// out + kMaxNumberText - 1, may be overwritten.
-char* put_decimal(char* out, std::uint64_t significand, int exponent, int upper) {
+// The last k (1 to 17) digits of the 17-digit string S = d0 D1 D2 (d0 one
+// digit char, D1 and D2 eight digit chars each as from digits8()), at out,
+// from registers: the bytes of a word shifted right by whole bytes drop its
+// first digits. Returns out + k; up to 8 bytes past it may be overwritten.
+char* put_last_digits(char* out, int k, char d0, std::uint64_t d1, std::uint64_t d2) {
+  if (k <= 8) {
+    store8(out, d2 >> (8 * (8 - k)));
+  } else if (k <= 16) {
+    store8(out, d1 >> (8 * (16 - k)));
+    store8(out + k - 8, d2);
+  } else {
+    out[0] = d0;
+    store8(out + 1, d1);
+    store8(out + 9, d2);
+  }
+  return out + k;
+}
+
+// put_decimal() for the layouts of most doubles, fixed notation with
+// digits after the point: d.ddd with at least nine of them after it, or
+// 0.0ddd. Nothing is shifted through memory: S, the significand as 17 digits
+// with leading zeros, is cut at the point (the last -exponent digits are
+// the fraction). Returns nullptr, having written nothing, for other layouts.
+char* put_fraction(char* out, std::uint64_t significand, int exponent, int n, int whole) {
+  const int fraction = -exponent;  // digits after the point
+  if (whole > 0 && fraction < 9) return nullptr;
+  const std::uint64_t high = significand / 100000000;
+  const std::uint64_t d2 = digits8(static_cast<std::uint32_t>(significand % 100000000));
+  const std::uint64_t d1 = digits8(static_cast<std::uint32_t>(high % 100000000));
+  const char d0 = static_cast<char>('0' + high / 100000000);
+  // 1234e-6 -> 0.001234: "0.", -whole zeros, the n digits.
+  if (whole <= 0) {
+    store8(out, 0x3030303030302e30u);  // "0.000000"
+    return put_last_digits(out + 2 - whole, n, d0, d1, d2);
+  }
+  // The whole digits are S[17 - n, 17 - fraction), within S's first eight
+  // bytes (fraction >= 9), so n >= 10: a shift by 17 - n <= 7 bytes.
+  const std::uint64_t first8 = static_cast<unsigned char>(d0) | d1 << 8;
+  store8(out, first8 >> (8 * (17 - n)));
+  out[whole] = '.';
+  return put_last_digits(out + whole + 1, fraction, d0, d1, d2);
+}
+
+// put_decimal() (below) of any layout; n is the number of digits.
+char* put_any_decimal(char* out, std::uint64_t significand, int exponent, int upper, int n) {
   constexpr std::uint64_t kZeros = 0x3030303030303030u;  // "00000000"
-  const int n = count_digits(significand);
-  const int first = exponent + n - 1;  // decimal exponent of the first digit
+  const int first = exponent + n - 1;                    // decimal exponent of the first digit
   // The digits right-aligned in bytes [0, 24), '0's after them.
   std::uint64_t w[6] = {kZeros, kZeros, kZeros, kZeros, kZeros, kZeros};
   w[2] = digits8(static_cast<std::uint32_t>(significand % 100000000));
@@ -197,6 +234,22 @@ char* put_decimal(char* out, std::uint64_t significand, int exponent, int upper)
   store8(digits, window(w, s));
   store8(digits + 8, window(w, s + 8));
   return digits + n;
+}
+
+// significand * 10^exponent (significand > 0, no trailing zeros, at most 17
+// digits), as fmt's general format without a precision lays it out: fixed
+// notation when the decimal exponent of the first digit is in [-4, upper),
+// upper <= 16, else d.ddde+XX with at least two exponent digits. The text
+// is stored eight bytes at a time: bytes past the returned end, up to
+// out + kMaxNumberText - 1, may be overwritten. The common layouts first,
+// in a function small enough to be inlined into the writers.
+inline char* put_decimal(char* out, std::uint64_t significand, int exponent, int upper) {
+  const int n = count_digits(significand);
+  const int first = exponent + n - 1;  // decimal exponent of the first digit
+  if (exponent < 0 && first >= -4 && first < upper) {
+    if (char* end = put_fraction(out, significand, exponent, n, first + 1)) return end;
+  }
+  return put_any_decimal(out, significand, exponent, upper, n);
 }
 
 // value > 0 as m * 10^-6 when that reads back as value: the shortest text

@@ -2,6 +2,7 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string_view>
 
@@ -83,7 +84,26 @@ struct OdometryCsvWriter::Impl {
 
   // ",source,used,excluded" of `e`. It rarely changes from one epoch to the
   // next, so it is composed only when it does.
+  // Whether `e` has the selection of `text`: its source, used sensors, and
+  // the exclusions of the sensors it did not use (Selection as composed
+  // below, compared in place).
+  bool same_selection(const RobustEstimate& e) const {
+    if (!selection || selection->source != e.source || selection->used != e.estimate.used) {
+      return false;
+    }
+    const std::size_t n = std::min(names.size(), static_cast<std::size_t>(kMaxSensors));
+    for (std::size_t i = 0; i < n; ++i) {
+      if (contains(e.estimate.used, static_cast<int>(i))) continue;
+      if (selection->excluded[i] != e.excluded[i] ||
+          selection->noise_flags[i] != e.noise_flags[i]) {
+        return false;
+      }
+    }
+    return true;
+  }
+
   std::string_view selection_text(const RobustEstimate& e) {
+    if (same_selection(e)) return text;
     Selection now{e.source, e.estimate.used, e.excluded, e.noise_flags};
     for (std::size_t i = 0; i < kMaxSensors; ++i) {
       if (i >= names.size() || contains(now.used, static_cast<int>(i))) {
@@ -91,7 +111,6 @@ struct OdometryCsvWriter::Impl {
         now.noise_flags[i] = 0;
       }
     }
-    if (selection && *selection == now) return text;
     selection = now;
     // fmt, not operator+= of a const char*: GCC 12 at -O3 misreads the
     // latter's length (-Wstringop-overflow, a false positive).

@@ -33,7 +33,16 @@ inline SensorMask all_sensors(int n) {
   return n >= 32 ? ~SensorMask{0} : ((SensorMask{1} << n) - 1);
 }
 inline bool contains(SensorMask mask, int i) { return (mask >> i) & 1u; }
-int count_sensors(SensorMask mask);
+/// The number of bits set, counted in the lanes of the word (pairs, then
+/// nibbles, then bytes summed by the multiplication into the top byte):
+/// baseline x86-64 has no popcount instruction and std::popcount is a
+/// library call there.
+inline int count_sensors(SensorMask mask) {
+  mask = mask - ((mask >> 1) & 0x55555555u);
+  mask = (mask & 0x33333333u) + ((mask >> 2) & 0x33333333u);
+  mask = (mask + (mask >> 4)) & 0x0F0F0F0Fu;
+  return static_cast<int>((mask * 0x01010101u) >> 24);
+}
 
 /// Flags a sensor row may carry (log format v1, column `flags`).
 enum SensorFlag : std::uint8_t {

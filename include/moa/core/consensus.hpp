@@ -82,14 +82,19 @@ class ConsensusEstimator {
   struct Reference {
     Vec3 x = Vec3::Zero();
     Mat3 covariance = Mat3::Zero();
-    Mat3 information = Mat3::Zero();  ///< covariance^-1
+    Mat3 information = Mat3::Zero();  ///< covariance^-1, once `informed`
   };
   struct References {
     std::array<Reference, 2> r;
     int size = 0;
+    /// The informations are computed: only minority subsets need them.
+    bool informed = false;
   };
-  std::optional<Candidate> search(SensorMask candidates, const References& refs) const;
-  bool consider(SensorMask mask, const References& refs, std::optional<Candidate>& best) const;
+  std::optional<Candidate> search(SensorMask candidates, References& refs) const;
+  /// `alone`: no other subset of mask's size competes, so its cost (the
+  /// ranking among them) is not computed.
+  bool consider(SensorMask mask, References& refs, bool alone,
+                std::optional<Candidate>& best) const;
 
   int n_;
   ConsensusOptions options_;
