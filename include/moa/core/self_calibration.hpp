@@ -42,7 +42,9 @@
 // bounds; it is still calibrated meanwhile.
 //
 // Deadband: an estimate is applied only once it is deadband (2 %, 0.02 rad)
-// away from the configured value. The estimates of good sensors scatter by
+// away from the configured value, or, for the scales, once their isotropic
+// part g = sqrt(s_x s_y) is isotropic_deadband (1.25 %) away from 1 (then g
+// is applied to an axis that is itself within the band). The estimates of good sensors scatter by
 // up to 0.5 % (scale) and 4 mrad (yaw) on the Table 3 path: a mount position
 // error of 0.2 mm at 0.1 m reads as 0.2 % of scale in rotation, which the
 // three-parameter model cannot tell apart, and applying those cost up to 30
@@ -78,6 +80,10 @@ struct SelfCalibrationOptions {
   /// An estimate within this of 1 (scale) or 0 (yaw offset, rad) is not
   /// applied: the configured value stands (docs/self-calibration.md).
   real deadband = 0.02;
+  /// An isotropic part sqrt(s_x s_y) further than this from 1 is applied to
+  /// both axes even when each is within `deadband` (dust dims both axes
+  /// alike; the good sensors' scatter is mostly one axis against the other).
+  real isotropic_deadband = 0.0125;
   real gate = 0.3;            ///< relative residual above which a block is not used
   real runaway_scale = 0.25;  ///< |s - 1| beyond which a sensor is excluded
   real runaway_yaw = 0.2;     ///< rad, |delta| beyond which a sensor is excluded
