@@ -301,9 +301,9 @@ TEST(SimScenario, UnknownNameListsTheBuiltins) {
   } catch (const io::Error& e) {
     EXPECT_EQ(
         std::string(e.what()),
-        "scenario 'sekimori-c': not a built-in scenario (calibration, differential, faults-dirty, "
-        "faults-drift, faults-liftoff, faults-spikes, faults-stuck, faults-zero, guided, kimlee, "
-        "sekimori-a, sekimori-b) and no such file");
+        "scenario 'sekimori-c': not a built-in scenario (calibration, cruise, differential, "
+        "faults-cruise, faults-dirty, faults-drift, faults-liftoff, faults-spikes, faults-stuck, "
+        "faults-zero, guided, kimlee, sekimori-a, sekimori-b) and no such file");
   }
 }
 

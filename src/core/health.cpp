@@ -67,8 +67,11 @@ SensorMask HealthMonitor::screen(const SubsetSolver& solver, const ArraySample& 
     SensorState& s = state_[k];
     const Vec2 c = sample.counts[k];
     const Vec2 p = solver.jacobian(i) * x;  // predicted point velocity, m/s
-    // Frozen: exact repeats of a count large enough to carry noise.
-    if (c == s.last_counts && c.cwiseAbs().maxCoeff() >= options_.frozen_min_counts) {
+    // Frozen: exact repeats (to 1e-6 counts: the synchroniser's rounding)
+    // of a count large enough to carry noise.
+    const real big = c.cwiseAbs().maxCoeff();
+    if ((c - s.last_counts).cwiseAbs().maxCoeff() <= 1e-6 * std::max<real>(1.0, big) &&
+        big >= options_.frozen_min_counts) {
       ++s.repeats;
     } else {
       s.repeats = 0;

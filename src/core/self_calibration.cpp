@@ -26,6 +26,8 @@ const char* SelfCalibrationOptions::validate() const {
   if (!positive(runaway_yaw)) return "self_calibration.runaway_yaw: must be positive (rad)";
   if (!(std::isfinite(deadband) && deadband >= 0.0))
     return "self_calibration.deadband: must be finite and not negative";
+  if (!(std::isfinite(isotropic_deadband) && isotropic_deadband >= 0.0))
+    return "self_calibration.isotropic_deadband: must be finite and not negative";
   if (!(std::isfinite(apply_step) && apply_step >= 0.0))
     return "self_calibration.apply_step: must be finite and not negative";
   return "";
@@ -71,12 +73,17 @@ void SelfCalibration::renew(int i) {
   if (change < options_.apply_step) return;
   s.applied = s.theta;
   // Within the deadband the configured value stands: the estimate's own
-  // errors (mount positions read as scale in rotation) would cost more.
-  const auto band = [&](real x, real one) {
-    return std::abs(x - one) > options_.deadband ? x : one;
-  };
-  const SelfCalibrationEstimate used{band(s.theta.scale_x, 1.0), band(s.theta.scale_y, 1.0),
-                                     band(s.theta.yaw_offset, 0.0)};
+  // errors (mount positions read as scale in rotation, and the direction of
+  // (s_x, s_y, delta) that a translation in one direction leaves open) would
+  // cost more. Those are mostly one axis against the other; a drift (dust)
+  // dims both axes alike, so the isotropic part g = sqrt(s_x s_y) has a
+  // narrower band: beyond it g stands for an axis inside the wide band.
+  const real g = std::sqrt(s.theta.scale_x * s.theta.scale_y);
+  const real iso = std::abs(g - 1.0) > options_.isotropic_deadband ? g : 1.0;
+  const auto band_scale = [&](real x) { return std::abs(x - 1.0) > options_.deadband ? x : iso; };
+  const SelfCalibrationEstimate used{
+      band_scale(s.theta.scale_x), band_scale(s.theta.scale_y),
+      std::abs(s.theta.yaw_offset) > options_.deadband ? s.theta.yaw_offset : 0.0};
   // counts -> robot velocity (configured), into the configured sensor frame,
   // C^-1 = R(delta) diag(1/s), back to the robot frame and to counts.
   const Mat2& v = velocity_from_counts_[static_cast<std::size_t>(i)];

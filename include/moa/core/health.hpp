@@ -11,7 +11,15 @@
 //    about 0.3 counts of noise, so both axes repeat often (seen on the
 //    faults-liftoff runs with the first rule alone, at 10 epochs); while its
 //    point velocity changes by 0.02 m/s (6 counts per 10 ms epoch at
-//    800 cpi) it cannot.
+//    800 cpi) it cannot. In a cruise at constant speed only the long run
+//    tells: the longest run of a good sensor's repeats (counts >= 4) on
+//    simulator seeds 1-30 of cruise, sekimori-a, sekimori-b, differential
+//    and guided was 22 epochs, and each epoch more about halved how often a
+//    run reached it, so 40 (0.4 s) leaves a margin of 2^-18; a register
+//    frozen in a cruise (one frame's counts repeated: faults-cruise) is out
+//    after 0.4 s instead of 1 s. "Equal" is to 1e-6 counts: a row whose time
+//    is off the epoch grid by a rounding error leaves a fraction of 1e-12
+//    of its counts in the neighbouring epoch.
 //  - zero: c_i = 0 while the predicted point speed |A_i x| is at least
 //    zero_speed, for zero_run epochs in a row (the others move).
 //  - drift: the relative residual against the twist x_(i) of the other
@@ -49,7 +57,7 @@ struct HealthOptions {
   int frozen_run = 10;           ///< epochs of identical counts
   real frozen_min_counts = 4.0;  ///< counts on the larger axis
   real frozen_change = 0.02;     ///< m/s, change of the predicted point velocity
-  int frozen_long_run = 100;     ///< epochs of identical counts, whatever the motion
+  int frozen_long_run = 40;      ///< epochs of identical counts, whatever the motion
   int zero_run = 5;              ///< epochs of zero counts while moving
   real zero_speed = 0.02;        ///< m/s, predicted point speed
   real drift_tau = 2.0;          ///< s, averaging window of the residual
