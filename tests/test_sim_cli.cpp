@@ -172,9 +172,10 @@ TEST(SimCli, UnknownScenarioIsAnErrorAndWritesNothing) {
   const auto r = simulate("sekimori-c", 1, dir);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_THAT(r.err, HasSubstr("scenario 'sekimori-c': not a built-in scenario (calibration, "
-                               "differential, faults-dirty, faults-drift, faults-liftoff, "
-                               "faults-spikes, faults-stuck, faults-zero, guided, kimlee, "
-                               "sekimori-a, sekimori-b) and no such file"));
+                               "differential, faults-dirty, faults-drift, faults-floor, "
+                               "faults-liftoff, faults-spikes, faults-stuck, faults-zero, guided, "
+                               "kimlee, sekimori-a, sekimori-b, selfcal-ramp, selfcal-step) and no "
+                               "such file"));
   EXPECT_FALSE(fs::exists(dir));
 }
 
