@@ -150,8 +150,9 @@ TEST(SelfCalibrationCli, NoCalibrationReasonWithoutSelfCalibrate) {
 
 // GAP (docs/self-calibration.md, Open): a sensor 50 % off (1200 cpi
 // configured as 800) is never reported: its blocks' relative residual (0.5)
-// is over the gate (0.3), so its estimate never moves from 1. Disabled until
-// the self-calibration handles it.
+// is over the gate (0.3), so its estimate never moves from 1 (the consensus
+// leaves m2 out as `inconsistent` instead). Disabled until the
+// self-calibration handles it.
 TEST(SelfCalibrationCli, DISABLED_SensorConfiguredHalfOffIsReportedToo) {
   const RunawayRun r = run_misconfigured(1200, 101, true);
   EXPECT_THAT(r.err, HasSubstr("sensor 'm2': its self-calibration ran away"));
