@@ -402,8 +402,8 @@ TEST(ExperimentCli, KimleeExamplePrintsEquationsAndOurResults) {
 // with --self-calibrate, and its scale plot.
 TEST(ExperimentCli, SelfCalibrationReportPlotsTheScaleOverTime) {
   const fs::path page = test::scratch_dir("experiment-report") / "page.html";
-  const auto r = test::run_moa("experiment self-calibration --runs 1 --seed 101 --report " +
-                               page.string());
+  const auto r =
+      test::run_moa("experiment self-calibration --runs 1 --seed 101 --report " + page.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("report written to " + page.string()));
   const std::string html = test::read_text(page);

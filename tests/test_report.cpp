@@ -377,10 +377,9 @@ TEST(Report, SelfCalibrationIsPlottedPerSensorOverTime) {
   const ReportRun& r = report_run();
   const fs::path dir = test::scratch_dir("report-self-calibration");
   const fs::path cal = dir / "self-calibration.csv";
-  const auto odometry = test::run_moa("odometry --quiet --config " + r.config.string() +
-                                      " --log " + r.dir.string() + " --out " +
-                                      (dir / "o.csv").string() + " --self-calibration " +
-                                      cal.string());
+  const auto odometry =
+      test::run_moa("odometry --quiet --config " + r.config.string() + " --log " + r.dir.string() +
+                    " --out " + (dir / "o.csv").string() + " --self-calibration " + cal.string());
   ASSERT_EQ(odometry.exit_code, 0) << odometry.err;
   std::map<std::string, std::vector<std::vector<double>>> rows;  // sensor -> t, sx, sy
   {

@@ -244,10 +244,9 @@ ReportModel build_report(const ReportInputs& inputs, const ReportOptions& option
       s.yaw_offset.push_back(row.estimate.yaw_offset);
     }
     for (auto& s : all) {
-      m.self_calibration.push_back({decimated(s.t, options.max_points),
-                                    decimated(s.scale_x, options.max_points),
-                                    decimated(s.scale_y, options.max_points),
-                                    decimated(s.yaw_offset, options.max_points)});
+      m.self_calibration.push_back(
+          {decimated(s.t, options.max_points), decimated(s.scale_x, options.max_points),
+           decimated(s.scale_y, options.max_points), decimated(s.yaw_offset, options.max_points)});
     }
   }
 

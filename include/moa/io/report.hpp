@@ -85,9 +85,9 @@ struct SensorSummary {
 /// One sensor's online self-calibration over time (self-calibration.csv),
 /// relative to its configured mount: scale 1 and yaw offset 0 as configured.
 struct ScaleSeries {
-  std::vector<double> t;                ///< s
+  std::vector<double> t;                 ///< s
   std::vector<double> scale_x, scale_y;  ///< counts per configured count
-  std::vector<double> yaw_offset;       ///< rad
+  std::vector<double> yaw_offset;        ///< rad
 };
 
 /// Everything the page shows, computed from the inputs.
