@@ -407,7 +407,7 @@ TEST(ExperimentCli, SelfCalibrationReportPlotsTheScaleOverTime) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("report written to " + page.string()));
   const std::string html = test::read_text(page);
-  EXPECT_THAT(html, HasSubstr("chart-self-calibration"));
+  EXPECT_THAT(html, HasSubstr("<canvas id=\"chart-self-calibration\">"));
   EXPECT_THAT(html, HasSubstr("--self-calibration self-calibration.csv"));
   EXPECT_THAT(html, HasSubstr("with online self-calibration"));
 }

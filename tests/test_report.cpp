@@ -414,10 +414,11 @@ TEST(Report, SelfCalibrationIsPlottedPerSensorOverTime) {
   }
   const std::string page = io::render_report(m);
   EXPECT_THAT(page, HasSubstr("id=\"self-calibration\""));
-  EXPECT_THAT(page, HasSubstr("chart-self-calibration"));
+  EXPECT_THAT(page, HasSubstr("<canvas id=\"chart-self-calibration\">"));
   EXPECT_THAT(page, HasSubstr("\"self_calibration\":[{\"t\":["));
   const std::string without = io::render_report(io::build_report(inputs_of(r)));
-  EXPECT_EQ(without.find("chart-self-calibration"), std::string::npos);
+  EXPECT_EQ(without.find("<canvas id=\"chart-self-calibration\">"), std::string::npos);
+  EXPECT_EQ(without.find("id=\"self-calibration\""), std::string::npos);
   EXPECT_THAT(without, HasSubstr("\"self_calibration\":null"));
 }
 

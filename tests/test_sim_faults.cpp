@@ -164,6 +164,7 @@ TEST(SimFaults, DriftIsALinearRampOrAStep) {
       g += gain(r.sensor, mid) / 23.0;
       any = any || (r.t > 0.0 && inside(r.sensor, mid));
     }
+    for (auto* sum : {&total, &expected, &magnitude}) sum->try_emplace(r.sensor, 0.0, 0.0);
     total[r.sensor] += r.row.counts.cast<double>();
     expected[r.sensor] += g * r.row.clean.cast<double>();
     magnitude[r.sensor] += r.row.clean.cast<double>().cwiseAbs();
