@@ -604,6 +604,8 @@ py::dict error_dict(const TrajectoryError& e) {
   d["rms_translation_m"] = e.rms_translation;
   d["max_heading_rad"] = e.max_heading;
   d["rms_heading_rad"] = e.rms_heading;
+  d["final_translation_m"] = e.final_translation;
+  d["final_heading_rad"] = e.final_heading;
   return d;
 }
 
@@ -825,5 +827,6 @@ true_config, names.)");
 
 truth, odometry: two paths (truth.csv, odometry.csv) or two dicts of arrays
 with t, x, y, theta. Returns a dict: samples, outside_truth_span,
-max_translation_m, rms_translation_m, max_heading_rad, rms_heading_rad.)");
+max_translation_m, rms_translation_m, max_heading_rad, rms_heading_rad,
+final_translation_m, final_heading_rad (the last estimate's).)");
 }

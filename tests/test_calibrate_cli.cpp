@@ -403,6 +403,20 @@ TEST(ExperimentCli, KimleeExamplePrintsEquationsAndOurResults) {
   EXPECT_THAT(j.out, HasSubstr("\"kimlee_rank\": 3"));
 }
 
+// The self-calibration experiment's report page: the representative run
+// with --self-calibrate, and its scale plot.
+TEST(ExperimentCli, SelfCalibrationReportPlotsTheScaleOverTime) {
+  const fs::path page = test::scratch_dir("experiment-report") / "page.html";
+  const auto r =
+      test::run_moa("experiment self-calibration --runs 1 --seed 101 --report " + page.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("report written to " + page.string()));
+  const std::string html = test::read_text(page);
+  EXPECT_THAT(html, HasSubstr("<canvas id=\"chart-self-calibration\">"));
+  EXPECT_THAT(html, HasSubstr("--self-calibration self-calibration.csv"));
+  EXPECT_THAT(html, HasSubstr("with online self-calibration"));
+}
+
 TEST(ExperimentCli, UnknownExperimentIsAnError) {
   expect_one_line_error(test::run_moa("experiment no-such-thing"),
                         "unknown experiment 'no-such-thing' (available: ");

@@ -370,6 +370,58 @@ TEST(Report, CalibratedMountsComeInTheConfigsOrder) {
   }
 }
 
+// --self-calibration: the estimates of `moa odometry --self-calibration` are
+// plotted per sensor over time, each series the file's rows of that sensor
+// (read here line by line); without the input there is no such section.
+TEST(Report, SelfCalibrationIsPlottedPerSensorOverTime) {
+  const ReportRun& r = report_run();
+  const fs::path dir = test::scratch_dir("report-self-calibration");
+  const fs::path cal = dir / "self-calibration.csv";
+  const auto odometry =
+      test::run_moa("odometry --quiet --config " + r.config.string() + " --log " + r.dir.string() +
+                    " --out " + (dir / "o.csv").string() + " --self-calibration " + cal.string());
+  ASSERT_EQ(odometry.exit_code, 0) << odometry.err;
+  std::map<std::string, std::vector<std::vector<double>>> rows;  // sensor -> t, sx, sy
+  {
+    std::ifstream in(cal);
+    std::string line;
+    std::getline(in, line);
+    ASSERT_EQ(line, "t,sensor,scale_x,scale_y,yaw_offset");
+    while (std::getline(in, line)) {
+      std::stringstream ss(line);
+      std::string t, name, sx, sy;
+      std::getline(ss, t, ',');
+      std::getline(ss, name, ',');
+      std::getline(ss, sx, ',');
+      std::getline(ss, sy, ',');
+      rows[name].push_back({std::stod(t), std::stod(sx), std::stod(sy)});
+    }
+  }
+  io::ReportInputs in = inputs_of(r);
+  in.self_calibration = cal;
+  const io::ReportModel m = io::build_report(in);
+  ASSERT_EQ(m.self_calibration.size(), 4u);
+  for (int i = 0; i < 4; ++i) {
+    const auto& series = m.self_calibration[static_cast<std::size_t>(i)];
+    const auto& expected = rows[m.config.names[static_cast<std::size_t>(i)]];
+    ASSERT_EQ(series.t.size(), expected.size()) << i;
+    ASSERT_GE(series.t.size(), 12u) << "12 s: about once a second";
+    for (std::size_t k = 0; k < expected.size(); ++k) {
+      EXPECT_EQ(series.t[k], expected[k][0]);
+      EXPECT_EQ(series.scale_x[k], expected[k][1]);
+      EXPECT_EQ(series.scale_y[k], expected[k][2]);
+    }
+  }
+  const std::string page = io::render_report(m);
+  EXPECT_THAT(page, HasSubstr("id=\"self-calibration\""));
+  EXPECT_THAT(page, HasSubstr("<canvas id=\"chart-self-calibration\">"));
+  EXPECT_THAT(page, HasSubstr("\"self_calibration\":[{\"t\":["));
+  const std::string without = io::render_report(io::build_report(inputs_of(r)));
+  EXPECT_EQ(without.find("<canvas id=\"chart-self-calibration\">"), std::string::npos);
+  EXPECT_EQ(without.find("id=\"self-calibration\""), std::string::npos);
+  EXPECT_THAT(without, HasSubstr("\"self_calibration\":null"));
+}
+
 TEST(Report, OdometryWithoutSelectionColumnsIsPlottedWithoutTimeline) {
   const ReportRun& r = report_run();
   const fs::path dir = test::scratch_dir("report-plain-odometry");
@@ -543,6 +595,18 @@ const BadInput kBadInputs[] = {
        return flags(d, "odom.csv", " --calibration " + (d / "cal.yaml").string());
      },
      "cal.yaml: has no sensor 'd' of"},
+    {"SelfCalibrationWithAnotherSensor",
+     [](const fs::path& d) {
+       write_file(d / "sc.csv", "t,sensor,scale_x,scale_y,yaw_offset\n0,a,1,1,0\n0,e,1,1,0\n");
+       return flags(d, "odom.csv", " --self-calibration " + (d / "sc.csv").string());
+     },
+     "sc.csv: sensor 'e' is not in"},
+    {"SelfCalibrationWithABadScale",
+     [](const fs::path& d) {
+       write_file(d / "sc.csv", "t,sensor,scale_x,scale_y,yaw_offset\n0,a,1,1,0\n1,a,1,-2,0\n");
+       return flags(d, "odom.csv", " --self-calibration " + (d / "sc.csv").string());
+     },
+     "sc.csv:3: column 'scale_y': must be > 0"},
     {"CalibrationWithAnotherSensor",
      [](const fs::path& d) {
        io::RobotConfig c = io::read_config(d / "cal.yaml");

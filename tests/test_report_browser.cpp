@@ -48,11 +48,18 @@ TEST(ReportBrowser, ChromiumDrawsEveryChartWithoutErrors) {
       test::run_moa("odometry --config " + (dir / "robot.yaml").string() + " --log " +
                     dir.string() + " --out " + (dir / "odom.csv").string());
   ASSERT_EQ(odometry.exit_code, 0) << odometry.err;
+  // The self-calibration's estimates of the same log (its own odometry, not plotted).
+  const auto calibrated =
+      test::run_moa("odometry --quiet --config " + (dir / "robot.yaml").string() + " --log " +
+                    dir.string() + " --out " + (dir / "odom-cal.csv").string() +
+                    " --self-calibration " + (dir / "self-calibration.csv").string());
+  ASSERT_EQ(calibrated.exit_code, 0) << calibrated.err;
   const fs::path page = dir / "report.html";
-  const auto report = test::run_moa("report --config " + (dir / "robot.yaml").string() + " --log " +
-                                    dir.string() + " --odometry " + (dir / "odom.csv").string() +
-                                    " --truth " + (dir / "truth.csv").string() + " --calibration " +
-                                    (dir / "cal.yaml").string() + " --out " + page.string());
+  const auto report = test::run_moa(
+      "report --config " + (dir / "robot.yaml").string() + " --log " + dir.string() +
+      " --odometry " + (dir / "odom.csv").string() + " --truth " + (dir / "truth.csv").string() +
+      " --calibration " + (dir / "cal.yaml").string() + " --self-calibration " +
+      (dir / "self-calibration.csv").string() + " --out " + page.string());
   ASSERT_EQ(report.exit_code, 0) << report.err;
 
   const test::BrowserPage loaded = test::load_page(
@@ -68,12 +75,11 @@ TEST(ReportBrowser, ChromiumDrawsEveryChartWithoutErrors) {
   EXPECT_EQ(console.find("CONSOLE"), std::string::npos) << console;
   // Every chart has pixels and its data elements on its canvas: at least one
   // bar per timeline row (4 sensors and the twist source, all used throughout
-  // this noise-free run), hundreds of points on the others.
-  const std::pair<const char*, unsigned long> charts[] = {{"chart-trajectory", 100},
-                                                          {"chart-errors", 100},
-                                                          {"chart-timeline", 5},
-                                                          {"chart-speed", 100},
-                                                          {"chart-layout", 8}};
+  // this noise-free run), hundreds of points on the others; the scales of 4
+  // sensors, 2 axes, about once a second over 10 s.
+  const std::pair<const char*, unsigned long> charts[] = {
+      {"chart-trajectory", 100}, {"chart-errors", 100},          {"chart-timeline", 5},
+      {"chart-speed", 100},      {"chart-self-calibration", 80}, {"chart-layout", 8}};
   for (const auto& [id, least] : charts) {
     const std::string tag = test::tag_of(dom, id);
     EXPECT_THAT(tag, HasSubstr("data-painted=\"1\"")) << id << ": " << tag;

@@ -173,8 +173,9 @@ TEST(SimCli, UnknownScenarioIsAnErrorAndWritesNothing) {
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_THAT(r.err, HasSubstr("scenario 'sekimori-c': not a built-in scenario (calibration, "
                                "cruise, differential, faults-cruise, faults-dirty, "
-                               "faults-drift, faults-liftoff, faults-spikes, faults-stuck, "
-                               "faults-zero, guided, kimlee, sekimori-a, sekimori-b) and no "
+                               "faults-drift, faults-floor, faults-liftoff, faults-spikes, "
+                               "faults-stuck, faults-zero, guided, kimlee, sekimori-a, sekimori-b, "
+                               "selfcal-ramp, selfcal-step) and no "
                                "such file"));
   EXPECT_FALSE(fs::exists(dir));
 }

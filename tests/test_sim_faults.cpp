@@ -2,6 +2,7 @@
 // with the effect its description promises; tracking loss follows speed.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <optional>
@@ -125,6 +126,60 @@ TEST(SimFaults, FaultsAppearOnlyWhereTheScenarioPutsThem) {
   EXPECT_GT(spikes, 0);
   ASSERT_TRUE(stuck_counts.has_value());
   EXPECT_NE(*stuck_counts, Eigen::Vector2i(0, 0));
+}
+
+// Drift, both forms docs/simulator.md names: a linear ramp (m2: gain 1 ->
+// 0.8 over 2 s from t = 1 s, window to 4 s, where the gain is 1 again) and
+// a step (m3: gain 1.25 from t = 2.5 s to past the end, ramp 0: a change of
+// floor). Expected gain of a frame: g(mid) = 1 + (scale - 1) min(1, (mid -
+// start) / ramp) inside [start, end), 1 outside; a row's expected counts are
+// its clean counts times the mean gain of its 23 frames (the counts of one
+// row barely change from frame to frame). Both quantisers carry their
+// remainder, so the running totals of a sensor's counts differ from the
+// expected by at most 0.5 + 1.25 * 0.5 counts, plus what the gain's variation
+// within a row does to a row whose counts also vary: 1e-3 of the total.
+TEST(SimFaults, DriftIsALinearRampOrAStep) {
+  const SimLog log = simulate(parse_scenario(base_scenario(R"(faults:
+  events:
+    - {type: drift, sensor: m2, start: 1.0, end: 4.0, scale: 0.8, ramp: 2}
+    - {type: drift, sensor: m3, start: 2.5, end: 100, scale: 1.25}
+)"),
+                                             "drift.yaml"),
+                              9);
+  const double h = 1.0 / 2300.0;
+  const auto inside = [](int sensor, double mid) {
+    return (sensor == 1 && mid >= 1.0 && mid < 4.0) || (sensor == 2 && mid >= 2.5);
+  };
+  const auto gain = [&](int sensor, double mid) {
+    if (!inside(sensor, mid)) return 1.0;
+    return sensor == 1 ? 1.0 - 0.2 * std::min(1.0, (mid - 1.0) / 2.0) : 1.25;
+  };
+  std::map<int, Eigen::Vector2d> total, expected, magnitude;
+  std::map<int, int> drifting_rows;
+  for (const MiceRecord& r : log.mice) {
+    double g = 0.0;
+    bool any = false;
+    for (int j = 0; j < 23; ++j) {
+      const double mid = r.t - (j + 0.5) * h;
+      g += gain(r.sensor, mid) / 23.0;
+      any = any || (r.t > 0.0 && inside(r.sensor, mid));
+    }
+    for (auto* sum : {&total, &expected, &magnitude}) sum->try_emplace(r.sensor, 0.0, 0.0);
+    total[r.sensor] += r.row.counts.cast<double>();
+    expected[r.sensor] += g * r.row.clean.cast<double>();
+    magnitude[r.sensor] += r.row.clean.cast<double>().cwiseAbs();
+    const double tol = 0.5 + 1.25 * 0.5 + 1e-3 * magnitude[r.sensor].maxCoeff();
+    EXPECT_LE((total[r.sensor] - expected[r.sensor]).cwiseAbs().maxCoeff(), tol)
+        << "t " << r.t << " sensor " << r.sensor;
+    EXPECT_EQ((r.row.faults & kFaultDrift) != 0, any) << "t " << r.t << " sensor " << r.sensor;
+    if (any) ++drifting_rows[r.sensor];
+  }
+  // The drifts changed the counts by far more than the tolerance: 20 % and 25 %
+  // of hundreds of counts per second.
+  EXPECT_GT(drifting_rows[1], 250);
+  EXPECT_GT(drifting_rows[2], 200);
+  EXPECT_EQ(drifting_rows.count(0), 0u);
+  EXPECT_EQ(drifting_rows.count(3), 0u);
 }
 
 TEST(SimFaults, TrackingLossNeverBelowRatedSpeed) {

@@ -228,6 +228,38 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"event after the run",
                 with("faults:\n  events:\n    - {type: stuck, sensor: m1, start: 5, end: 6}\n"),
                 "s.yaml:8: key 'faults.events[0].start': after the end of the run (1 s)"},
+        BadCase{"drift without scale",
+                with("faults:\n  events:\n    - {type: drift, sensor: m1, start: 0, end: 1}\n"),
+                "s.yaml:8: missing key 'faults.events[0].scale'"},
+        BadCase{"drift scale zero",
+                with("faults:\n  events:\n    - {type: drift, sensor: m1, start: 0, end: 1, "
+                     "scale: 0}\n"),
+                "s.yaml:8: key 'faults.events[0].scale': must be > 0 (found 0)"},
+        BadCase{"drift scale negative",
+                with("faults:\n  events:\n    - {type: drift, sensor: m1, start: 0, end: 1, "
+                     "scale: -0.5}\n"),
+                "s.yaml:8: key 'faults.events[0].scale': must be > 0 (found -0.5)"},
+        BadCase{"drift scale not finite",
+                with("faults:\n  events:\n    - {type: drift, sensor: m1, start: 0, end: 1, "
+                     "scale: .nan}\n"),
+                "s.yaml:8: key 'faults.events[0].scale': '.nan' is not a finite number"},
+        BadCase{"drift ramp negative",
+                with("faults:\n  events:\n    - {type: drift, sensor: m1, start: 0, end: 1, "
+                     "scale: 0.9, ramp: -1}\n"),
+                "s.yaml:8: key 'faults.events[0].ramp': must be >= 0 (found -1)"},
+        BadCase{"drift ramp not a number",
+                with("faults:\n  events:\n    - {type: drift, sensor: m1, start: 0, end: 1, "
+                     "scale: 0.9, ramp: soon}\n"),
+                "s.yaml:8: key 'faults.events[0].ramp': 'soon' is not a number"},
+        BadCase{"drift ramp infinite",
+                with("faults:\n  events:\n    - {type: drift, sensor: m1, start: 0, end: 1, "
+                     "scale: 0.9, ramp: .inf}\n"),
+                "s.yaml:8: key 'faults.events[0].ramp': '.inf' is not a finite number"},
+        BadCase{"key of another event type on a drift",
+                with("faults:\n  events:\n    - {type: drift, sensor: m1, start: 0, end: 1, "
+                     "scale: 0.9, retained: 1}\n"),
+                "s.yaml:8: unknown key 'faults.events[0].retained' (known here: type, sensor, "
+                "start, end, scale, ramp)"},
         BadCase{"dirty without retained",
                 with("faults:\n  events:\n    - {type: dirty, sensor: m1, start: 0, end: 1}\n"),
                 "s.yaml:8: missing key 'faults.events[0].retained'"},
@@ -302,8 +334,9 @@ TEST(SimScenario, UnknownNameListsTheBuiltins) {
     EXPECT_EQ(
         std::string(e.what()),
         "scenario 'sekimori-c': not a built-in scenario (calibration, cruise, differential, "
-        "faults-cruise, faults-dirty, faults-drift, faults-liftoff, faults-spikes, faults-stuck, "
-        "faults-zero, guided, kimlee, sekimori-a, sekimori-b) and no such file");
+        "faults-cruise, faults-dirty, faults-drift, faults-floor, faults-liftoff, faults-spikes, "
+        "faults-stuck, faults-zero, guided, kimlee, sekimori-a, sekimori-b, selfcal-ramp, "
+        "selfcal-step) and no such file");
   }
 }
 

@@ -64,7 +64,9 @@ int run_evaluate(const EvaluateArgs& args) {
         .member("max_translation_m", e.max_translation)
         .member("rms_translation_m", e.rms_translation)
         .member("max_heading_rad", e.max_heading)
-        .member("rms_heading_rad", e.rms_heading);
+        .member("rms_heading_rad", e.rms_heading)
+        .member("final_translation_m", e.final_translation)
+        .member("final_heading_rad", e.final_heading);
     if (!references.empty()) {
       json.key("references").begin_array();
       for (const ErrorReference& r : references) {

@@ -21,6 +21,7 @@ struct ReportArgs {
   std::string odometry;
   std::string truth;
   std::string calibration;
+  std::string self_calibration;
   std::string title;
   std::string out;
   std::size_t max_points = io::ReportOptions{}.max_points;
@@ -33,9 +34,11 @@ int run_report(const ReportArgs& args) {
   inputs.odometry = args.odometry;
   if (!args.truth.empty()) inputs.truth = args.truth;
   if (!args.calibration.empty()) inputs.calibration = args.calibration;
+  if (!args.self_calibration.empty()) inputs.self_calibration = args.self_calibration;
   inputs.title = args.title;
   std::vector<std::filesystem::path> read{inputs.config, inputs.odometry, inputs.truth.value_or(""),
-                                          inputs.calibration.value_or("")};
+                                          inputs.calibration.value_or(""),
+                                          inputs.self_calibration.value_or("")};
   try {
     const auto log_files = io::resolve_log(inputs.log).files();
     read.insert(read.end(), log_files.begin(), log_files.end());
@@ -65,6 +68,9 @@ void add_report(CLI::App& app, Action& action) {
   cmd->add_option("--truth", args->truth, "truth.csv (t,x,y,theta): adds the error plots");
   cmd->add_option("--calibration", args->calibration,
                   "Calibrated config (YAML, moa calibrate): nominal and calibrated mounts");
+  cmd->add_option("--self-calibration", args->self_calibration,
+                  "self-calibration.csv (moa odometry --self-calibration): each sensor's "
+                  "estimated scale over time");
   cmd->add_option("--title", args->title, "Page title (default: after the log directory)");
   cmd->add_option("--max-points", args->max_points,
                   "Most points per plotted series; longer runs are binned in time")

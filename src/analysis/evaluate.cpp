@@ -47,6 +47,10 @@ void TrajectoryErrorAccumulator::add(double t, const Pose2& estimate) {
   }
   const double dp = (estimate.t - truth->t).norm();
   const double dh = std::abs(wrap_angle(estimate.theta - truth->theta));
+  if (e_.samples == 0 || t >= last_t_) {
+    e_.final_translation = dp;
+    e_.final_heading = dh;
+  }
   ++e_.samples;
   last_t_ = std::max(last_t_, t);
   e_.max_translation = std::max(e_.max_translation, dp);

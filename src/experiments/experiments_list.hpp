@@ -10,5 +10,6 @@ Result sekimori_fig6(const Options& options);
 Result robust_faults(const Options& options);
 Result kimlee_example(const Options& options);
 Result calibration_crb(const Options& options);
+Result self_calibration(const Options& options);
 
 }  // namespace moa::experiments

@@ -26,6 +26,10 @@ constexpr Experiment kAll[] = {
      "Sekimori & Miyazaki Table 4: max errors of wheels, 2 mice, voting, consensus, oracle "
      "(default 10 runs)",
      sekimori_table4},
+    {"self-calibration",
+     "Online self-calibration of a drifting and a stepping sensor scale: estimated vs true scale "
+     "over time, error with and without, oracle (default 5 runs)",
+     self_calibration},
 };
 
 }  // namespace

@@ -27,18 +27,22 @@ constexpr ExperimentReportRecipe kRecipes[] = {
     {"sekimori-fig6", "sekimori-b", "consensus", true},
     {"kimlee-example", "kimlee", "ls", false},
     {"calibration-crb", "calibration", "consensus", false},
+    {"self-calibration", "selfcal-ramp", "consensus", false, true},
 };
 
-/// What `moa odometry --estimator E [--fuse-camera]` writes, into `out`.
+/// What `moa odometry --estimator E [--fuse-camera] [--self-calibration
+/// CAL]` writes, into `out` (and `calibration`).
 void write_odometry(const fs::path& log, const ExperimentReportRecipe& recipe,
-                    double camera_latency, const fs::path& out) {
+                    double camera_latency, const fs::path& out, const fs::path& calibration) {
   const fs::path config_path = log / "robot.yaml";
   const io::RobotConfig config = io::read_config(config_path);
   OdometryOptions options;
   options.estimator = *estimator_from_name(recipe.estimator);
   options.fuse_camera = recipe.fuse_camera;
   options.camera_latency = camera_latency;
-  io::write_odometry(config, config_path.string(), io::resolve_log(log), options, out);
+  options.self_calibration.enabled = recipe.self_calibrate;
+  io::write_odometry(config, config_path.string(), io::resolve_log(log), options, out, {},
+                     recipe.self_calibrate ? calibration : fs::path{});
 }
 
 }  // namespace
@@ -57,22 +61,26 @@ void write_experiment_report(const ExperimentReportRecipe& recipe, std::uint64_t
   const fs::path log = dir.path() / "log";
   sim::write_log(scenario, seed, log);
   const fs::path odometry = dir.path() / "odometry.csv";
-  write_odometry(log, recipe, scenario.camera.latency, odometry);
+  const fs::path calibration = dir.path() / "self-calibration.csv";
+  write_odometry(log, recipe, scenario.camera.latency, odometry, calibration);
   io::ReportInputs inputs;
   inputs.config = log / "robot.yaml";
   inputs.log = log;
   inputs.odometry = odometry;
   inputs.truth = log / "truth.csv";
-  inputs.title = fmt::format("moa experiment {}: scenario {}, seed {}, {} estimator{}",
+  if (recipe.self_calibrate) inputs.self_calibration = calibration;
+  inputs.title = fmt::format("moa experiment {}: scenario {}, seed {}, {} estimator{}{}",
                              recipe.experiment, recipe.scenario, seed, recipe.estimator,
-                             recipe.fuse_camera ? " with camera fixes (EKF)" : "");
+                             recipe.fuse_camera ? " with camera fixes (EKF)" : "",
+                             recipe.self_calibrate ? " with online self-calibration" : "");
   inputs.note = fmt::format(
       "The run of `moa simulate --scenario {} --seed {}`, dead reckoning as `moa odometry "
-      "--estimator {}{}`; its files were temporary.",
+      "--estimator {}{}{}`; its files were temporary.",
       recipe.scenario, seed, recipe.estimator,
       recipe.fuse_camera
           ? fmt::format(" --fuse-camera --camera-latency {}", scenario.camera.latency)
-          : std::string{});
+          : std::string{},
+      recipe.self_calibrate ? " --self-calibration self-calibration.csv" : "");
   io::write_report(inputs, out);
 }
 

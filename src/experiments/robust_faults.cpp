@@ -1,8 +1,10 @@
 // `moa experiment robust-faults`: every fault the simulator makes, one kind
 // at a time (built-in scenarios faults-*: a 2 s window on each sensor in
 // turn along the Table 3 path at speed (a); tracking loss is speed (b)'s own
-// over-speed fault; drift on one sensor for the rest of the run), against plain least squares,
-// Sekimori & Miyazaki's voting, the consensus and oracle selection.
+// over-speed fault; drift, linear or a step at a change of floor, on one
+// sensor for the rest of the run), against plain least squares, Sekimori &
+// Miyazaki's voting, the consensus, the consensus with online
+// self-calibration (`--self-calibrate`) and oracle selection.
 #include <fmt/core.h>
 
 #include <numbers>
@@ -31,16 +33,22 @@ const FaultCase kCases[] = {
     {"stuck", "faults-stuck", "counts frozen at the last frame's"},
     {"zero reading", "faults-zero", "zero counts, SQUAL 80, no lift flag"},
     {"drift", "faults-drift", "m2's scale 1 -> 0.9 over 6 s from t = 1 s, then held"},
+    {"drift, step", "faults-floor", "m2's scale steps 1 -> 0.9 at t = 5 s (change of floor)"},
 };
 
 struct MethodRow {
   const char* name;
+  const char* column;  ///< the table's header
   EstimatorKind estimator;
+  bool self_calibrate;
 };
-const MethodRow kMethods[] = {{"least squares, all", EstimatorKind::kLs},
-                              {"voting (Sekimori)", EstimatorKind::kSekimori},
-                              {"consensus", EstimatorKind::kConsensus},
-                              {"oracle selection", EstimatorKind::kOracle}};
+const MethodRow kMethods[] = {
+    {"least squares, all", "least squares, all", EstimatorKind::kLs, false},
+    {"voting (Sekimori)", "voting (Sekimori)", EstimatorKind::kSekimori, false},
+    {"consensus", "consensus", EstimatorKind::kConsensus, false},
+    {"consensus + self-calibration", "+ self-calibration", EstimatorKind::kConsensus, true},
+    {"oracle selection", "oracle selection", EstimatorKind::kOracle, false}};
+constexpr std::size_t kConsensus = 2, kSelfCalibrated = 3, kOracle = 4;
 constexpr std::size_t kMethodCount = std::size(kMethods);
 constexpr std::size_t kCaseCount = std::size(kCases);
 
@@ -60,6 +68,7 @@ Result robust_faults(const Options& options) {
       for (std::size_t m = 0; m < kMethodCount; ++m) {
         Method method{kMethods[m].name, {}};
         method.options.estimator = kMethods[m].estimator;
+        method.options.self_calibration.enabled = kMethods[m].self_calibrate;
         records[c][m].push_back(run.run(method));
       }
     }
@@ -86,7 +95,7 @@ Result robust_faults(const Options& options) {
       "(seeds {}..{}) of the maximum translation (mm) and heading (deg) error.\n\n",
       runs, options.seed, last);
   text += fmt::format("{:<18}", "fault");
-  for (const auto& m : kMethods) text += fmt::format(" | {:>18}", m.name);
+  for (const auto& m : kMethods) text += fmt::format(" | {:>18}", m.column);
   text += "\n";
   for (std::size_t c = 0; c < kCaseCount; ++c) {
     text += fmt::format("{:<18}", kCases[c].name);
@@ -101,8 +110,8 @@ Result robust_faults(const Options& options) {
   // of the oracle's mean (sd over runs / sqrt(runs), both added), and where not.
   text += "\n";
   for (std::size_t c = 0; c < kCaseCount; ++c) {
-    const MeanError consensus = mean_error(records[c][2]);
-    const MeanError oracle = mean_error(records[c][3]);
+    const MeanError consensus = mean_error(records[c][kConsensus]);
+    const MeanError oracle = mean_error(records[c][kOracle]);
     const double se = std::sqrt((consensus.max_translation.sd * consensus.max_translation.sd +
                                  oracle.max_translation.sd * oracle.max_translation.sd) /
                                 runs);
@@ -112,6 +121,21 @@ Result robust_faults(const Options& options) {
                         gap <= 2.0 * se ? "at the oracle (within 2 standard errors)"
                                         : fmt::format("{:.1f} mm worse ({:.1f} standard errors)",
                                                       1e3 * gap, se > 0 ? gap / se : 0.0));
+  }
+  // The consensus with self-calibration against without it: the paired
+  // difference of the max error per seed, its mean and standard error.
+  text += "\n";
+  for (std::size_t c = 0; c < kCaseCount; ++c) {
+    std::vector<double> d;
+    for (std::size_t k = 0; k < records[c][kConsensus].size(); ++k) {
+      d.push_back(records[c][kSelfCalibrated][k].error.max_translation -
+                  records[c][kConsensus][k].error.max_translation);
+    }
+    const Spread diff = spread(d);
+    text += fmt::format(
+        "{}: self-calibration changes the consensus's max error by {:+.1f} +- {:.1f} mm (paired "
+        "mean +- its standard error)\n",
+        kCases[c].name, 1e3 * diff.mean, 1e3 * diff.sd / std::sqrt(static_cast<double>(runs)));
   }
   text += "\n";
   for (const auto& c : kCases) text += fmt::format("{}: {}\n", c.name, c.describes);

@@ -8,6 +8,7 @@
 
 #include "moa/io/evaluate.hpp"
 #include "moa/io/odometry_run.hpp"
+#include "moa/io/self_calibration_csv.hpp"
 #include "moa/sim/log_writer.hpp"
 #include "moa/sim/scenario.hpp"
 
@@ -34,11 +35,16 @@ std::vector<std::string> odometry_flags(const OdometryOptions& o, const io::Robo
     flags.insert(flags.end(), {"--camera-latency", fmt::format("{}", o.camera_latency)});
   }
   if (o.rate != d.rate) flags.insert(flags.end(), {"--rate", fmt::format("{}", o.rate)});
+  if (o.self_calibration.enabled) flags.emplace_back("--self-calibrate");
   // What the command line has no flag for must stay at its default.
   if (o.max_row_interval != d.max_row_interval || o.max_gap != d.max_gap || o.initial ||
       o.camera_sigma != d.camera_sigma || o.camera_heading_sigma != d.camera_heading_sigma ||
       o.sekimori.e_th != d.sekimori.e_th || o.sekimori.r_th != d.sekimori.r_th ||
-      o.consensus.alpha != d.consensus.alpha) {
+      o.consensus.alpha != d.consensus.alpha ||
+      o.self_calibration.scale_walk != d.self_calibration.scale_walk ||
+      o.self_calibration.deadband != d.self_calibration.deadband ||
+      o.self_calibration.runaway_scale != d.self_calibration.runaway_scale ||
+      o.self_calibration.runaway_yaw != d.self_calibration.runaway_yaw) {
     throw std::invalid_argument("odometry_flags: an option the experiments do not vary");
   }
   return flags;
@@ -68,16 +74,26 @@ SimulatedRun::~SimulatedRun() {
   fs::remove_all(dir_, ignored);
 }
 
-RunRecord SimulatedRun::run(const Method& method) const {
+RunRecord SimulatedRun::run(const Method& method, bool keep_calibration) const {
   const fs::path config = dir_ / "robot.yaml";
-  const fs::path odometry = dir_ / fmt::format("odometry-{}.csv", runs_++);
-  io::write_odometry(config_, config.string(), io::resolve_log(dir_), method.options, odometry);
+  const int k = runs_++;
+  const fs::path odometry = dir_ / fmt::format("odometry-{}.csv", k);
+  const bool calibration = keep_calibration && method.options.self_calibration.enabled;
+  const fs::path estimates =
+      calibration ? dir_ / fmt::format("self-calibration-{}.csv", k) : fs::path{};
+  io::write_odometry(config_, config.string(), io::resolve_log(dir_), method.options, odometry, {},
+                     estimates);
   RunRecord r;
   r.seed = seed_;
   r.error = io::evaluate_files(dir_ / "truth.csv", odometry);
   fs::remove(odometry);
+  if (calibration) {
+    r.calibration = io::read_self_calibration_csv(estimates);
+    fs::remove(estimates);
+  }
   std::string flags;
   for (const auto& f : odometry_flags(method.options, config_)) flags += " " + f;
+  if (calibration) flags += " --self-calibration $OUT/self-calibration.csv";
   r.reproduce = {
       fmt::format("moa simulate --scenario {} --seed {} --out $OUT", scenario_, seed_),
       fmt::format("moa odometry --config $OUT/robot.yaml --log $OUT{} --out $OUT/odometry.csv",
@@ -106,14 +122,15 @@ Spread spread(const std::vector<double>& values) {
 namespace moa::experiments {
 
 MeanError mean_error(const std::vector<RunRecord>& runs) {
-  std::vector<double> a, b, c, d;
+  std::vector<double> a, b, c, d, f;
   for (const auto& r : runs) {
     a.push_back(r.error.max_translation);
     b.push_back(r.error.rms_translation);
     c.push_back(r.error.max_heading);
     d.push_back(r.error.rms_heading);
+    f.push_back(r.error.final_translation);
   }
-  return {spread(a), spread(b), spread(c), spread(d)};
+  return {spread(a), spread(b), spread(c), spread(d), spread(f)};
 }
 
 void write_runs(io::JsonWriter& json, const std::vector<RunRecord>& runs) {
@@ -122,6 +139,7 @@ void write_runs(io::JsonWriter& json, const std::vector<RunRecord>& runs) {
       .member("rms_translation_m", m.rms_translation.mean)
       .member("max_heading_rad", m.max_heading.mean)
       .member("rms_heading_rad", m.rms_heading.mean)
+      .member("final_translation_m", m.final_translation.mean)
       .member("sd_max_translation_m", m.max_translation.sd)
       .member("sd_max_heading_rad", m.max_heading.sd);
   json.key("runs").begin_array();
@@ -132,6 +150,8 @@ void write_runs(io::JsonWriter& json, const std::vector<RunRecord>& runs) {
         .member("rms_translation_m", r.error.rms_translation)
         .member("max_heading_rad", r.error.max_heading)
         .member("rms_heading_rad", r.error.rms_heading)
+        .member("final_translation_m", r.error.final_translation)
+        .member("final_heading_rad", r.error.final_heading)
         .member("samples", r.error.samples);
     json.key("reproduce").begin_array();
     for (const auto& call : r.reproduce) json.value(call);

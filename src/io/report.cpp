@@ -17,6 +17,7 @@
 #include "moa/io/csv.hpp"
 #include "moa/io/error.hpp"
 #include "moa/io/log.hpp"
+#include "moa/io/self_calibration_csv.hpp"
 
 namespace moa::io {
 namespace {
@@ -225,6 +226,28 @@ ReportModel build_report(const ReportInputs& inputs, const ReportOptions& option
   if (inputs.calibration) {
     m.calibrated = matched_calibration(m.config, config_path, read_config(*inputs.calibration),
                                        inputs.calibration->string());
+  }
+
+  if (inputs.self_calibration) {
+    const std::string path = inputs.self_calibration->string();
+    std::vector<ScaleSeries> all(static_cast<std::size_t>(n));
+    for (const auto& row : read_self_calibration_csv(*inputs.self_calibration)) {
+      const auto index = m.config.index_of(row.sensor);
+      if (!index) {
+        throw Error(fmt::format("{}: sensor '{}' is not in {} ({})", path, row.sensor, config_path,
+                                joined_names(m.config)));
+      }
+      ScaleSeries& s = all[static_cast<std::size_t>(*index)];
+      s.t.push_back(row.t);
+      s.scale_x.push_back(row.estimate.scale_x);
+      s.scale_y.push_back(row.estimate.scale_y);
+      s.yaw_offset.push_back(row.estimate.yaw_offset);
+    }
+    for (auto& s : all) {
+      m.self_calibration.push_back(
+          {decimated(s.t, options.max_points), decimated(s.scale_x, options.max_points),
+           decimated(s.scale_y, options.max_points), decimated(s.yaw_offset, options.max_points)});
+    }
   }
 
   std::error_code ec;

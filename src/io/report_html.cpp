@@ -167,6 +167,21 @@ std::string data_json(const ReportModel& m) {
         bins, [i](const ReportBin& b) { return b.speed[static_cast<std::size_t>(i)]; }, 5);
   }
   j.close(']');
+  j.key("self_calibration");
+  if (!m.self_calibration.empty()) {
+    j.open('[');
+    for (const ScaleSeries& c : m.self_calibration) {
+      j.open('{');
+      j.key("t").numbers(
+          c.t, [](double v) { return v; }, kTimeDigits);
+      j.key("scale_x").numbers(c.scale_x, [](double v) { return v; });
+      j.key("scale_y").numbers(c.scale_y, [](double v) { return v; });
+      j.close('}');
+    }
+    j.close(']');
+  } else {
+    j.null();
+  }
   j.key("truth");
   if (!m.truth.empty()) {
     j.open('{');
@@ -227,6 +242,7 @@ std::string summary_table(const ReportModel& m) {
   row("odometry", html(in.odometry.string()));
   if (in.truth) row("truth", html(in.truth->string()));
   if (in.calibration) row("calibration", html(in.calibration->string()));
+  if (in.self_calibration) row("self-calibration", html(in.self_calibration->string()));
   row("time span",
       fmt::format("{:.6g} s to {:.6g} s ({:.6g} s)", m.t_first, m.t_last, m.t_last - m.t_first));
   row("epochs", fmt::format("{}", m.epochs));
@@ -397,6 +413,15 @@ std::string render_report(const ReportModel& m) {
       "odometry's twist and the config's mount (the largest in each time bin), and the rated "
       "<code>max_speed</code> (dashed).</p>\n";
   page += chart("chart-speed", "wide") + std::string(kHint) + "</section>\n";
+
+  if (!m.self_calibration.empty()) {
+    page += "<section id=\"self-calibration\">\n<h2>Self-calibration: scale over time</h2>\n";
+    page +=
+        "<p>Each sensor's scale estimated online (<code>moa odometry --self-calibration</code>, "
+        "docs/self-calibration.md), relative to its configured resolution: 1 as configured; "
+        "x axis solid, y axis dashed. An estimate within the deadband of 1 is not applied.</p>\n";
+    page += chart("chart-self-calibration", "wide") + std::string(kHint) + "</section>\n";
+  }
 
   page += "<section id=\"sensors\">\n<h2>Sensors</h2>\n" + sensor_table(m) + "</section>\n";
 

@@ -405,6 +405,24 @@
               {y: {type: 'linear', beginAtZero: true, title: {display: true, text: 'point speed (m/s)'}}});
   }
 
+  // Self-calibration (moa odometry --self-calibration): each sensor's
+  // estimated scale relative to its configured resolution, x solid, y dashed.
+  function drawSelfCalibration() {
+    if (!data.self_calibration) return;
+    var datasets = [];
+    data.self_calibration.forEach(function (c, i) {
+      if (c.t.length === 0) return;
+      var name = data.sensors[i].name;
+      datasets.push({label: name + ' scale x', data: points(c.t, c.scale_x), pointRadius: 0,
+                     borderWidth: 1.3, borderColor: sensorColor(i), backgroundColor: sensorColor(i)});
+      datasets.push({label: name + ' scale y', data: points(c.t, c.scale_y), pointRadius: 0,
+                     borderWidth: 1.3, borderDash: [6, 4], borderColor: sensorColor(i),
+                     backgroundColor: sensorColor(i)});
+    });
+    timeChart('chart-self-calibration', datasets,
+              {y: {type: 'linear', title: {display: true, text: 'scale (1: as configured)'}}});
+  }
+
   // `drawn` holds the positions and yaws to draw (calibrated ones magnified);
   // the tooltips give the mounts' own values. Without `dash` (the nominal
   // mounts) each sensor is a dataset of its own, so the legend names it in
@@ -505,7 +523,8 @@
   }
 
   [['trajectory', drawTrajectory], ['errors', drawErrors], ['timeline', drawTimeline],
-   ['speed', drawSpeed], ['layout', drawLayout], ['tables', colourTables]].forEach(function (step) {
+   ['speed', drawSpeed], ['self-calibration', drawSelfCalibration], ['layout', drawLayout],
+   ['tables', colourTables]].forEach(function (step) {
     try {
       step[1]();
     } catch (e) {

@@ -7,6 +7,7 @@
 #include <ostream>
 
 #include "moa/io/atomic_file.hpp"
+#include "moa/io/csv.hpp"
 
 namespace moa::io {
 
@@ -34,6 +35,29 @@ struct SelfCalibrationCsvWriter::Impl {
   std::array<SelfCalibrationEstimate, kMaxSensors> last{};
   bool any = false;
 };
+
+std::vector<SelfCalibrationRow> read_self_calibration_csv(const std::filesystem::path& file) {
+  CsvReader in(file);
+  const std::size_t t = in.required_column("t");
+  const std::size_t sensor = in.required_column("sensor");
+  const std::size_t sx = in.required_column("scale_x");
+  const std::size_t sy = in.required_column("scale_y");
+  const std::size_t yaw = in.required_column("yaw_offset");
+  std::vector<SelfCalibrationRow> rows;
+  while (in.next()) {
+    SelfCalibrationRow r;
+    r.t = in.time(t);
+    r.sensor = std::string(in.field(sensor));
+    if (r.sensor.empty()) in.fail_field(sensor, "empty sensor name");
+    r.estimate.scale_x = in.number(sx);
+    r.estimate.scale_y = in.number(sy);
+    r.estimate.yaw_offset = in.number(yaw);
+    if (!(r.estimate.scale_x > 0.0)) in.fail_field(sx, "must be > 0");
+    if (!(r.estimate.scale_y > 0.0)) in.fail_field(sy, "must be > 0");
+    rows.push_back(std::move(r));
+  }
+  return rows;
+}
 
 SelfCalibrationCsvWriter::SelfCalibrationCsvWriter(const std::filesystem::path& file,
                                                    std::vector<std::string> names,

@@ -39,6 +39,9 @@ struct TrajectoryError {
   double rms_translation = 0.0;  ///< m
   double max_heading = 0.0;      ///< rad
   double rms_heading = 0.0;      ///< rad
+  /// The error of the latest estimate compared (largest t; the last of equal t).
+  double final_translation = 0.0;  ///< m
+  double final_heading = 0.0;      ///< rad
   double distance = 0.0;  ///< m, truth's path length from its start to the last estimate compared
 };
 

@@ -7,6 +7,8 @@
 // the methods run through the odometry pipeline, "runs": one object per run
 // with its seed, its figures and "reproduce": the moa calls that recompute
 // them ($OUT a scratch directory; the last call is `moa evaluate --json`).
+// self-calibration also has "scale": per scenario the affected sensor's true
+// and estimated scale at each sample time, and each run's estimates.
 #pragma once
 
 #include <cstdint>

@@ -14,6 +14,9 @@ struct ExperimentReportRecipe {
   const char* scenario;    ///< built-in scenario of the run shown
   const char* estimator;   ///< ls | sekimori | consensus
   bool fuse_camera;        ///< EKF with the scenario's camera fixes
+  /// Online self-calibration (`--self-calibrate`); the page plots its
+  /// estimated scales over time.
+  bool self_calibrate = false;
 };
 
 /// The recipe of an experiment that has a report; nullptr if it has none.

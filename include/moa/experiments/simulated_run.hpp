@@ -13,6 +13,7 @@
 #include "moa/analysis/evaluate.hpp"
 #include "moa/core/odometry.hpp"
 #include "moa/io/config.hpp"
+#include "moa/io/self_calibration_csv.hpp"
 
 namespace moa::experiments {
 
@@ -24,7 +25,8 @@ struct Method {
 };
 
 /// The `moa odometry` flags that give `options` (those that differ from
-/// the defaults: estimator, sensors, wheels, camera fusion and latency).
+/// the defaults: estimator, sensors, wheels, camera fusion and latency,
+/// self-calibration on with its default options).
 /// Throws std::invalid_argument for an option the command line cannot say.
 std::vector<std::string> odometry_flags(const OdometryOptions& options,
                                         const io::RobotConfig& config);
@@ -34,6 +36,9 @@ struct RunRecord {
   std::uint64_t seed = 0;
   TrajectoryError error;
   std::vector<std::string> reproduce;  ///< moa calls; $OUT is a scratch directory
+  /// With run(method, true) and self-calibration on: the rows of the
+  /// self-calibration.csv that `moa odometry --self-calibration` writes.
+  std::vector<io::SelfCalibrationRow> calibration;
 };
 
 class SimulatedRun {
@@ -47,8 +52,9 @@ class SimulatedRun {
   SimulatedRun& operator=(const SimulatedRun&) = delete;
 
   /// Runs the method as `moa odometry` does, then evaluates it as `moa
-  /// evaluate` does.
-  RunRecord run(const Method& method) const;
+  /// evaluate` does. With `keep_calibration` and the method's
+  /// self-calibration on, also keeps the estimates it writes (RunRecord::calibration).
+  RunRecord run(const Method& method, bool keep_calibration = false) const;
 
   const std::filesystem::path& dir() const { return dir_; }
   const io::RobotConfig& config() const { return config_; }
@@ -96,11 +102,13 @@ namespace moa::experiments {
 /// Mean over the runs of each run's figures.
 struct MeanError {
   Spread max_translation, rms_translation, max_heading, rms_heading;  ///< m, rad
+  Spread final_translation;                                           ///< m, the last estimate's
 };
 MeanError mean_error(const std::vector<RunRecord>& runs);
 
 /// Writes "max_translation_m", "rms_translation_m", "max_heading_rad",
-/// "rms_heading_rad" (means), their "sd_..." over the runs, and "runs".
+/// "rms_heading_rad", "final_translation_m" (means), "sd_..." of the max
+/// errors over the runs, and "runs" (each with "final_heading_rad" too).
 void write_runs(io::JsonWriter& json, const std::vector<RunRecord>& runs);
 
 }  // namespace moa::experiments

@@ -39,6 +39,9 @@ struct ReportInputs {
   std::filesystem::path odometry;              ///< odometry.csv of `moa odometry`
   std::optional<std::filesystem::path> truth;  ///< truth.csv: adds the error plots
   std::optional<std::filesystem::path> calibration;  ///< config v1 from `moa calibrate`
+  /// self-calibration.csv of `moa odometry --self-calibration`: adds the plot
+  /// of each sensor's estimated scale over time.
+  std::optional<std::filesystem::path> self_calibration;
   std::string title;  ///< page title; empty: named after the log directory
   std::string note;   ///< a paragraph under the title (plain text), e.g. how the run was made
 };
@@ -79,6 +82,14 @@ struct SensorSummary {
   std::optional<int> min_squal;  ///< lowest SQUAL in mice.csv, if reported
 };
 
+/// One sensor's online self-calibration over time (self-calibration.csv),
+/// relative to its configured mount: scale 1 and yaw offset 0 as configured.
+struct ScaleSeries {
+  std::vector<double> t;                 ///< s
+  std::vector<double> scale_x, scale_y;  ///< counts per configured count
+  std::vector<double> yaw_offset;        ///< rad
+};
+
 /// Everything the page shows, computed from the inputs.
 struct ReportModel {
   std::string title;
@@ -108,6 +119,9 @@ struct ReportModel {
   std::vector<SensorSummary> sensors;
   /// Epochs per state of the twist source row.
   std::vector<std::size_t> sources;
+  /// With a self-calibration input: per config sensor (empty series for a
+  /// sensor the file has no row of), at most max_points samples each.
+  std::vector<ScaleSeries> self_calibration;
 };
 
 /// Reads and checks the inputs. Throws io::Error "FILE:LINE: what" (or

@@ -14,6 +14,18 @@
 
 namespace moa::io {
 
+/// One row of self-calibration.csv.
+struct SelfCalibrationRow {
+  double t = 0.0;  ///< s, the epoch's time
+  std::string sensor;
+  SelfCalibrationEstimate estimate;  ///< scale_x, scale_y; yaw_offset in rad
+};
+
+/// Reads a self-calibration.csv (the columns by name, in any order); throws
+/// io::Error "FILE:LINE: ..." for a missing column, a field that is not a
+/// finite number, a scale <= 0 or a time earlier than the previous row's.
+std::vector<SelfCalibrationRow> read_self_calibration_csv(const std::filesystem::path& file);
+
 class SelfCalibrationCsvWriter {
  public:
   /// `names`: the sensor names in config order; `selected`: the sensors written.
