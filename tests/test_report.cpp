@@ -386,15 +386,17 @@ TEST(Report, SelfCalibrationIsPlottedPerSensorOverTime) {
     std::ifstream in(cal);
     std::string line;
     std::getline(in, line);
-    ASSERT_EQ(line, "t,sensor,scale_x,scale_y,yaw_offset");
+    ASSERT_EQ(line,
+              "t,sensor,scale_x,scale_y,yaw_offset,filter_scale_x,filter_scale_y,"
+              "filter_yaw_offset");
     while (std::getline(in, line)) {
+      // The chart shows the filter's estimates (the last three columns).
       std::stringstream ss(line);
-      std::string t, name, sx, sy;
+      std::string t, name, f[5];
       std::getline(ss, t, ',');
       std::getline(ss, name, ',');
-      std::getline(ss, sx, ',');
-      std::getline(ss, sy, ',');
-      rows[name].push_back({std::stod(t), std::stod(sx), std::stod(sy)});
+      for (auto& x : f) std::getline(ss, x, ',');
+      rows[name].push_back({std::stod(t), std::stod(f[3]), std::stod(f[4])});
     }
   }
   io::ReportInputs in = inputs_of(r);

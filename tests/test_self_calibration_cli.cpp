@@ -189,11 +189,12 @@ TEST(SelfCalibrationCli, LiveWritesTheEstimatesAboutOnceASecond) {
 
   std::string header;
   const auto rows = rows_of(cal, &header);
-  EXPECT_EQ(header, "t,sensor,scale_x,scale_y,yaw_offset");
+  EXPECT_EQ(header,
+            "t,sensor,scale_x,scale_y,yaw_offset,filter_scale_x,filter_scale_y,filter_yaw_offset");
   const std::vector<std::string> names{"m1", "m2", "m3", "m4"};
   ASSERT_EQ(rows.size(), due.size() * names.size());
   for (std::size_t k = 0; k < rows.size(); ++k) {
-    ASSERT_EQ(rows[k].size(), 5u);
+    ASSERT_EQ(rows[k].size(), 8u);
     EXPECT_DOUBLE_EQ(std::stod(rows[k][0]), due[k / names.size()]) << "row " << k;
     EXPECT_EQ(rows[k][1], names[k % names.size()]) << "row " << k;
     for (int c = 2; c <= 4; ++c) EXPECT_TRUE(std::isfinite(std::stod(rows[k][c])));
@@ -244,6 +245,24 @@ TEST(SelfCalibrationCsv, ReadsWhatItWritesAndNamesTheLineOfBadRows) {
   EXPECT_EQ(rows[0].estimate.scale_x, 0.95);
   EXPECT_EQ(rows[0].estimate.scale_y, 0.9);
   EXPECT_EQ(rows[0].estimate.yaw_offset, -0.01);
+  EXPECT_EQ(rows[0].filter.scale_x, 0.95);  // no filter columns: the filter's are the applied
+  EXPECT_EQ(rows[0].filter.yaw_offset, -0.01);
+
+  // With the filter's columns: read apart; one without the others is refused.
+  const std::string both =
+      "t,sensor,scale_x,scale_y,yaw_offset,filter_scale_x,filter_scale_y,"
+      "filter_yaw_offset\n";
+  std::ofstream(file) << both << "0.25,m2,1,1,0,1.004,0.997,0.001\n";
+  const auto filtered = io::read_self_calibration_csv(file);
+  ASSERT_EQ(filtered.size(), 1u);
+  EXPECT_EQ(filtered[0].estimate.scale_x, 1.0);
+  EXPECT_EQ(filtered[0].filter.scale_x, 1.004);
+  EXPECT_EQ(filtered[0].filter.scale_y, 0.997);
+  EXPECT_EQ(filtered[0].filter.yaw_offset, 0.001);
+  EXPECT_EQ(read_error(both + "0,m1,1,1,0,0,1,0\n"),
+            "cal.csv:2: column 'filter_scale_x': must be > 0");
+  EXPECT_THAT(read_error(header.substr(0, header.size() - 1) + ",filter_scale_x\n0,m1,1,1,0,1\n"),
+              HasSubstr("come together"));
 }
 
 }  // namespace

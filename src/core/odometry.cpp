@@ -391,8 +391,9 @@ bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& 
     }
     self_calibration_->observe(raw_, e);
     for (int k = 0; k < m_; ++k) {
-      calibration_[static_cast<std::size_t>(selected_[static_cast<std::size_t>(k)])] =
-          self_calibration_->calibration(k);
+      const auto i = static_cast<std::size_t>(selected_[static_cast<std::size_t>(k)]);
+      calibration_[i] = self_calibration_->applied(k);
+      calibration_filter_[i] = self_calibration_->calibration(k);
     }
   }
   if (all) {
@@ -425,7 +426,10 @@ void Odometry::process(const ArraySample& sample, StepSink sink) {
                                            : std::nullopt;
   OdometryStep step;
   step.sample = &sample;
-  if (self_calibration_) step.calibration = &calibration_;
+  if (self_calibration_) {
+    step.calibration = &calibration_;
+    step.calibration_filter = &calibration_filter_;
+  }
   if (!estimate(sample, wheels, step.estimate)) {
     deferred_error_ = OdometryError::kNoInterval;
     return;

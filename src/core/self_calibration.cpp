@@ -67,11 +67,11 @@ void SelfCalibration::correct(ArraySample& sample) const {
 
 void SelfCalibration::renew(int i) {
   SensorState& s = state_[static_cast<std::size_t>(i)];
-  const real change = std::max({std::abs(s.theta.scale_x - s.applied.scale_x),
-                                std::abs(s.theta.scale_y - s.applied.scale_y),
-                                std::abs(s.theta.yaw_offset - s.applied.yaw_offset)});
+  const real change = std::max({std::abs(s.theta.scale_x - s.renewed.scale_x),
+                                std::abs(s.theta.scale_y - s.renewed.scale_y),
+                                std::abs(s.theta.yaw_offset - s.renewed.yaw_offset)});
   if (change < options_.apply_step) return;
-  s.applied = s.theta;
+  s.renewed = s.theta;
   // Within the deadband the configured value stands: the estimate's own
   // errors (mount positions read as scale in rotation, and the direction of
   // (s_x, s_y, delta) that a translation in one direction leaves open) would
@@ -81,9 +81,9 @@ void SelfCalibration::renew(int i) {
   const real g = std::sqrt(s.theta.scale_x * s.theta.scale_y);
   const real iso = std::abs(g - 1.0) > options_.isotropic_deadband ? g : 1.0;
   const auto band_scale = [&](real x) { return std::abs(x - 1.0) > options_.deadband ? x : iso; };
-  const SelfCalibrationEstimate used{
-      band_scale(s.theta.scale_x), band_scale(s.theta.scale_y),
-      std::abs(s.theta.yaw_offset) > options_.deadband ? s.theta.yaw_offset : 0.0};
+  s.applied = {band_scale(s.theta.scale_x), band_scale(s.theta.scale_y),
+               std::abs(s.theta.yaw_offset) > options_.deadband ? s.theta.yaw_offset : 0.0};
+  const SelfCalibrationEstimate& used = s.applied;
   // counts -> robot velocity (configured), into the configured sensor frame,
   // C^-1 = R(delta) diag(1/s), back to the robot frame and to counts.
   const Mat2& v = velocity_from_counts_[static_cast<std::size_t>(i)];

@@ -102,9 +102,9 @@ Series series_of(const RunRecord& r, const std::string& sensor) {
   for (const auto& row : r.calibration) {
     if (row.sensor != sensor) continue;
     s.t.push_back(row.t);
-    s.scale_x.push_back(row.estimate.scale_x);
-    s.scale_y.push_back(row.estimate.scale_y);
-    s.yaw.push_back(row.estimate.yaw_offset);
+    s.scale_x.push_back(row.filter.scale_x);
+    s.scale_y.push_back(row.filter.scale_y);
+    s.yaw.push_back(row.filter.yaw_offset);
   }
   return s;
 }

@@ -169,7 +169,7 @@ OdometryRun run_odometry(const RobotConfig& config, const std::string& config_pa
           continue;
         }
         runaway_seen |= SensorMask{1} << i;
-        const auto& c = (*step.calibration)[static_cast<std::size_t>(i)];
+        const auto& c = (*step.calibration_filter)[static_cast<std::size_t>(i)];
         run.warnings.push_back(fmt::format(
             "sensor '{}': its self-calibration ran away (scale {:.3f}, {:.3f}, yaw offset {:.3f} "
             "rad at t = {} s; bounds {} and {} rad): excluded as 'calibration' while beyond",

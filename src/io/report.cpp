@@ -239,9 +239,9 @@ ReportModel build_report(const ReportInputs& inputs, const ReportOptions& option
       }
       ScaleSeries& s = all[static_cast<std::size_t>(*index)];
       s.t.push_back(row.t);
-      s.scale_x.push_back(row.estimate.scale_x);
-      s.scale_y.push_back(row.estimate.scale_y);
-      s.yaw_offset.push_back(row.estimate.yaw_offset);
+      s.scale_x.push_back(row.filter.scale_x);
+      s.scale_y.push_back(row.filter.scale_y);
+      s.yaw_offset.push_back(row.filter.yaw_offset);
     }
     for (auto& s : all) {
       m.self_calibration.push_back(

@@ -77,12 +77,14 @@ class Reproduction(unittest.TestCase):
         [series] = [x for x in scale["runs"] if x["seed"] == seed]
         with open(csv_path) as f:
             lines = f.read().splitlines()
-        self.assertEqual(lines[0], "t,sensor,scale_x,scale_y,yaw_offset")
+        self.assertEqual(lines[0], "t,sensor,scale_x,scale_y,yaw_offset,"
+                         "filter_scale_x,filter_scale_y,filter_yaw_offset")
         rows = [line.split(",") for line in lines[1:] if line.split(",")[1] == scale["sensor"]]
+        # The experiment reports the filter's estimates (the last three columns).
         self.assertEqual([float(x[0]) for x in rows], series["t_s"], scenario)
-        self.assertEqual([float(x[2]) for x in rows], series["scale_x"], scenario)
-        self.assertEqual([float(x[3]) for x in rows], series["scale_y"], scenario)
-        self.assertEqual([float(x[4]) for x in rows], series["yaw_offset_rad"], scenario)
+        self.assertEqual([float(x[5]) for x in rows], series["scale_x"], scenario)
+        self.assertEqual([float(x[6]) for x in rows], series["scale_y"], scenario)
+        self.assertEqual([float(x[7]) for x in rows], series["yaw_offset_rad"], scenario)
 
     def test_every_run_is_reproduced_by_its_moa_calls(self):
         checked = 0

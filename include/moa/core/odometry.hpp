@@ -122,9 +122,12 @@ struct OdometryStep {
   /// The EKF's dead-reckoning scales (s_v, s_w) (PoseEkf::scale()); (1, 1) unless scaled.
   Vec2 scale{1.0, 1.0};
   Mat2 scale_covariance = Mat2::Zero();  ///< of (s_v, s_w)
-  /// With self_calibration.enabled: each configured sensor's calibration
-  /// (1, 1, 0 for one not selected), by configured index; else null.
+  /// With self_calibration.enabled, by configured index (1, 1, 0 for a
+  /// sensor not selected), else null: the calibration applied to each
+  /// sensor's counts (SelfCalibration::applied), and the filter's estimate
+  /// behind it (SelfCalibration::calibration; equal outside the deadbands).
   const std::array<SelfCalibrationEstimate, kMaxSensors>* calibration = nullptr;
+  const std::array<SelfCalibrationEstimate, kMaxSensors>* calibration_filter = nullptr;
   double t() const { return sample->t; }
 };
 
@@ -245,7 +248,9 @@ class Odometry {
   std::array<real, kMaxSensors> impossible_speed_{};
   std::optional<SelfCalibration> self_calibration_;
   ArraySample raw_;  ///< the selected sensors' counts before the self-calibration's correction
-  std::array<SelfCalibrationEstimate, kMaxSensors> calibration_{};  ///< by configured index
+  std::array<SelfCalibrationEstimate, kMaxSensors>
+      calibration_{};  ///< applied, by configured index
+  std::array<SelfCalibrationEstimate, kMaxSensors> calibration_filter_{};  ///< the filter's
 };
 
 }  // namespace moa

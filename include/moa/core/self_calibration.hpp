@@ -116,8 +116,14 @@ class SelfCalibration {
   /// estimator's output on the corrected counts.
   void observe(const ArraySample& raw, const RobustEstimate& estimate);
 
+  /// The filter's estimate (theta) of sensor i.
   const SelfCalibrationEstimate& calibration(int i) const {
     return state_[static_cast<std::size_t>(i)].theta;
+  }
+  /// What is applied to sensor i's counts: the estimate where it is outside
+  /// the deadbands, else as configured (1, 1, 0).
+  const SelfCalibrationEstimate& applied(int i) const {
+    return state_[static_cast<std::size_t>(i)].applied;
   }
   /// Standard deviations of (scale_x, scale_y, yaw_offset).
   Vec3 sd(int i) const;
@@ -131,7 +137,8 @@ class SelfCalibration {
  private:
   struct SensorState {
     SelfCalibrationEstimate theta;
-    SelfCalibrationEstimate applied;
+    SelfCalibrationEstimate renewed;  ///< theta when the correction was last renewed
+    SelfCalibrationEstimate applied;  ///< theta through the deadbands: in the correction
     Mat3 p = Mat3::Zero();
     Vec2 sum_meas{0.0, 0.0}, sum_pred{0.0, 0.0};  ///< m, configured sensor frame
     real sum_var = 0.0;                           ///< m^2, prediction variance

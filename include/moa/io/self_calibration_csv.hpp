@@ -1,5 +1,7 @@
 // The self-calibration's estimates over time (docs/formats/log.md,
-// self-calibration.csv): `t,sensor,scale_x,scale_y,yaw_offset`, one row per
+// self-calibration.csv): `t,sensor,scale_x,scale_y,yaw_offset` (applied to
+// the counts) `,filter_scale_x,filter_scale_y,filter_yaw_offset` (the
+// filter's estimate; equal outside the deadbands), one row per
 // selected sensor about once a second (the first epoch at or after each
 // whole second since the first epoch, and the last epoch), relative to the
 // config (1, 1, 0: as configured; yaw_offset in rad).
@@ -18,7 +20,9 @@ namespace moa::io {
 struct SelfCalibrationRow {
   double t = 0.0;  ///< s, the epoch's time
   std::string sensor;
-  SelfCalibrationEstimate estimate;  ///< scale_x, scale_y; yaw_offset in rad
+  SelfCalibrationEstimate estimate;  ///< applied: scale_x, scale_y; yaw_offset in rad
+  /// The filter's estimate (filter_* columns; `estimate` when absent).
+  SelfCalibrationEstimate filter;
 };
 
 /// Reads a self-calibration.csv (the columns by name, in any order); throws
