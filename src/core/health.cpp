@@ -62,6 +62,15 @@ SensorMask HealthMonitor::screen(const SubsetSolver& solver, const ArraySample& 
   SensorMask allowed = candidates;
   if (!options_.enabled) return allowed;
   const Vec3 x = predicted.vector();
+  // One bad sensor biases the leave-one-out twists the others are judged
+  // against, so their drift statistics rise with its own (by about 1/(N-1)
+  // of it): only the largest of them may be newly excluded as drift.
+  real largest_drift = 0.0;
+  for (int i = 0; i < n_; ++i) {
+    if (contains(candidates, i)) {
+      largest_drift = std::max(largest_drift, drift(state_[static_cast<std::size_t>(i)]));
+    }
+  }
   for (int i = 0; i < n_; ++i) {
     const auto k = static_cast<std::size_t>(i);
     SensorState& s = state_[k];
@@ -98,7 +107,7 @@ SensorMask HealthMonitor::screen(const SubsetSolver& solver, const ArraySample& 
       bad = Exclusion::kFrozen;
     } else if (s.zeros >= options_.zero_run) {
       bad = Exclusion::kZero;
-    } else if (d > options_.drift_exclude) {
+    } else if (d > options_.drift_exclude && d >= largest_drift) {
       bad = Exclusion::kDrift;
     }
     const bool half = s.repeats >= 1 || s.zeros >= 1 || d > options_.drift_suspect;
@@ -162,7 +171,11 @@ void HealthMonitor::observe(const SubsetSolver& solver, const ArraySample& sampl
     const real p2 = p.squaredNorm();
     if (p2 < options_.drift_min_speed * options_.drift_min_speed) continue;
     const Vec2 r = m.u[k] - p;
-    if (r.dot(m.info[k] * r) > residual_gate_) continue;  // a gross error, not drift
+    // A gross error (a spike, a lost frame) is not drift: left out when it is
+    // both beyond the epoch's chi-square gate and over a quarter of the point's
+    // displacement. A step of the scale (a change of floor, 10 %) is beyond
+    // the gate at speed yet is what this test is for: it stays in.
+    if (r.dot(m.info[k] * r) > residual_gate_ && r.squaredNorm() > 0.0625 * p2) continue;
     SensorState& s = state_[k];
     s.sum_par = (1.0 - a) * s.sum_par + a * p.dot(r) / p2;
     s.sum_perp = (1.0 - a) * s.sum_perp + a * (p.x() * r.y() - p.y() * r.x()) / p2;
