@@ -1,5 +1,6 @@
 // SubsetSolver: a fit from prepared per-sensor terms is the fit that
-// computes them itself, to the bit, for every subset of random samples.
+// computes them itself, to the bit, for every subset of random samples; and
+// twist() is fit()'s twist to the bit.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -40,6 +41,15 @@ TEST(SubsetSolver, PreparedTermsGiveTheSameFitToTheBit) {
       const auto a = solver.fit(mask, plain);
       const auto b = solver.fit(mask, prepared);
       ASSERT_EQ(a.has_value(), b.has_value()) << mask;
+      // twist(): fit()'s twist alone, to the bit, from either.
+      for (const PointMeasurements* m : {&plain, &prepared}) {
+        const auto t = solver.twist(mask, *m);
+        ASSERT_EQ(t.has_value(), a.has_value()) << mask;
+        for (int k = 0; t && k < 3; ++k) {
+          const auto& f = m == &plain ? a : b;
+          EXPECT_TRUE(same_bits(t->vector()(k), f->twist.vector()(k))) << mask;
+        }
+      }
       if (!a) continue;
       EXPECT_EQ(a->dof, b->dof);
       EXPECT_TRUE(same_bits(a->chi2, b->chi2)) << mask;

@@ -14,6 +14,7 @@ struct ReplayBenchArgs {
   std::string estimator = "consensus";
   int repeats = 3;            ///< best of
   std::filesystem::path dir;  ///< where the temporary log goes (system temp if empty)
+  bool keep_log = false;      ///< leave the log (and odometry.csv) for runs of `moa odometry`
   bool json = false;
 };
 

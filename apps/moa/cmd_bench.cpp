@@ -236,6 +236,9 @@ void add_bench(CLI::App& app, Action& action) {
   cmd->add_option("--dir", r.dir,
                   "--replay: directory for the temporary log (default: system temp)")
       ->check(CLI::ExistingDirectory);
+  cmd->add_flag("--keep-log", r.keep_log,
+                "--replay: keep the log (robot.yaml, mice.csv, odometry.csv) and print its "
+                "directory");
   cmd->callback([&action, args] {
     action = [args] {
       if (!args->replay) return run_bench(*args);

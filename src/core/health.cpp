@@ -163,9 +163,10 @@ void HealthMonitor::observe(const SubsetSolver& solver, const ArraySample& sampl
     const SensorMask others = used & ~(SensorMask{1} << i);
     if (contains(used, i)) {
       if (count_sensors(others) < 2) continue;
-      const auto fit = solver.fit(others, m);
-      if (!fit) continue;
-      xi = fit->twist.vector();
+      // The twist alone (no chi-square, no covariance): bit for bit fit()'s.
+      const auto twist = solver.twist(others, m);
+      if (!twist) continue;
+      xi = twist->vector();
     }
     const Vec2 p = solver.jacobian(i) * xi;
     const real p2 = p.squaredNorm();

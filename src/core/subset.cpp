@@ -19,9 +19,8 @@ void SubsetSolver::prepare(PointMeasurements& m) const {
   m.prepared_by = this;
 }
 
-std::optional<SubsetFit> SubsetSolver::fit(SensorMask mask, const PointMeasurements& m) const {
-  const int k = count_sensors(mask);
-  if (k < 2) return std::nullopt;
+bool SubsetSolver::solve(SensorMask mask, const PointMeasurements& m, Mat3& inv, Vec3& x) const {
+  if (count_sensors(mask) < 2) return false;
   Mat3 normal = Mat3::Zero();
   Vec3 rhs = Vec3::Zero();
   if (m.prepared_by == this) {
@@ -40,16 +39,30 @@ std::optional<SubsetFit> SubsetSolver::fit(SensorMask mask, const PointMeasureme
       rhs.noalias() += at_info * m.u[s];
     }
   }
-  Mat3 inv;
   bool invertible = false;
   real det = 0.0;
   normal.computeInverseAndDetWithCheck(inv, det, invertible, 0.0);
   // Relative determinant test: det / (product of the diagonal) measures how
   // close the normal matrix is to singular, independent of the weights' scale.
   const real scale = normal(0, 0) * normal(1, 1) * normal(2, 2);
-  if (!invertible || !(det > 1e-12 * scale)) return std::nullopt;
+  if (!invertible || !(det > 1e-12 * scale)) return false;
+  x = inv * rhs;
+  return true;
+}
+
+std::optional<Twist2> SubsetSolver::twist(SensorMask mask, const PointMeasurements& m) const {
+  Mat3 inv;
+  Vec3 x;
+  if (!solve(mask, m, inv, x)) return std::nullopt;
+  return Twist2::from_vector(x);
+}
+
+std::optional<SubsetFit> SubsetSolver::fit(SensorMask mask, const PointMeasurements& m) const {
+  Mat3 inv;
+  Vec3 x;
+  if (!solve(mask, m, inv, x)) return std::nullopt;
+  const int k = count_sensors(mask);
   SubsetFit out;
-  const Vec3 x = inv * rhs;
   out.twist = Twist2::from_vector(x);
   out.covariance = inv;
   out.dof = 2 * k - 3;

@@ -158,7 +158,9 @@ OdometryCsvWriter::~OdometryCsvWriter() = default;
 
 void OdometryCsvWriter::flush() { impl_->writer.flush(); }
 
-void OdometryCsvWriter::write(const OdometryStep& step) {
+void OdometryCsvWriter::write(const OdometryStep& step) { write(step.t(), step); }
+
+void OdometryCsvWriter::write(double t, const OdometryStep& step) {
   Impl& s = *impl_;
   const RobustEstimate& e = step.estimate;
   if (s.names_break_csv) {
@@ -191,7 +193,7 @@ void OdometryCsvWriter::write(const OdometryStep& step) {
     if (s.scaled) {
       for (const double v : scale_fields(step)) fields.push_back(number(v));
     }
-    s.writer.write(step.t(), step.pose, e.estimate.twist, fields);
+    s.writer.write(t, step.pose, e.estimate.twist, fields);
     return;
   }
   // sd_vx, sd_vy, sd_omega, then the selection, then pxx, pxy, pyy, ptt,
@@ -199,8 +201,7 @@ void OdometryCsvWriter::write(const OdometryStep& step) {
   // row's numbers.
   const std::string_view selection = s.selection_text(e);
   constexpr std::size_t kNumbers = 11 * (kMaxNumberText + 1);
-  char* out =
-      s.writer.begin_row(step.t(), step.pose, e.estimate.twist, kNumbers + selection.size());
+  char* out = s.writer.begin_row(t, step.pose, e.estimate.twist, kNumbers + selection.size());
   for (int i = 0; i < 3; ++i) {
     *out++ = ',';
     out = write_shortest(out, std::sqrt(std::max(e.estimate.covariance(i, i), 0.0)));

@@ -4,8 +4,11 @@
 
 #include <fmt/core.h>
 
+#include <exception>
 #include <memory>
+#include <thread>
 
+#include "batch_queue.hpp"
 #include "moa/io/csv.hpp"
 #include "moa/io/error.hpp"
 #include "moa/io/log.hpp"
@@ -130,6 +133,164 @@ class FaultsReader {
   std::size_t t_, sensor_, faults_;
 };
 
+// The threads of a replay: parsing mice.csv, running the pipeline and
+// writing odometry.csv take about a third of the time each (docs/
+// performance.md), so the parse and the write run beside the pipeline, on
+// the machine's other cores. The core stays single-threaded: the pipeline
+// runs on the caller's thread, and only rows and steps change threads, in
+// batches (io/batch_queue.hpp), in order. Records are copied into
+// preallocated batches: no allocation per row or step.
+//
+// Each side can work ahead by 8 batches, about 5 ms of the pipeline (0.65
+// us an epoch of four sensors at 1 kHz, `moa bench --replay`): a scheduler
+// slice, so that a thread descheduled on a loaded machine rarely stalls the
+// others.
+constexpr std::size_t kBatches = 8;
+constexpr std::size_t kRowBatch = 4096;   // mice rows per batch (about 230 kB)
+constexpr std::size_t kStepBatch = 1024;  // odometry steps per batch (about 390 kB)
+
+/// A mice.csv row as the parser thread hands it over: the row with its
+/// faults.csv bits, and its line for the error messages ("mice.csv:LINE").
+struct MiceRecord {
+  SensorRow row;
+  std::size_t line = 0;
+};
+
+/// Parses mice.csv (and faults.csv's twin rows) on a thread of its own. A
+/// parse error reaches next() after the rows before it, as the same
+/// io::Error. Destroyed before the end (an exception of the pipeline), it
+/// stops the parser and joins it.
+class MiceReaderThread {
+ public:
+  MiceReaderThread(MiceReader& mice, FaultsReader* faults)
+      : mice_(mice), faults_(faults), thread_([this] { parse(); }) {}
+  ~MiceReaderThread() {
+    if (thread_.joinable()) {
+      queue_.stop();
+      thread_.join();
+    }
+  }
+  MiceReaderThread(const MiceReaderThread&) = delete;
+  MiceReaderThread& operator=(const MiceReaderThread&) = delete;
+
+  /// The next row in file order, valid until the next call; nullptr at the
+  /// end. Rethrows the parser's error where it stopped.
+  const MiceRecord* next() {
+    if (batch_ != nullptr) {
+      if (index_ < batch_->size()) return &(*batch_)[index_++];
+      queue_.release();
+      batch_ = nullptr;
+    }
+    batch_ = queue_.next();  // never an empty batch
+    index_ = 0;
+    if (batch_ == nullptr) return nullptr;
+    return &(*batch_)[index_++];
+  }
+  /// After next() returned nullptr: the parser is done with the readers
+  /// (MiceReader::rows_per_sensor() may be read).
+  void join() { thread_.join(); }
+
+ private:
+  void parse() {
+    std::vector<MiceRecord>* batch = nullptr;
+    try {
+      while (auto row = mice_.next()) {
+        if (faults_ != nullptr) row->faults = faults_->next(*row);
+        if (batch == nullptr) {
+          batch = queue_.acquire();
+          if (batch == nullptr) return;  // the pipeline stopped
+        }
+        batch->push_back({*row, mice_.line()});
+        if (batch->size() == queue_.capacity()) {
+          queue_.submit();
+          batch = nullptr;
+        }
+      }
+      if (batch != nullptr) queue_.submit();
+      queue_.close();
+    } catch (...) {
+      // The rows before the error first, then the error.
+      if (batch != nullptr && !batch->empty()) queue_.submit();
+      queue_.close(std::current_exception());
+    }
+  }
+
+  MiceReader& mice_;
+  FaultsReader* faults_;
+  BatchQueue<MiceRecord> queue_{kBatches, kRowBatch};
+  const std::vector<MiceRecord>* batch_ = nullptr;  ///< being consumed
+  std::size_t index_ = 0;                           ///< next record of batch_
+  std::thread thread_;                              ///< last: starts with the rest built
+};
+
+/// A step as the writer thread gets it: a copy of the sink's step without
+/// its pointers (valid only during the sink call), and the step's time (s).
+struct StepRecord {
+  double t = 0.0;
+  OdometryStep step;
+};
+
+/// Writes odometry.csv's rows on a thread of its own. A write error (a full
+/// disk) is rethrown by the write() after it or by finish(); destroyed
+/// before finish() (an exception of the pipeline), it stops the writer and
+/// joins it, and the file, never committed, does not appear.
+class StepWriterThread {
+ public:
+  explicit StepWriterThread(OdometryCsvWriter& writer)
+      : writer_(writer), thread_([this] { write_batches(); }) {}
+  ~StepWriterThread() {
+    if (thread_.joinable()) {
+      queue_.stop();
+      thread_.join();
+    }
+  }
+  StepWriterThread(const StepWriterThread&) = delete;
+  StepWriterThread& operator=(const StepWriterThread&) = delete;
+
+  void write(const OdometryStep& step) {
+    if (batch_ == nullptr) {
+      batch_ = queue_.acquire();  // rethrows the writer's error
+      if (batch_ == nullptr) throw Error("odometry.csv: the writer thread stopped");
+    }
+    batch_->push_back({step.t(), step});
+    OdometryStep& copy = batch_->back().step;
+    copy.sample = nullptr;
+    copy.calibration = nullptr;
+    if (batch_->size() == queue_.capacity()) {
+      queue_.submit();
+      batch_ = nullptr;
+    }
+  }
+  /// Writes the rest and joins the writer; rethrows its error. The writer
+  /// may then be committed.
+  void finish() {
+    if (batch_ != nullptr && !batch_->empty()) queue_.submit();
+    batch_ = nullptr;
+    queue_.close();
+    thread_.join();
+    if (error_) std::rethrow_exception(error_);
+  }
+
+ private:
+  void write_batches() {
+    try {
+      while (const auto* batch = queue_.next()) {
+        for (const StepRecord& r : *batch) writer_.write(r.t, r.step);
+        queue_.release();
+      }
+    } catch (...) {
+      error_ = std::current_exception();  // read by finish() after the join
+      queue_.stop(error_);
+    }
+  }
+
+  OdometryCsvWriter& writer_;
+  BatchQueue<StepRecord> queue_{kBatches, kStepBatch};
+  std::vector<StepRecord>* batch_ = nullptr;  ///< being filled
+  std::exception_ptr error_;
+  std::thread thread_;  ///< last: starts with the rest built
+};
+
 }  // namespace
 
 OdometryRun run_odometry(const RobotConfig& config, const std::string& config_path,
@@ -202,16 +363,18 @@ OdometryRun run_odometry(const RobotConfig& config, const std::string& config_pa
     }
   };
 
-  while (auto row = mice.next()) {
-    if (faults) row->faults = faults->next(*row);
-    feed_until(row->t);
-    if (const auto e = odometry->push(*row, sink)) {
-      fail(fmt::format("{}:{}", where, mice.line()), row->t, *e);
+  MiceReaderThread parsed(mice, faults.get());
+  while (const MiceRecord* record = parsed.next()) {
+    const SensorRow& row = record->row;
+    feed_until(row.t);
+    if (const auto e = odometry->push(row, sink)) {
+      fail(fmt::format("{}:{}", where, record->line), row.t, *e);
     }
-    run.t_end = row->t;
+    run.t_end = row.t;
     ++run.rows;
-    if (progress && (run.rows & 0xfff) == 0) progress(run.rows, row->t);
+    if (progress && (run.rows & 0xfff) == 0) progress(run.rows, row.t);
   }
+  parsed.join();
   // The stream ends with the last mice row: the last epochs use the wheel
   // rows and fixes up to its time.
   feed_until(run.t_end);
@@ -249,13 +412,16 @@ OdometryRun write_odometry(const RobotConfig& config, const std::string& config_
   }
   OdometryCsvWriter writer(out, config.names, options.fuse_camera,
                            options.fuse_camera && options.ekf.estimate_scale);
+  StepWriterThread steps(writer);
   const OdometryRun run = run_odometry(
       config, config_path, log, options,
       [&](const OdometryStep& step) {
-        writer.write(step);
+        steps.write(step);
+        // About once a second: on this thread.
         if (calibration) calibration->write(step);
       },
       progress);
+  steps.finish();
   writer.commit();
   if (calibration) calibration->commit();
   return run;

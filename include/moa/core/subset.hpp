@@ -52,6 +52,10 @@ class SubsetSolver {
   /// twist (fewer than two, or rank deficient). Sums m's prepared terms when
   /// this solver prepared them, else computes them.
   std::optional<SubsetFit> fit(SensorMask mask, const PointMeasurements& m) const;
+  /// fit()'s twist alone, bit for bit (the same sums and solve), without
+  /// the residual's chi-square or the covariance: for a caller that reads
+  /// only the twist (the health monitor's leave-one-out twists).
+  std::optional<Twist2> twist(SensorMask mask, const PointMeasurements& m) const;
   /// Computes m.normal and m.rhs of every sensor from m.u and m.info, for
   /// this solver's A_i.
   void prepare(PointMeasurements& m) const;
@@ -61,6 +65,10 @@ class SubsetSolver {
   int size() const { return n_; }
 
  private:
+  /// The normal equations of `mask` solved: false when they do not
+  /// determine a twist; else `inv` their inverse and `x` the twist.
+  bool solve(SensorMask mask, const PointMeasurements& m, Mat3& inv, Vec3& x) const;
+
   int n_ = 0;
   std::array<Mat<2, 3>, kMaxSensors> a_ = zeros<Mat<2, 3>>();
 };

@@ -40,6 +40,9 @@ class OdometryCsvWriter {
                     bool scaled = false);
   ~OdometryCsvWriter();
   void write(const OdometryStep& step);
+  /// The row of `step` at time `t` (s): step.sample is not read, so a copy
+  /// of a step kept past its sink call (without its sample) can be written.
+  void write(double t, const OdometryStep& step);
   void flush();
   void commit();
 
