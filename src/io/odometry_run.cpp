@@ -256,6 +256,7 @@ class StepWriterThread {
     OdometryStep& copy = batch_->back().step;
     copy.sample = nullptr;
     copy.calibration = nullptr;
+    copy.calibration_filter = nullptr;
     if (batch_->size() == queue_.capacity()) {
       queue_.submit();
       batch_ = nullptr;
