@@ -15,6 +15,7 @@
 #include "moa/io/log.hpp"
 #include "moa/io/mice_writer.hpp"
 #include "support/error_of.hpp"
+#include "support/run.hpp"
 #include "support/synth.hpp"
 
 namespace moa::io {
@@ -24,13 +25,7 @@ namespace fs = std::filesystem;
 using Durability = MiceWriter::Durability;
 
 using test::error_of;
-
-std::string read_text(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+using test::read_text;
 
 RobotConfig config_ab() {
   return parse_config(

@@ -21,6 +21,7 @@
 #include "moa/io/odometry_csv.hpp"
 #include "moa/io/odometry_run.hpp"
 #include "support/error_of.hpp"
+#include "support/run.hpp"
 #include "support/synth.hpp"
 
 namespace moa::io {
@@ -28,13 +29,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using test::error_of;
-
-std::string read_text(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+using test::read_text;
 
 std::vector<std::string> read_lines(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);

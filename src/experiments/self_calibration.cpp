@@ -142,10 +142,9 @@ Result self_calibration(const Options& options) {
       const SimulatedRun run(kCases[c].scenario, options.seed + static_cast<std::uint64_t>(k),
                              scratch.path());
       for (std::size_t m = 0; m < kMethodCount; ++m) {
-        Method method{kMethods[m].name, {}};
-        method.options.estimator = kMethods[m].estimator;
-        method.options.self_calibration.enabled = kMethods[m].self_calibrate;
-        records[c][m].push_back(run.run(method, kMethods[m].self_calibrate));
+        const MethodRow& row = kMethods[m];
+        records[c][m].push_back(
+            run.run(method_of(row.name, row.estimator, row.self_calibrate), row.self_calibrate));
       }
       series[c].push_back(series_of(records[c][kSelfCalibrated].back(), truth[c].name));
     }

@@ -74,6 +74,13 @@ SimulatedRun::~SimulatedRun() {
   fs::remove_all(dir_, ignored);
 }
 
+Method method_of(std::string name, EstimatorKind estimator, bool self_calibrate) {
+  Method method{std::move(name), {}};
+  method.options.estimator = estimator;
+  method.options.self_calibration.enabled = self_calibrate;
+  return method;
+}
+
 RunRecord SimulatedRun::run(const Method& method, bool keep_calibration) const {
   const fs::path config = dir_ / "robot.yaml";
   const int k = runs_++;

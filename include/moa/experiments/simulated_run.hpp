@@ -24,6 +24,10 @@ struct Method {
   OdometryOptions options;
 };
 
+/// The method `name`: the pipeline's default options with `estimator`, and
+/// self-calibration on when `self_calibrate`.
+Method method_of(std::string name, EstimatorKind estimator, bool self_calibrate = false);
+
 /// The `moa odometry` flags that give `options` (those that differ from
 /// the defaults: estimator, sensors, wheels, camera fusion and latency,
 /// self-calibration on with its default options).
