@@ -74,8 +74,9 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
                 "estimated from the others while driving and applied to its counts "
                 "(docs/self-calibration.md); a sensor whose estimate runs away is excluded");
   cmd->add_option("--self-calibration", f.self_calibration_out,
-                  "With --self-calibrate (implied): write the estimates to this CSV "
-                  "(t,sensor,scale_x,scale_y,yaw_offset, about once a second per sensor)");
+                  "With --self-calibrate (implied): write the calibration to this CSV, "
+                  "about once a second per sensor (t,sensor,scale_x,scale_y,yaw_offset as "
+                  "applied, then the filter's filter_scale_x,filter_scale_y,filter_yaw_offset)");
   cmd->add_option("--rate", o.rate, "Epoch rate of the synchroniser, Hz (0.1 to 10000)")
       ->check(finite_within(0.1, 10000.0))
       ->capture_default_str();
