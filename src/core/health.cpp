@@ -11,12 +11,14 @@ const char* HealthOptions::validate() const {
   if (frozen_run < 2) return "health.frozen_run: must be at least 2 epochs";
   if (frozen_long_run < frozen_run) return "health.frozen_long_run: must be at least frozen_run";
   if (zero_run < 1) return "health.zero_run: must be at least 1 epoch";
-  for (const real x : {frozen_min_counts, frozen_change, zero_speed, drift_tau, drift_min_speed,
-                       drift_min_time, drift_suspect, drift_exclude, drift_release, probation}) {
+  for (const real x :
+       {frozen_min_counts, frozen_change, zero_speed, drift_tau, drift_min_speed, drift_min_time,
+        drift_suspect, drift_exclude, drift_release, drift_step_tau, drift_step, probation}) {
     if (!(std::isfinite(x) && x >= 0.0))
       return "health: thresholds and times must be finite and not negative";
   }
   if (!(drift_tau > 0.0)) return "health.drift_tau: must be positive (s)";
+  if (!(drift_step_tau > 0.0)) return "health.drift_step_tau: must be positive (s)";
   if (!(drift_release <= drift_suspect && drift_suspect <= drift_exclude))
     return "health: drift_release <= drift_suspect <= drift_exclude";
   return "";
@@ -46,6 +48,11 @@ real HealthMonitor::drift(const SensorState& s) const {
   return std::max(std::abs(s.sum_par), std::abs(s.sum_perp)) / s.weight;
 }
 
+real HealthMonitor::step(const SensorState& s) const {
+  if (s.step_weight <= 0.0 || s.time < options_.drift_step_tau) return 0.0;
+  return std::max(std::abs(s.step_par), std::abs(s.step_perp)) / s.step_weight;
+}
+
 real HealthMonitor::drift_scale(int i) const {
   const SensorState& s = state_[static_cast<std::size_t>(i)];
   return s.weight > 0.0 ? s.sum_par / s.weight : 0.0;
@@ -65,10 +72,12 @@ SensorMask HealthMonitor::screen(const SubsetSolver& solver, const ArraySample& 
   // One bad sensor biases the leave-one-out twists the others are judged
   // against, so their drift statistics rise with its own (by about 1/(N-1)
   // of it): only the largest of them may be newly excluded as drift.
-  real largest_drift = 0.0;
+  real largest_drift = 0.0, largest_step = 0.0;
   for (int i = 0; i < n_; ++i) {
     if (contains(candidates, i)) {
-      largest_drift = std::max(largest_drift, drift(state_[static_cast<std::size_t>(i)]));
+      const SensorState& s = state_[static_cast<std::size_t>(i)];
+      largest_drift = std::max(largest_drift, drift(s));
+      largest_step = std::max(largest_step, step(s));
     }
   }
   for (int i = 0; i < n_; ++i) {
@@ -101,14 +110,21 @@ SensorMask HealthMonitor::screen(const SubsetSolver& solver, const ArraySample& 
       s.zeros = 0;
     }
     if (!contains(candidates, i)) continue;  // lifted: nothing to judge
-    const real d = drift(s);
+    const real d = drift(s), f = step(s);
     Exclusion bad = Exclusion::kNone;
     if (frozen) {
       bad = Exclusion::kFrozen;
     } else if (s.zeros >= options_.zero_run) {
       bad = Exclusion::kZero;
-    } else if (d > options_.drift_exclude && d >= largest_drift) {
+    } else if ((d > options_.drift_exclude && d >= largest_drift) ||
+               (f > options_.drift_step && f >= largest_step)) {
       bad = Exclusion::kDrift;
+    }
+    if (bad == Exclusion::kFrozen || bad == Exclusion::kZero) {
+      // The residuals fed before the test fired were the fault's, not a
+      // drift's: the windows start again when the sensor comes back.
+      s.sum_par = s.sum_perp = s.weight = s.time = 0.0;
+      s.step_par = s.step_perp = s.step_weight = 0.0;
     }
     const bool half = s.repeats >= 1 || s.zeros >= 1 || d > options_.drift_suspect;
     switch (s.health) {
@@ -123,7 +139,8 @@ SensorMask HealthMonitor::screen(const SubsetSolver& solver, const ArraySample& 
         break;
       case Health::kExcluded:
         if (bad == Exclusion::kNone &&
-            (s.reason != Exclusion::kDrift || d < options_.drift_release)) {
+            (s.reason != Exclusion::kDrift ||
+             (d < options_.drift_release && f < options_.drift_release))) {
           s.health = Health::kProbation;
           s.since = sample.t;
         } else if (bad != Exclusion::kNone) {
@@ -152,7 +169,8 @@ void HealthMonitor::observe(const SubsetSolver& solver, const ArraySample& sampl
                             SensorMask candidates,
                             const std::array<std::uint8_t, kMaxSensors>& noise_flags) {
   if (!options_.enabled) return;
-  const real a = std::min(1.0, sample.dt / options_.drift_tau);  // window weight of this epoch
+  const real a = std::min(1.0, sample.dt / options_.drift_tau);       // window weight of this epoch
+  const real b = std::min(1.0, sample.dt / options_.drift_step_tau);  // the short window's
   for (int i = 0; i < n_; ++i) {
     const auto k = static_cast<std::size_t>(i);
     if (!contains(candidates, i) || noise_flags[k] != 0) continue;
@@ -181,6 +199,9 @@ void HealthMonitor::observe(const SubsetSolver& solver, const ArraySample& sampl
     s.sum_par = (1.0 - a) * s.sum_par + a * p.dot(r) / p2;
     s.sum_perp = (1.0 - a) * s.sum_perp + a * (p.x() * r.y() - p.y() * r.x()) / p2;
     s.weight = (1.0 - a) * s.weight + a;
+    s.step_par = (1.0 - b) * s.step_par + b * p.dot(r) / p2;
+    s.step_perp = (1.0 - b) * s.step_perp + b * (p.x() * r.y() - p.y() * r.x()) / p2;
+    s.step_weight = (1.0 - b) * s.step_weight + b;
     s.time += sample.dt;
   }
 }

@@ -326,11 +326,14 @@ bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& 
     selected_estimate_ = RobustEstimate{};
     if (self_calibration_) {
       // The counts as the sensors would read with their estimated calibration;
-      // a sensor whose estimate ran away is left out as if lifted.
+      // a sensor whose estimate ran away, or that is held out as drift while
+      // its correction is applied, is left out as if lifted.
       raw_ = compact_;
       self_calibration_->correct(compact_);
       for (int k = 0; k < m_; ++k) {
-        if (self_calibration_->runaway(k)) compact_.flags[static_cast<std::size_t>(k)] |= kFlagLift;
+        if (self_calibration_->runaway(k) || self_calibration_->held_as_drift(k)) {
+          compact_.flags[static_cast<std::size_t>(k)] |= kFlagLift;
+        }
       }
     }
   }
@@ -385,8 +388,11 @@ bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& 
   if (!ok) return false;
   if (self_calibration_) {
     for (int k = 0; k < m_; ++k) {
-      if (self_calibration_->runaway(k) && !contains(e.estimate.used, k)) {
+      if (contains(e.estimate.used, k)) continue;
+      if (self_calibration_->runaway(k)) {
         e.excluded[static_cast<std::size_t>(k)] = Exclusion::kCalibration;
+      } else if (self_calibration_->held_as_drift(k)) {
+        e.excluded[static_cast<std::size_t>(k)] = Exclusion::kDrift;
       }
     }
     self_calibration_->observe(raw_, e);

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "moa/core/chi2.hpp"
 #include "moa/core/se2.hpp"
 
 namespace moa {
@@ -21,6 +22,8 @@ const char* SelfCalibrationOptions::validate() const {
   if (!(std::isfinite(relative_noise) && relative_noise >= 0.0))
     return "self_calibration.relative_noise: must be finite and not negative";
   if (!positive(gate)) return "self_calibration.gate: must be positive and finite";
+  if (!(positive(predictor_alpha) && predictor_alpha < 1.0))
+    return "self_calibration.predictor_alpha: must be in (0, 1)";
   if (!(positive(runaway_scale) && runaway_scale < 1.0))
     return "self_calibration.runaway_scale: must be in (0, 1)";
   if (!positive(runaway_yaw)) return "self_calibration.runaway_yaw: must be positive (rad)";
@@ -47,10 +50,20 @@ SelfCalibration::SelfCalibration(const SensorArray& array, SelfCalibrationOption
     state_[u].p = prior.cwiseAbs2().asDiagonal();
   }
   points_.size = n_;
+  for (std::size_t d = 1; d < chi2_gate_.size(); ++d) {
+    chi2_gate_[d] =
+        static_cast<real>(chi2_quantile(1.0 - options_.predictor_alpha, static_cast<int>(d)));
+  }
 }
 
 Vec3 SelfCalibration::sd(int i) const {
   return state_[static_cast<std::size_t>(i)].p.diagonal().cwiseMax(0.0).cwiseSqrt();
+}
+
+bool SelfCalibration::held_as_drift(int i) const {
+  const SensorState& s = state_[static_cast<std::size_t>(i)];
+  return s.drifted &&
+         !(s.applied.scale_x == 1.0 && s.applied.scale_y == 1.0 && s.applied.yaw_offset == 0.0);
 }
 
 SensorMask SelfCalibration::runaways() const {
@@ -116,6 +129,13 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
   const SensorMask used = estimate.estimate.used;
   for (int i = 0; i < n_; ++i) {
     const auto u = static_cast<std::size_t>(i);
+    SensorState& d = state_[u];
+    if (estimate.excluded[u] == Exclusion::kDrift) {
+      d.drifted = true;
+    } else if (d.applied.scale_x == 1.0 && d.applied.scale_y == 1.0 &&
+               d.applied.yaw_offset == 0.0) {
+      d.drifted = false;
+    }
     switch (estimate.excluded[u]) {
       case Exclusion::kNone:
       case Exclusion::kInconsistent:
@@ -134,6 +154,11 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
     if (count_sensors(others) < 2) continue;
     const auto fit = solver_.fit(others, points_);
     if (!fit) continue;
+    // The others must agree among themselves (chi-square of their fit under
+    // this filter's noise: quantisation and relative_noise): a fault in one
+    // of them that the estimator has not caught yet (a step of its scale)
+    // would otherwise be learnt by every other sensor.
+    if (fit->dof > 0 && fit->chi2 > chi2_gate_[static_cast<std::size_t>(fit->dof)]) continue;
     const Vec2 p = solver_.jacobian(i) * fit->twist.vector();
     // Over (or near) its rating a sensor under-reads by random fractions: a
     // fault, not a calibration.

@@ -27,7 +27,9 @@
 //      rho_par  = p^T (u_i - p) / |p|^2      (scale error along the motion)
 //      rho_perp = p x (u_i - p) / |p|^2      (yaw offset, rad)
 //    with p = A_i x_(i), averaged by an exponential window of drift_tau
-//    seconds (weights normalised, so the mean is unbiased from the start).
+//    seconds (weights normalised, so the mean is unbiased from the start),
+//    and by a short one of drift_step_tau seconds that sees a step of the
+//    scale (a change of floor) before the long mean reaches drift_exclude.
 //    Fed only on epochs where |p| >= drift_min_speed, the sensor's noise was
 //    not inflated (over speed, low SQUAL, overflow) and its whitened
 //    residual passes q(1 - alpha, 2): gross errors are the consistency
@@ -66,6 +68,11 @@ struct HealthOptions {
   real drift_suspect = 0.015;    ///< relative scale or yaw (rad)
   real drift_exclude = 0.03;
   real drift_release = 0.01;
+  /// A step (a change of floor) is seen sooner by a short window: its mean
+  /// over drift_step_tau (s) beyond drift_step excludes too, once the
+  /// window has drift_step_tau of samples.
+  real drift_step_tau = 0.2;
+  real drift_step = 0.06;
   /// s; 0.5 s cost 1.1 mm on robust-faults' liftoff, seeds 1-5 (four sensors beat three).
   real probation = 0.1;
   /// Empty when usable, else what is wrong, naming the field.
@@ -103,8 +110,10 @@ class HealthMonitor {
     Vec2 run_start{0.0, 0.0};  ///< m/s, predicted point velocity when the run began
     int repeats = 0, zeros = 0;
     real sum_par = 0.0, sum_perp = 0.0, weight = 0.0, time = 0.0;
+    real step_par = 0.0, step_perp = 0.0, step_weight = 0.0;  ///< the short window's
   };
   real drift(const SensorState& s) const;
+  real step(const SensorState& s) const;
 
   HealthOptions options_;
   real residual_gate_;

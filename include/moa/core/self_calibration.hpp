@@ -95,7 +95,10 @@ struct SelfCalibrationOptions {
   /// both axes when each is within `deadband` (dust dims both axes
   /// alike; the good sensors' scatter is mostly one axis against the other).
   real isotropic_deadband = 0.0125;
-  real gate = 0.3;            ///< relative residual above which a block is not used
+  real gate = 0.3;  ///< relative residual above which a block is not used
+  /// An epoch is not used for sensor i when the other sensors' fit fails
+  /// the chi-square test at this level (they disagree among themselves).
+  real predictor_alpha = 0.001;
   real runaway_scale = 0.25;  ///< |s - 1| beyond which a sensor is excluded
   real runaway_yaw = 0.2;     ///< rad, |delta| beyond which a sensor is excluded
   /// Blocks over `gate` in a row, read as one scale and rotation against the
@@ -145,6 +148,12 @@ class SelfCalibration {
   /// The estimate ran away: the sensor is left out (kCalibration).
   bool runaway(int i) const { return state_[static_cast<std::size_t>(i)].runaway; }
   SensorMask runaways() const;
+  /// The health monitor excluded sensor i as drift and its correction is
+  /// applied: it stays out (Exclusion::kDrift) until the correction is back
+  /// to as configured. A sensor that changed enough to be excluded is not
+  /// trusted back on a correction whose own error (0.3-0.7 %, the filter's
+  /// scatter) would bias the rotation: on selfcal-step it cost 7 mm.
+  bool held_as_drift(int i) const;
   int size() const { return n_; }
 
  private:
@@ -165,8 +174,9 @@ class SelfCalibration {
     double last_update = -1.0;                    ///< s; < 0: never
     long updates = 0;
     bool runaway = false;
-    long reacquired = 0;                 ///< restarts by reacquire()
-    GrossRun gross;                      ///< the blocks over the gate in a row
+    long reacquired = 0;   ///< restarts by reacquire()
+    bool drifted = false;  ///< excluded as drift since the correction was last 1, 1, 0
+    GrossRun gross;        ///< the blocks over the gate in a row
     Mat2 correction = Mat2::Identity();  ///< counts -> corrected counts
   };
   void update(int i, double t);
@@ -181,6 +191,7 @@ class SelfCalibration {
   SubsetSolver solver_;
   std::array<Mat2, kMaxSensors> velocity_from_counts_ = zeros<Mat2>();
   std::array<real, kMaxSensors> metres_per_count_{};
+  std::array<real, 2 * kMaxSensors> chi2_gate_{};  ///< by degrees of freedom
   std::array<SensorState, kMaxSensors> state_{};
   PointMeasurements points_;
 };
