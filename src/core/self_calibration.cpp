@@ -8,7 +8,26 @@
 
 namespace moa {
 
+const char* describe(SelfCalibrationGauge gauge) {
+  switch (gauge) {
+    case SelfCalibrationGauge::kSensors:
+      return "sensors";
+    case SelfCalibrationGauge::kWheels:
+      return "wheels";
+  }
+  return "?";
+}
+
+std::optional<SelfCalibrationGauge> self_calibration_gauge_from_name(std::string_view name) {
+  for (const auto g : {SelfCalibrationGauge::kSensors, SelfCalibrationGauge::kWheels}) {
+    if (name == describe(g)) return g;
+  }
+  return std::nullopt;
+}
+
 const char* SelfCalibrationOptions::validate() const {
+  if (gauge != SelfCalibrationGauge::kSensors && gauge != SelfCalibrationGauge::kWheels)
+    return "self_calibration.gauge: must be sensors or wheels";
   const auto positive = [](real x) { return std::isfinite(x) && x > 0.0; };
   if (!positive(block)) return "self_calibration.block: must be positive and finite (s)";
   if (!(std::isfinite(min_speed) && min_speed >= 0.0))
@@ -30,6 +49,10 @@ const char* SelfCalibrationOptions::validate() const {
     return "self_calibration.isotropic_deadband: must be finite and not negative";
   if (!(std::isfinite(apply_step) && apply_step >= 0.0))
     return "self_calibration.apply_step: must be finite and not negative";
+  if (!(std::isfinite(gauge_walk) && gauge_walk >= 0.0))
+    return "self_calibration.gauge_walk: must be finite and not negative (1/sqrt(s))";
+  if (!(std::isfinite(wheel_noise) && wheel_noise >= 0.0))
+    return "self_calibration.wheel_noise: must be finite and not negative";
   return "";
 }
 
@@ -44,6 +67,10 @@ SelfCalibration::SelfCalibration(const SensorArray& array, SelfCalibrationOption
     state_[u].p = prior.cwiseAbs2().asDiagonal();
   }
   points_.size = n_;
+  real r2 = 0.0;
+  for (int i = 0; i < n_; ++i) r2 += array[i].position.squaredNorm();
+  radius_ = n_ > 0 ? std::sqrt(r2 / static_cast<real>(n_)) : 0.0;
+  wheel_.p = Mat2::Identity() * (options_.prior_scale_sd * options_.prior_scale_sd);
 }
 
 Vec3 SelfCalibration::sd(int i) const {
@@ -78,11 +105,19 @@ void SelfCalibration::renew(int i) {
   // cost more. Those are mostly one axis against the other; a drift (dust)
   // dims both axes alike, so the isotropic part g = sqrt(s_x s_y) has a
   // narrower band: beyond it g stands for an axis inside the wide band.
-  const real g = std::sqrt(s.theta.scale_x * s.theta.scale_y);
+  // The bands judge the relative calibration theta / (G, D); the gauge's
+  // common part (G, D) has its own (with kSensors it is (1, 0), exactly).
+  const SelfCalibrationEstimate common_part = gauge();
+  const real gs = common_part.scale_x, gy = common_part.yaw_offset;
+  const SelfCalibrationEstimate rel{s.theta.scale_x / gs, s.theta.scale_y / gs,
+                                    s.theta.yaw_offset - gy};
+  const real g = std::sqrt(rel.scale_x * rel.scale_y);
   const real iso = std::abs(g - 1.0) > options_.isotropic_deadband ? g : 1.0;
   const auto band_scale = [&](real x) { return std::abs(x - 1.0) > options_.deadband ? x : iso; };
-  s.applied = {band_scale(s.theta.scale_x), band_scale(s.theta.scale_y),
-               std::abs(s.theta.yaw_offset) > options_.deadband ? s.theta.yaw_offset : 0.0};
+  const SelfCalibrationEstimate common = applied_gauge();
+  s.applied = {
+      common.scale_x * band_scale(rel.scale_x), common.scale_y * band_scale(rel.scale_y),
+      common.yaw_offset + (std::abs(rel.yaw_offset) > options_.deadband ? rel.yaw_offset : 0.0)};
   const SelfCalibrationEstimate& used = s.applied;
   // counts -> robot velocity (configured), into the configured sensor frame,
   // C^-1 = R(delta) diag(1/s), back to the robot frame and to counts.
@@ -93,7 +128,8 @@ void SelfCalibration::renew(int i) {
   s.correction = v.inverse() * r * c_inv * r.transpose() * v;
 }
 
-void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& estimate) {
+void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& estimate,
+                              const std::optional<Twist2>& wheels) {
   if (estimate.source != Source::kMice || !(std::isfinite(raw.dt) && raw.dt > 0.0)) return;
   const real dt = raw.dt;
   // Corrected point velocities of every sensor, weighed by their
@@ -107,6 +143,16 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
     points_.info[u] = Mat2::Identity() / (q * q / 6.0 + rel * rel + 1e-12);
   }
   const SensorMask used = estimate.estimate.used;
+  // The others' corrections carry the applied common part (Gc, Dc), theta
+  // the gauge's (G, D): a prediction in theta's gauge is (Gc / G) R(D - Dc)
+  // times theirs (robot frame). Without it every block of every sensor would
+  // pull theta towards the applied common part, against fix_gauge(), and on
+  // a path that leaves a direction of theta open that tug drives it off.
+  Mat2 to_gauge = Mat2::Identity();
+  if (options_.gauge == SelfCalibrationGauge::kWheels) {
+    const SelfCalibrationEstimate g = gauge(), gc = applied_gauge();
+    to_gauge = (gc.scale_x / g.scale_x) * rotation(g.yaw_offset - gc.yaw_offset);
+  }
   for (int i = 0; i < n_; ++i) {
     const auto u = static_cast<std::size_t>(i);
     switch (estimate.excluded[u]) {
@@ -127,7 +173,8 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
     if (count_sensors(others) < 2) continue;
     const auto fit = solver_.fit(others, points_);
     if (!fit) continue;
-    const Vec2 p = solver_.jacobian(i) * fit->twist.vector();
+    Vec2 p = solver_.jacobian(i) * fit->twist.vector();
+    if (options_.gauge == SelfCalibrationGauge::kWheels) p = to_gauge * p;
     // Over (or near) its rating a sensor under-reads by random fractions: a
     // fault, not a calibration.
     if (array_[i].max_speed && p.norm() > 0.8 * *array_[i].max_speed) continue;
@@ -146,6 +193,95 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
       s.time = 0.0;
     }
   }
+  if (options_.gauge == SelfCalibrationGauge::kWheels && wheels) observe_wheels(raw, used, *wheels);
+}
+
+void SelfCalibration::observe_wheels(const ArraySample& raw, SensorMask used,
+                                     const Twist2& wheels) {
+  if (!wheels.vector().allFinite()) return;
+  const real dt = raw.dt;
+  const SelfCalibrationEstimate common = gauge();
+  // The used sensors' point velocities (robot frame, m/s) corrected by their
+  // relative calibration theta / (G, D) alone: u = R(yaw) R(delta - D)
+  // diag(G / s) R(yaw)^T u_raw. Their fit is the array's twist in the
+  // configured gauge, G R(-D) times the true one.
+  for (int k = 0; k < n_; ++k) {
+    if (!contains(used, k)) continue;
+    const auto u = static_cast<std::size_t>(k);
+    const SensorState& s = state_[u];
+    const Vec2 u_raw = velocity_from_counts_[u] * raw.counts[u] / dt;
+    // Over (or near) its rating a sensor under-reads by random fractions.
+    if (array_[k].max_speed && u_raw.norm() > 0.8 * *array_[k].max_speed) return;
+    const Mat2 r = rotation(array_[k].yaw);
+    const Mat2 c_inv =
+        rotation(s.theta.yaw_offset - common.yaw_offset) *
+        Vec2(common.scale_x / s.theta.scale_x, common.scale_y / s.theta.scale_y).asDiagonal();
+    points_.u[u] = r * c_inv * r.transpose() * u_raw;
+    const real q = metres_per_count_[u] / dt;
+    const real rel = options_.relative_noise * points_.u[u].norm();
+    points_.info[u] = Mat2::Identity() / (q * q / 6.0 + rel * rel + 1e-12);
+  }
+  const auto fit = solver_.fit(used, points_);
+  if (!fit) return;
+  WheelGauge& w = wheel_;
+  w.sum_v_array += fit->twist.v * dt;
+  w.sum_theta_array += fit->twist.omega * dt;
+  w.sum_v_wheels += wheels.v * dt;
+  w.sum_theta_wheels += wheels.omega * dt;
+  const Mat3& c = fit->covariance;
+  w.sum_var += (0.5 * (c(0, 0) + c(1, 1)) + radius_ * radius_ * c(2, 2)) * dt * dt;
+  w.time += dt;
+  if (w.time >= options_.block - 1e-9) {
+    update_gauge(raw.t);
+    w.sum_v_array.setZero();
+    w.sum_v_wheels.setZero();
+    w.sum_theta_array = w.sum_theta_wheels = w.sum_var = w.time = 0.0;
+  }
+}
+
+void SelfCalibration::update_gauge(double t) {
+  WheelGauge& w = wheel_;
+  // 1. The block's motion, m: a rotation moves the sensors by radius_ Theta.
+  const real d = std::hypot(w.sum_v_wheels.norm(), radius_ * w.sum_theta_wheels);
+  if (d < options_.min_speed * w.time) return;  // nothing excited
+  // 2. Forgetting: the random walk since the last update, capped at the prior.
+  if (w.last_update >= 0.0) {
+    const real e = static_cast<real>(t - w.last_update);
+    w.p.diagonal() += Vec2::Constant(e * options_.gauge_walk * options_.gauge_walk);
+    const real cap = options_.prior_scale_sd * options_.prior_scale_sd;
+    for (int k = 0; k < 2; ++k) {
+      if (w.p(k, k) > cap) {
+        const real f = std::sqrt(cap / w.p(k, k));
+        w.p.row(k) *= f;
+        w.p.col(k) *= f;
+      }
+    }
+  }
+  w.last_update = t;
+  // 3. y = H k: (V_a, r Theta_a) against the wheels' (V_w, r Theta_w).
+  const Vec3 y(w.sum_v_array.x(), w.sum_v_array.y(), radius_ * w.sum_theta_array);
+  Mat<3, 2> h;
+  h << w.sum_v_wheels.x(), -w.sum_v_wheels.y(),  //
+      w.sum_v_wheels.y(), w.sum_v_wheels.x(),    //
+      radius_ * w.sum_theta_wheels, 0.0;
+  const Vec3 r = y - h * w.k;
+  if (r.norm() > options_.gate * d) return;  // the wheels slipped grossly
+  // 4. Measurement variance, m^2 per component; Huber beyond three standard
+  // deviations (chi-square 27 on three components).
+  real var = options_.wheel_noise * options_.wheel_noise * d * d + w.sum_var + 1e-12;
+  const real nu2 = r.squaredNorm() / var;
+  if (nu2 > 27.0) var *= nu2 / 27.0;
+  // 5. Kalman update, Joseph form.
+  const Mat3 sm = h * w.p * h.transpose() + var * Mat3::Identity();
+  const Mat<2, 3> k = w.p * h.transpose() * sm.inverse();
+  w.k += k * r;
+  const Mat2 ikh = Mat2::Identity() - k * h;
+  w.p = ikh * w.p * ikh.transpose() + var * k * k.transpose();
+  w.p = 0.5 * (w.p + w.p.transpose()).eval();
+  ++w.updates;
+  // 6. The new common part to every sensor.
+  fix_gauge();
+  for (int j = 0; j < n_; ++j) renew(j);
 }
 
 void SelfCalibration::update(int i, double t) {
@@ -212,7 +348,7 @@ void SelfCalibration::update(int i, double t) {
 
 void SelfCalibration::fix_gauge() {
   // The median over the sensors not run away of log sqrt(s_x s_y) and of
-  // delta: the majority keeps its configured scale and yaw.
+  // delta is set to the gauge's: the majority carries the common part.
   std::array<real, kMaxSensors> logs{}, yaws{};
   int m = 0;
   for (int j = 0; j < n_; ++j) {
@@ -228,13 +364,32 @@ void SelfCalibration::fix_gauge() {
     const auto h = static_cast<std::size_t>(m / 2);
     return m % 2 == 1 ? v[h] : 0.5 * (v[h - 1] + v[h]);
   };
-  const real g = std::exp(-median(logs)), d = median(yaws);
+  const SelfCalibrationEstimate target = gauge();
+  const real g = std::exp(std::log(target.scale_x) - median(logs)),
+             d = median(yaws) - target.yaw_offset;
   for (int j = 0; j < n_; ++j) {
     SensorState& o = state_[static_cast<std::size_t>(j)];
     o.theta.scale_x *= g;
     o.theta.scale_y *= g;
     o.theta.yaw_offset -= d;
   }
+}
+
+SelfCalibrationEstimate SelfCalibration::applied_gauge() const {
+  const SelfCalibrationEstimate g = gauge();
+  const real scale = std::abs(g.scale_x - 1.0) > options_.isotropic_deadband ? g.scale_x : 1.0;
+  return {scale, scale, std::abs(g.yaw_offset) > options_.deadband ? g.yaw_offset : 0.0};
+}
+
+SelfCalibrationEstimate SelfCalibration::gauge() const {
+  // k = a + i b = G e^(-iD) (kWheels); its prior (1, 0) is the configured gauge.
+  const real a = wheel_.k.x(), b = wheel_.k.y();
+  if (options_.gauge != SelfCalibrationGauge::kWheels || wheel_.updates == 0 ||
+      !(std::isfinite(a) && std::isfinite(b) && a > 0.0)) {
+    return {};
+  }
+  const real g = std::hypot(a, b);
+  return {g, g, std::atan2(-b, a)};
 }
 
 }  // namespace moa
