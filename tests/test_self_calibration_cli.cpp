@@ -56,38 +56,39 @@ std::vector<std::vector<std::string>> rows_of(const fs::path& file, std::string*
 }
 
 /// sekimori-a (Table 3 path at speed (a), four HDNS-2051 configured at 800
-/// cpi) with sensor m2 built at `true_cpi` instead.
-std::string misconfigured_scenario(int true_cpi) {
+/// cpi) with sensor m2 built as `m2_truth` (a true_sensors entry's fields).
+std::string misconfigured_scenario(const std::string& m2_truth) {
   std::string yaml(sim::builtin_scenario_text("sekimori-a"));
   const std::string m2 =
       "  m2: {position_error: [-0.0002, 0.0001], yaw_error: -0.0017, scale: [1.001, 0.9995]}";
   const auto at = yaml.find(m2);
   EXPECT_NE(at, std::string::npos) << "sekimori-a's m2 line changed";
-  if (at != std::string::npos) {
-    yaml.replace(at, m2.size(),
-                 "  m2: {position_error: [-0.0002, 0.0001], yaw_error: -0.0017, cpi: " +
-                     std::to_string(true_cpi) + "}");
-  }
+  if (at != std::string::npos) yaml.replace(at, m2.size(), "  m2: {" + m2_truth + "}");
   return yaml;
+}
+
+std::string built_at_cpi(int true_cpi) {
+  return "position_error: [-0.0002, 0.0001], yaw_error: -0.0017, cpi: " + std::to_string(true_cpi);
 }
 
 struct RunawayRun {
   std::string err;                    ///< moa odometry's stderr
   std::vector<std::string> excluded;  ///< odometry.csv's `excluded`, row by row
   std::vector<double> t;
+  std::vector<io::SelfCalibrationRow> calibration;  ///< self-calibration.csv
 };
 
-RunawayRun run_misconfigured(int true_cpi, int seed, bool self_calibrate) {
+RunawayRun run_misconfigured(const std::string& m2_truth, int seed, bool self_calibrate) {
   const fs::path dir = test::scratch_dir("self-calibration-runaway");
-  { std::ofstream(dir / "s.yaml") << misconfigured_scenario(true_cpi); }
+  { std::ofstream(dir / "s.yaml") << misconfigured_scenario(m2_truth); }
   const std::string log = (dir / "log").string();
   const auto sim = test::run_moa("simulate --scenario " + (dir / "s.yaml").string() + " --seed " +
                                  std::to_string(seed) + " --out " + log);
   EXPECT_EQ(sim.exit_code, 0) << sim.err;
-  const fs::path out = dir / "odometry.csv";
+  const fs::path out = dir / "odometry.csv", cal = dir / "self-calibration.csv";
   const auto odo =
       test::run_moa("odometry --config " + log + "/robot.yaml --log " + log + " --out " +
-                    out.string() + (self_calibrate ? " --self-calibrate" : ""));
+                    out.string() + (self_calibrate ? " --self-calibration " + cal.string() : ""));
   EXPECT_EQ(odo.exit_code, 0) << odo.err;
   RunawayRun r;
   r.err = odo.err;
@@ -101,7 +102,45 @@ RunawayRun run_misconfigured(int true_cpi, int seed, bool self_calibrate) {
     r.t.push_back(std::stod(row.front()));
     r.excluded.push_back(row.back());
   }
+  if (self_calibrate) r.calibration = io::read_self_calibration_csv(cal);
   return r;
+}
+
+/// Checks that m2, and no other sensor, is reported once on stderr and
+/// excluded as `calibration` from the epoch reported to the end, within the
+/// first half of the run; returns the time it was reported.
+double expect_m2_reported_and_excluded(const RunawayRun& r, int seed) {
+  std::smatch m;
+  const std::regex warning(
+      "warning: sensor 'm2': its self-calibration ran away \\(scale [0-9.]+, [0-9.]+, yaw "
+      "offset [-0-9.]+ rad at t = ([0-9.]+) s");
+  if (!std::regex_search(r.err, m, warning)) {
+    ADD_FAILURE() << seed << ": " << r.err;
+    return NAN;
+  }
+  const double t_warned = std::stod(m[1]);
+  EXPECT_EQ(r.err.find("ran away", m.position(0) + m.length(0)), std::string::npos)
+      << "reported once: " << r.err;
+  EXPECT_FALSE(r.t.empty());
+  std::size_t first = r.t.size();
+  for (std::size_t k = 0; k < r.t.size(); ++k) {
+    for (const char* other : {"m1:calibration", "m3:calibration", "m4:calibration"}) {
+      EXPECT_EQ(r.excluded[k].find(other), std::string::npos) << seed << " t " << r.t[k];
+    }
+    const bool out = r.excluded[k].find("m2:calibration") != std::string::npos;
+    if (out && first == r.t.size()) first = k;
+    if (first < k) {
+      EXPECT_TRUE(out) << seed << " t " << r.t[k] << ": " << r.excluded[k];
+    }
+  }
+  if (first == r.t.size()) {
+    ADD_FAILURE() << seed << ": m2 never excluded as calibration";
+    return t_warned;
+  }
+  EXPECT_DOUBLE_EQ(r.t[first], t_warned) << seed;
+  // It runs away within the first lap's turns, not at the very end.
+  EXPECT_LT(r.t[first], 0.5 * r.t.back()) << seed;
+  return t_warned;
 }
 
 // m2 counts 1020/800 = 1.275 times what its config says: beyond the runaway
@@ -113,49 +152,51 @@ RunawayRun run_misconfigured(int true_cpi, int seed, bool self_calibrate) {
 // 20 %, and its truth stays 27.5 % off); no other sensor ever is.
 TEST(SelfCalibrationCli, SensorConfiguredAQuarterOffIsReportedAndExcluded) {
   for (int seed = 101; seed <= 103; ++seed) {
-    const RunawayRun r = run_misconfigured(1020, seed, true);
-    std::smatch m;
-    const std::regex warning(
-        "warning: sensor 'm2': its self-calibration ran away \\(scale [0-9.]+, [0-9.]+, yaw "
-        "offset [-0-9.]+ rad at t = ([0-9.]+) s");
-    ASSERT_TRUE(std::regex_search(r.err, m, warning)) << seed << ": " << r.err;
-    const double t_warned = std::stod(m[1]);
-    EXPECT_EQ(r.err.find("ran away", m.position(0) + m.length(0)), std::string::npos)
-        << "reported once: " << r.err;
-    ASSERT_FALSE(r.t.empty());
-    std::size_t first = r.t.size();
-    for (std::size_t k = 0; k < r.t.size(); ++k) {
-      for (const char* other : {"m1:calibration", "m3:calibration", "m4:calibration"}) {
-        EXPECT_EQ(r.excluded[k].find(other), std::string::npos) << seed << " t " << r.t[k];
-      }
-      const bool out = r.excluded[k].find("m2:calibration") != std::string::npos;
-      if (out && first == r.t.size()) first = k;
-      if (first < k) {
-        EXPECT_TRUE(out) << seed << " t " << r.t[k] << ": " << r.excluded[k];
-      }
-    }
-    ASSERT_LT(first, r.t.size()) << seed << ": m2 never excluded as calibration";
-    EXPECT_DOUBLE_EQ(r.t[first], t_warned) << seed;
-    // It runs away within the first lap's turns, not at the very end.
-    EXPECT_LT(r.t[first], 0.5 * r.t.back()) << seed;
+    expect_m2_reported_and_excluded(run_misconfigured(built_at_cpi(1020), seed, true), seed);
   }
 }
 
 // Without --self-calibrate nothing is ever excluded as `calibration`.
 TEST(SelfCalibrationCli, NoCalibrationReasonWithoutSelfCalibrate) {
-  const RunawayRun r = run_misconfigured(1020, 101, false);
+  const RunawayRun r = run_misconfigured(built_at_cpi(1020), 101, false);
   EXPECT_THAT(r.err, ::testing::Not(HasSubstr("ran away")));
   for (const auto& e : r.excluded) EXPECT_EQ(e.find(":calibration"), std::string::npos) << e;
 }
 
-// GAP (docs/self-calibration.md, Open): a sensor 50 % off (1200 cpi
-// configured as 800) is never reported: its blocks' relative residual (0.5)
-// is over the gate (0.3), so its estimate never moves from 1 (the consensus
-// leaves m2 out as `inconsistent` instead). Disabled until the
-// self-calibration handles it.
-TEST(SelfCalibrationCli, DISABLED_SensorConfiguredHalfOffIsReportedToo) {
-  const RunawayRun r = run_misconfigured(1200, 101, true);
-  EXPECT_THAT(r.err, HasSubstr("sensor 'm2': its self-calibration ran away"));
+// Calibrations far off, beyond the 30 % relative residual over which a
+// block does not update the filter: m2 built at 1200 cpi (counts 1.5 times
+// the config's), at 560 cpi (0.7 times), or turned by 30 degrees
+// (0.5236 rad). The blocks over the gate agree with one scale and rotation,
+// so the estimate restarts there (reacquire) and then runs away: reported,
+// excluded as `calibration` to the end, as above. And the filter's final
+// estimate is the truth: within the issue's 2 % on each scale (the good
+// sensors' estimates scatter up to 1.2 % on cruise, docs/self-calibration.md)
+// and 0.01 rad on the yaw offset (the true yaw errors of the other sensors,
+// whose median is the gauge, differ from 0 by up to 0.0017 rad).
+TEST(SelfCalibrationCli, CalibrationsFarOffAreReacquiredReportedAndExcluded) {
+  struct Case {
+    std::string truth;
+    double scale, yaw;  ///< m2's truth relative to its config
+  };
+  const std::vector<Case> cases{
+      {built_at_cpi(1200), 1.5, -0.0017},
+      {built_at_cpi(560), 0.7, -0.0017},
+      {"position_error: [-0.0002, 0.0001], yaw_error: 0.5236", 1.0, 0.5236}};
+  for (const Case& c : cases) {
+    for (int seed = 101; seed <= 103; ++seed) {
+      SCOPED_TRACE(c.truth + ", seed " + std::to_string(seed));
+      const RunawayRun r = run_misconfigured(c.truth, seed, true);
+      expect_m2_reported_and_excluded(r, seed);
+      const io::SelfCalibrationRow* last = nullptr;
+      for (const auto& row : r.calibration) {
+        if (row.sensor == "m2") last = &row;
+      }
+      ASSERT_NE(last, nullptr);
+      EXPECT_NEAR(last->filter.scale_x / c.scale, 1.0, 0.02);
+      EXPECT_NEAR(last->filter.scale_y / c.scale, 1.0, 0.02);
+      EXPECT_NEAR(last->filter.yaw_offset, c.yaw, 0.01);
+    }
+  }
 }
 
 // moa live on a replayed log writes self-calibration.csv as

@@ -43,6 +43,9 @@ const char* SelfCalibrationOptions::validate() const {
   if (!(positive(runaway_scale) && runaway_scale < 1.0))
     return "self_calibration.runaway_scale: must be in (0, 1)";
   if (!positive(runaway_yaw)) return "self_calibration.runaway_yaw: must be positive (rad)";
+  if (reacquire_blocks < 2) return "self_calibration.reacquire_blocks: must be at least 2";
+  if (!positive(reacquire_spread))
+    return "self_calibration.reacquire_spread: must be positive and finite";
   if (!(std::isfinite(deadband) && deadband >= 0.0))
     return "self_calibration.deadband: must be finite and not negative";
   if (!(std::isfinite(isotropic_deadband) && isotropic_deadband >= 0.0))
@@ -104,19 +107,23 @@ void SelfCalibration::renew(int i) {
   // (s_x, s_y, delta) that a translation in one direction leaves open) would
   // cost more. Those are mostly one axis against the other; a drift (dust)
   // dims both axes alike, so the isotropic part g = sqrt(s_x s_y) has a
-  // narrower band: beyond it g stands for an axis inside the wide band.
-  // The bands judge the relative calibration theta / (G, D); the gauge's
-  // common part (G, D) has its own (with kSensors it is (1, 0), exactly).
+  // narrower band: beyond it, with both axes inside the wide band, g stands
+  // for both. An axis beyond the wide band is plainly off: then both axes
+  // take their estimates. The bands judge the relative calibration theta /
+  // (G, D); the gauge's common part (G, D) has its own (with kSensors it is
+  // (1, 0), exactly).
   const SelfCalibrationEstimate common_part = gauge();
   const real gs = common_part.scale_x, gy = common_part.yaw_offset;
   const SelfCalibrationEstimate rel{s.theta.scale_x / gs, s.theta.scale_y / gs,
                                     s.theta.yaw_offset - gy};
   const real g = std::sqrt(rel.scale_x * rel.scale_y);
-  const real iso = std::abs(g - 1.0) > options_.isotropic_deadband ? g : 1.0;
-  const auto band_scale = [&](real x) { return std::abs(x - 1.0) > options_.deadband ? x : iso; };
+  const bool off = std::abs(rel.scale_x - 1.0) > options_.deadband ||
+                   std::abs(rel.scale_y - 1.0) > options_.deadband;
+  const bool dimmed = std::abs(g - 1.0) > options_.isotropic_deadband;
   const SelfCalibrationEstimate common = applied_gauge();
   s.applied = {
-      common.scale_x * band_scale(rel.scale_x), common.scale_y * band_scale(rel.scale_y),
+      common.scale_x * (off ? rel.scale_x : (dimmed ? g : 1.0)),
+      common.scale_y * (off ? rel.scale_y : (dimmed ? g : 1.0)),
       common.yaw_offset + (std::abs(rel.yaw_offset) > options_.deadband ? rel.yaw_offset : 0.0)};
   const SelfCalibrationEstimate& used = s.applied;
   // counts -> robot velocity (configured), into the configured sensor frame,
@@ -313,23 +320,28 @@ void SelfCalibration::update(int i, double t) {
   hj << rw.x(), 0.0, s.theta.scale_x * (-sn * w.x() + c * w.y()),  //
       0.0, rw.y(), s.theta.scale_y * (-c * w.x() - sn * w.y());
   const Vec2 r = s.sum_meas - h;
-  if (r.norm() > options_.gate * w.norm()) return;  // a gross error, not a calibration
-  const real mpc = metres_per_count_[static_cast<std::size_t>(i)];
-  const real rel = options_.relative_noise * w.norm();
-  real var = mpc * mpc / 3.0 + s.sum_var + rel * rel;
-  // Huber: a block far out weighs as one at three standard deviations.
-  const real nu2 = r.squaredNorm() / var;
-  if (nu2 > 18.0) var *= nu2 / 18.0;
-  const Mat2 sm = hj * s.p * hj.transpose() + var * Mat2::Identity();
-  const Mat<3, 2> k = s.p * hj.transpose() * sm.inverse();
-  const Vec3 dx = k * r;
-  s.theta.scale_x += dx(0);
-  s.theta.scale_y += dx(1);
-  s.theta.yaw_offset += dx(2);
-  const Mat3 ikh = Mat3::Identity() - k * hj;
-  s.p = ikh * s.p * ikh.transpose() + var * k * k.transpose();  // Joseph form
-  s.p = 0.5 * (s.p + s.p.transpose()).eval();
-  ++s.updates;
+  if (r.norm() > options_.gate * w.norm()) {
+    // A gross error, not a calibration: unless it persists.
+    if (!reacquire(s, h)) return;
+  } else {
+    s.gross = {};
+    const real mpc = metres_per_count_[static_cast<std::size_t>(i)];
+    const real rel = options_.relative_noise * w.norm();
+    real var = mpc * mpc / 3.0 + s.sum_var + rel * rel;
+    // Huber: a block far out weighs as one at three standard deviations.
+    const real nu2 = r.squaredNorm() / var;
+    if (nu2 > 18.0) var *= nu2 / 18.0;
+    const Mat2 sm = hj * s.p * hj.transpose() + var * Mat2::Identity();
+    const Mat<3, 2> k = s.p * hj.transpose() * sm.inverse();
+    const Vec3 dx = k * r;
+    s.theta.scale_x += dx(0);
+    s.theta.scale_y += dx(1);
+    s.theta.yaw_offset += dx(2);
+    const Mat3 ikh = Mat3::Identity() - k * hj;
+    s.p = ikh * s.p * ikh.transpose() + var * k * k.transpose();  // Joseph form
+    s.p = 0.5 * (s.p + s.p.transpose()).eval();
+    ++s.updates;
+  }
   fix_gauge();
   for (int j = 0; j < n_; ++j) {
     SensorState& o = state_[static_cast<std::size_t>(j)];
@@ -344,6 +356,50 @@ void SelfCalibration::update(int i, double t) {
     }
     renew(j);
   }
+}
+
+bool SelfCalibration::reacquire(SensorState& s, const Vec2& h) {
+  // A block over the gate: m against the prediction h = C(theta) w as one
+  // scale and one rotation, m ~ rho R(phi) h, with
+  //   rho cos(phi) = h.m / |h|^2,   rho sin(phi) = (h x m) / |h|^2.
+  // A spike or a slipping sensor gives scattered (rho, phi); a calibration
+  // far off (a wrong resolution in the config, a sensor mounted turned)
+  // gives the same pair block after block. After reacquire_blocks such
+  // blocks in a row whose (log rho, phi) scatter by less than
+  // reacquire_spread, theta is restarted there (s <- rho s on both axes,
+  // delta <- delta - phi, the prior's covariance): the filter refines it
+  // from then on, and the runaway bounds judge it.
+  const real hh = h.squaredNorm();
+  if (!(hh > 0.0)) return false;
+  const Vec2 m = s.sum_meas;
+  const real c = h.dot(m) / hh, sn = (h.x() * m.y() - h.y() * m.x()) / hh;
+  const real rho = std::hypot(c, sn);
+  if (!(rho > 0.0)) {
+    s.gross = {};
+    return false;
+  }
+  const Vec2 x(std::log(rho), std::atan2(sn, c));
+  GrossRun& g = s.gross;
+  // Welford's running mean and sum of squared deviations.
+  ++g.blocks;
+  const Vec2 delta = x - g.mean;
+  g.mean += delta / static_cast<real>(g.blocks);
+  g.m2 += delta.cwiseProduct(x - g.mean);
+  if (g.blocks < options_.reacquire_blocks) return false;
+  const Vec2 spread = (g.m2 / static_cast<real>(g.blocks - 1)).cwiseSqrt();
+  if (spread.maxCoeff() < options_.reacquire_spread) {
+    const real k = std::exp(g.mean.x());
+    s.theta.scale_x *= k;
+    s.theta.scale_y *= k;
+    s.theta.yaw_offset -= g.mean.y();
+    const Vec3 prior(options_.prior_scale_sd, options_.prior_scale_sd, options_.prior_yaw_sd);
+    s.p = prior.cwiseAbs2().asDiagonal();
+    ++s.reacquired;
+    g = {};
+    return true;
+  }
+  g = {};
+  return false;
 }
 
 void SelfCalibration::fix_gauge() {

@@ -78,12 +78,18 @@
 // A sensor whose estimate runs away (|s - 1| > runaway_scale on an axis or
 // |delta| > runaway_yaw) is reported by runaway() and left out of the
 // estimate (Exclusion::kCalibration) until it is back within 0.8 times the
-// bounds; it is still calibrated meanwhile.
+// bounds; it is still calibrated meanwhile. A calibration so far off that
+// every block is over the gate (a resolution 50 % off, a sensor turned by
+// 30 degrees) is reacquired: reacquire_blocks such blocks in a row that
+// agree on one scale rho and rotation phi (m ~ rho R(phi) C w; the sd of
+// their log rho and phi under reacquire_spread) restart the estimate there,
+// with the prior's covariance; then it runs away as above.
 //
 // Deadband: an estimate is applied only once it is deadband (2 %, 0.02 rad)
 // away from the configured value, or, for the scales, once their isotropic
 // part g = sqrt(s_x s_y) is isotropic_deadband (1.25 %) away from 1 (then g
-// is applied to an axis that is itself within the band). The estimates of
+// is applied to both axes); once an axis is beyond the wide band both axes
+// take their own estimates (a sensor plainly off). The estimates of
 // good sensors deviate by up to 1 % on an axis on a path that drives
 // forward only (sekimori-a, cruise): such a translation leaves one
 // direction of (s_x, s_y, delta) to rotation, where a mount position error
@@ -141,13 +147,18 @@ struct SelfCalibrationOptions {
   /// applied: the configured value stands (docs/self-calibration.md).
   real deadband = 0.02;
   /// An isotropic part sqrt(s_x s_y) further than this from 1 is applied to
-  /// both axes even when each is within `deadband` (dust dims both axes
+  /// both axes when each is within `deadband` (dust dims both axes
   /// alike; the good sensors' scatter is mostly one axis against the other).
   real isotropic_deadband = 0.0125;
   real gate = 0.3;            ///< relative residual above which a block is not used
   real runaway_scale = 0.25;  ///< |s - 1| beyond which a sensor is excluded
   real runaway_yaw = 0.2;     ///< rad, |delta| beyond which a sensor is excluded
-  real apply_step = 5e-4;     ///< change of an estimate that renews the applied correction
+  /// Blocks over `gate` in a row, read as one scale and rotation against the
+  /// prediction, that restart a sensor's estimate there when they agree
+  /// (a calibration far off: docs/self-calibration.md "Runaway").
+  int reacquire_blocks = 20;
+  real reacquire_spread = 0.05;  ///< sd of their log scale and rotation (rad) that agrees
+  real apply_step = 5e-4;        ///< change of an estimate that renews the applied correction
   /// kWheels: 1/sqrt(s), random walk of the common scale (of a and b, above).
   real gauge_walk = 0.001;
   /// kWheels: sd of a block's wheel displacement, fraction of it (the
@@ -192,6 +203,8 @@ class SelfCalibration {
   Vec3 sd(int i) const;
   /// Blocks used for sensor i so far.
   long updates(int i) const { return state_[static_cast<std::size_t>(i)].updates; }
+  /// Times sensor i's estimate was restarted from blocks over the gate.
+  long reacquired(int i) const { return state_[static_cast<std::size_t>(i)].reacquired; }
   /// The estimate ran away: the sensor is left out (kCalibration).
   bool runaway(int i) const { return state_[static_cast<std::size_t>(i)].runaway; }
   SensorMask runaways() const;
@@ -204,6 +217,12 @@ class SelfCalibration {
   long gauge_updates() const { return wheel_.updates; }
 
  private:
+  /// Blocks over the gate in a row: running mean and sum of squared
+  /// deviations of (log rho, phi) (reacquire()).
+  struct GrossRun {
+    int blocks = 0;
+    Vec2 mean{0.0, 0.0}, m2{0.0, 0.0};
+  };
   struct SensorState {
     SelfCalibrationEstimate theta;
     SelfCalibrationEstimate renewed;  ///< theta when the correction was last renewed
@@ -215,6 +234,8 @@ class SelfCalibration {
     double last_update = -1.0;                    ///< s; < 0: never
     long updates = 0;
     bool runaway = false;
+    long reacquired = 0;                 ///< restarts by reacquire()
+    GrossRun gross;                      ///< the blocks over the gate in a row
     Mat2 correction = Mat2::Identity();  ///< counts -> corrected counts
   };
   /// kWheels: the array's twist against the wheels', summed over a block.
@@ -229,6 +250,8 @@ class SelfCalibration {
     long updates = 0;
   };
   void update(int i, double t);
+  /// True when theta was restarted.
+  bool reacquire(SensorState& s, const Vec2& h);
   void fix_gauge();
   void renew(int i);
   void observe_wheels(const ArraySample& raw, SensorMask used, const Twist2& wheels);
