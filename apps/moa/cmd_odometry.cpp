@@ -9,6 +9,7 @@
 
 #include "commands.hpp"
 #include "moa/io/config.hpp"
+#include "moa/io/error.hpp"
 #include "moa/io/odometry_run.hpp"
 #include "moa/io/output_path.hpp"
 #include "odometry_options.hpp"
@@ -30,6 +31,11 @@ int run_odometry(const OdometryArgs& args) {
   const OdometryOptions options = resolve_odometry_flags(args.flags, config, args.config);
   io::LogFiles log = io::resolve_log(args.log);
   if (!args.faults.empty()) log.faults = args.faults;
+  if (options.self_calibration.enabled &&
+      options.self_calibration.gauge == SelfCalibrationGauge::kWheels && !log.wheels) {
+    throw io::Error(
+        fmt::format("--self-calibration-gauge wheels: {} has no wheels.csv", log.dir.string()));
+  }
   io::refuse_output_onto_inputs(
       args.out, "--out",
       {args.config, log.mice, log.wheels.value_or(""), log.camera.value_or(""),

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "moa/io/error.hpp"
 #include "moa/io/odometry_run.hpp"
 
 namespace moa::cli {
@@ -77,6 +78,16 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
                   "With --self-calibrate (implied): write the calibration to this CSV, "
                   "about once a second per sensor (t,sensor,scale_x,scale_y,yaw_offset as "
                   "applied, then the filter's filter_scale_x,filter_scale_y,filter_yaw_offset)");
+  cmd->add_option("--self-calibration-gauge", f.self_calibration_gauge,
+                  live ? "With --self-calibrate (implied): what fixes the common scale and yaw "
+                         "of all sensors, which the redundancy cannot see: sensors (their "
+                         "median keeps the configured values; moa live reads no wheels)"
+                       : "With --self-calibrate (implied): what fixes the common scale and yaw "
+                         "of all sensors, which the redundancy cannot see: sensors (default: "
+                         "their median keeps the configured values) or wheels (the log's "
+                         "wheels.csv; their systematic slip becomes the array's scale; "
+                         "docs/self-calibration.md)")
+      ->check(live ? CLI::IsMember({"sensors"}) : CLI::IsMember({"sensors", "wheels"}));
   cmd->add_option("--rate", o.rate, "Epoch rate of the synchroniser, Hz (0.1 to 10000)")
       ->check(finite_within(0.1, 10000.0))
       ->capture_default_str();
@@ -120,7 +131,16 @@ OdometryOptions resolve_odometry_flags(const OdometryFlags& f, const io::RobotCo
                                        const std::string& config_path) {
   OdometryOptions o = f.options;
   o.consensus.motion_prior = !f.no_motion_prior;
-  o.self_calibration.enabled = f.self_calibrate || !f.self_calibration_out.empty();
+  o.self_calibration.enabled =
+      f.self_calibrate || !f.self_calibration_out.empty() || !f.self_calibration_gauge.empty();
+  if (!f.self_calibration_gauge.empty()) {
+    const auto gauge = self_calibration_gauge_from_name(f.self_calibration_gauge);
+    if (!gauge) {
+      throw io::Error(fmt::format("--self-calibration-gauge: unknown gauge '{}' (sensors, wheels)",
+                                  f.self_calibration_gauge));
+    }
+    o.self_calibration.gauge = *gauge;
+  }
   if (f.initial_pose.size() == 3) {
     o.initial = Pose2{{f.initial_pose[0], f.initial_pose[1]}, f.initial_pose[2]};
   }

@@ -395,7 +395,7 @@ bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& 
         e.excluded[static_cast<std::size_t>(k)] = Exclusion::kDrift;
       }
     }
-    self_calibration_->observe(raw_, e);
+    self_calibration_->observe(raw_, e, wheels);
     for (int k = 0; k < m_; ++k) {
       const auto i = static_cast<std::size_t>(selected_[static_cast<std::size_t>(k)]);
       calibration_[i] = self_calibration_->applied(k);

@@ -9,7 +9,26 @@
 
 namespace moa {
 
+const char* describe(SelfCalibrationGauge gauge) {
+  switch (gauge) {
+    case SelfCalibrationGauge::kSensors:
+      return "sensors";
+    case SelfCalibrationGauge::kWheels:
+      return "wheels";
+  }
+  return "?";
+}
+
+std::optional<SelfCalibrationGauge> self_calibration_gauge_from_name(std::string_view name) {
+  for (const auto g : {SelfCalibrationGauge::kSensors, SelfCalibrationGauge::kWheels}) {
+    if (name == describe(g)) return g;
+  }
+  return std::nullopt;
+}
+
 const char* SelfCalibrationOptions::validate() const {
+  if (gauge != SelfCalibrationGauge::kSensors && gauge != SelfCalibrationGauge::kWheels)
+    return "self_calibration.gauge: must be sensors or wheels";
   const auto positive = [](real x) { return std::isfinite(x) && x > 0.0; };
   if (!positive(block)) return "self_calibration.block: must be positive and finite (s)";
   if (!(std::isfinite(min_speed) && min_speed >= 0.0))
@@ -36,6 +55,10 @@ const char* SelfCalibrationOptions::validate() const {
     return "self_calibration.isotropic_deadband: must be finite and not negative";
   if (!(std::isfinite(apply_step) && apply_step >= 0.0))
     return "self_calibration.apply_step: must be finite and not negative";
+  if (!(std::isfinite(gauge_walk) && gauge_walk >= 0.0))
+    return "self_calibration.gauge_walk: must be finite and not negative (1/sqrt(s))";
+  if (!(std::isfinite(wheel_noise) && wheel_noise >= 0.0))
+    return "self_calibration.wheel_noise: must be finite and not negative";
   return "";
 }
 
@@ -54,6 +77,10 @@ SelfCalibration::SelfCalibration(const SensorArray& array, SelfCalibrationOption
     chi2_gate_[d] =
         static_cast<real>(chi2_quantile(1.0 - options_.predictor_alpha, static_cast<int>(d)));
   }
+  real r2 = 0.0;
+  for (int i = 0; i < n_; ++i) r2 += array[i].position.squaredNorm();
+  radius_ = n_ > 0 ? std::sqrt(r2 / static_cast<real>(n_)) : 0.0;
+  wheel_.p = Mat2::Identity() * (options_.prior_scale_sd * options_.prior_scale_sd);
 }
 
 Vec3 SelfCalibration::sd(int i) const {
@@ -62,8 +89,7 @@ Vec3 SelfCalibration::sd(int i) const {
 
 bool SelfCalibration::held_as_drift(int i) const {
   const SensorState& s = state_[static_cast<std::size_t>(i)];
-  return s.drifted &&
-         !(s.applied.scale_x == 1.0 && s.applied.scale_y == 1.0 && s.applied.yaw_offset == 0.0);
+  return s.drifted && s.corrected;
 }
 
 SensorMask SelfCalibration::runaways() const {
@@ -95,14 +121,23 @@ void SelfCalibration::renew(int i) {
   // dims both axes alike, so the isotropic part g = sqrt(s_x s_y) has a
   // narrower band: beyond it, with both axes inside the wide band, g stands
   // for both. An axis beyond the wide band is plainly off: then both axes
-  // take their estimates.
-  const real g = std::sqrt(s.theta.scale_x * s.theta.scale_y);
-  const bool off = std::abs(s.theta.scale_x - 1.0) > options_.deadband ||
-                   std::abs(s.theta.scale_y - 1.0) > options_.deadband;
+  // take their estimates. The bands judge the relative calibration theta /
+  // (G, D); the gauge's common part (G, D) has its own (with kSensors it is
+  // (1, 0), exactly).
+  const SelfCalibrationEstimate common_part = gauge();
+  const real gs = common_part.scale_x, gy = common_part.yaw_offset;
+  const SelfCalibrationEstimate rel{s.theta.scale_x / gs, s.theta.scale_y / gs,
+                                    s.theta.yaw_offset - gy};
+  const real g = std::sqrt(rel.scale_x * rel.scale_y);
+  const bool off = std::abs(rel.scale_x - 1.0) > options_.deadband ||
+                   std::abs(rel.scale_y - 1.0) > options_.deadband;
   const bool dimmed = std::abs(g - 1.0) > options_.isotropic_deadband;
-  s.applied = {off ? s.theta.scale_x : (dimmed ? g : 1.0),
-               off ? s.theta.scale_y : (dimmed ? g : 1.0),
-               std::abs(s.theta.yaw_offset) > options_.deadband ? s.theta.yaw_offset : 0.0};
+  s.corrected = off || dimmed || std::abs(rel.yaw_offset) > options_.deadband;
+  const SelfCalibrationEstimate common = applied_gauge();
+  s.applied = {
+      common.scale_x * (off ? rel.scale_x : (dimmed ? g : 1.0)),
+      common.scale_y * (off ? rel.scale_y : (dimmed ? g : 1.0)),
+      common.yaw_offset + (std::abs(rel.yaw_offset) > options_.deadband ? rel.yaw_offset : 0.0)};
   const SelfCalibrationEstimate& used = s.applied;
   // counts -> robot velocity (configured), into the configured sensor frame,
   // C^-1 = R(delta) diag(1/s), back to the robot frame and to counts.
@@ -113,7 +148,8 @@ void SelfCalibration::renew(int i) {
   s.correction = v.inverse() * r * c_inv * r.transpose() * v;
 }
 
-void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& estimate) {
+void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& estimate,
+                              const std::optional<Twist2>& wheels) {
   if (estimate.source != Source::kMice || !(std::isfinite(raw.dt) && raw.dt > 0.0)) return;
   const real dt = raw.dt;
   // Corrected point velocities of every sensor, weighed by their
@@ -127,13 +163,22 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
     points_.info[u] = Mat2::Identity() / (q * q / 6.0 + rel * rel + 1e-12);
   }
   const SensorMask used = estimate.estimate.used;
+  // The others' corrections carry the applied common part (Gc, Dc), theta
+  // the gauge's (G, D): a prediction in theta's gauge is (Gc / G) R(D - Dc)
+  // times theirs (robot frame). Without it every block of every sensor would
+  // pull theta towards the applied common part, against fix_gauge(), and on
+  // a path that leaves a direction of theta open that tug drives it off.
+  Mat2 to_gauge = Mat2::Identity();
+  if (options_.gauge == SelfCalibrationGauge::kWheels) {
+    const SelfCalibrationEstimate g = gauge(), gc = applied_gauge();
+    to_gauge = (gc.scale_x / g.scale_x) * rotation(g.yaw_offset - gc.yaw_offset);
+  }
   for (int i = 0; i < n_; ++i) {
     const auto u = static_cast<std::size_t>(i);
     SensorState& d = state_[u];
     if (estimate.excluded[u] == Exclusion::kDrift) {
       d.drifted = true;
-    } else if (d.applied.scale_x == 1.0 && d.applied.scale_y == 1.0 &&
-               d.applied.yaw_offset == 0.0) {
+    } else if (!d.corrected) {
       d.drifted = false;
     }
     switch (estimate.excluded[u]) {
@@ -159,7 +204,8 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
     // of them that the estimator has not caught yet (a step of its scale)
     // would otherwise be learnt by every other sensor.
     if (fit->dof > 0 && fit->chi2 > chi2_gate_[static_cast<std::size_t>(fit->dof)]) continue;
-    const Vec2 p = solver_.jacobian(i) * fit->twist.vector();
+    Vec2 p = solver_.jacobian(i) * fit->twist.vector();
+    if (options_.gauge == SelfCalibrationGauge::kWheels) p = to_gauge * p;
     // Over (or near) its rating a sensor under-reads by random fractions: a
     // fault, not a calibration.
     if (array_[i].max_speed && p.norm() > 0.8 * *array_[i].max_speed) continue;
@@ -178,6 +224,95 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
       s.time = 0.0;
     }
   }
+  if (options_.gauge == SelfCalibrationGauge::kWheels && wheels) observe_wheels(raw, used, *wheels);
+}
+
+void SelfCalibration::observe_wheels(const ArraySample& raw, SensorMask used,
+                                     const Twist2& wheels) {
+  if (!wheels.vector().allFinite()) return;
+  const real dt = raw.dt;
+  const SelfCalibrationEstimate common = gauge();
+  // The used sensors' point velocities (robot frame, m/s) corrected by their
+  // relative calibration theta / (G, D) alone: u = R(yaw) R(delta - D)
+  // diag(G / s) R(yaw)^T u_raw. Their fit is the array's twist in the
+  // configured gauge, G R(-D) times the true one.
+  for (int k = 0; k < n_; ++k) {
+    if (!contains(used, k)) continue;
+    const auto u = static_cast<std::size_t>(k);
+    const SensorState& s = state_[u];
+    const Vec2 u_raw = velocity_from_counts_[u] * raw.counts[u] / dt;
+    // Over (or near) its rating a sensor under-reads by random fractions.
+    if (array_[k].max_speed && u_raw.norm() > 0.8 * *array_[k].max_speed) return;
+    const Mat2 r = rotation(array_[k].yaw);
+    const Mat2 c_inv =
+        rotation(s.theta.yaw_offset - common.yaw_offset) *
+        Vec2(common.scale_x / s.theta.scale_x, common.scale_y / s.theta.scale_y).asDiagonal();
+    points_.u[u] = r * c_inv * r.transpose() * u_raw;
+    const real q = metres_per_count_[u] / dt;
+    const real rel = options_.relative_noise * points_.u[u].norm();
+    points_.info[u] = Mat2::Identity() / (q * q / 6.0 + rel * rel + 1e-12);
+  }
+  const auto fit = solver_.fit(used, points_);
+  if (!fit) return;
+  WheelGauge& w = wheel_;
+  w.sum_v_array += fit->twist.v * dt;
+  w.sum_theta_array += fit->twist.omega * dt;
+  w.sum_v_wheels += wheels.v * dt;
+  w.sum_theta_wheels += wheels.omega * dt;
+  const Mat3& c = fit->covariance;
+  w.sum_var += (0.5 * (c(0, 0) + c(1, 1)) + radius_ * radius_ * c(2, 2)) * dt * dt;
+  w.time += dt;
+  if (w.time >= options_.block - 1e-9) {
+    update_gauge(raw.t);
+    w.sum_v_array.setZero();
+    w.sum_v_wheels.setZero();
+    w.sum_theta_array = w.sum_theta_wheels = w.sum_var = w.time = 0.0;
+  }
+}
+
+void SelfCalibration::update_gauge(double t) {
+  WheelGauge& w = wheel_;
+  // 1. The block's motion, m: a rotation moves the sensors by radius_ Theta.
+  const real d = std::hypot(w.sum_v_wheels.norm(), radius_ * w.sum_theta_wheels);
+  if (d < options_.min_speed * w.time) return;  // nothing excited
+  // 2. Forgetting: the random walk since the last update, capped at the prior.
+  if (w.last_update >= 0.0) {
+    const real e = static_cast<real>(t - w.last_update);
+    w.p.diagonal() += Vec2::Constant(e * options_.gauge_walk * options_.gauge_walk);
+    const real cap = options_.prior_scale_sd * options_.prior_scale_sd;
+    for (int k = 0; k < 2; ++k) {
+      if (w.p(k, k) > cap) {
+        const real f = std::sqrt(cap / w.p(k, k));
+        w.p.row(k) *= f;
+        w.p.col(k) *= f;
+      }
+    }
+  }
+  w.last_update = t;
+  // 3. y = H k: (V_a, r Theta_a) against the wheels' (V_w, r Theta_w).
+  const Vec3 y(w.sum_v_array.x(), w.sum_v_array.y(), radius_ * w.sum_theta_array);
+  Mat<3, 2> h;
+  h << w.sum_v_wheels.x(), -w.sum_v_wheels.y(),  //
+      w.sum_v_wheels.y(), w.sum_v_wheels.x(),    //
+      radius_ * w.sum_theta_wheels, 0.0;
+  const Vec3 r = y - h * w.k;
+  if (r.norm() > options_.gate * d) return;  // the wheels slipped grossly
+  // 4. Measurement variance, m^2 per component; Huber beyond three standard
+  // deviations (chi-square 27 on three components).
+  real var = options_.wheel_noise * options_.wheel_noise * d * d + w.sum_var + 1e-12;
+  const real nu2 = r.squaredNorm() / var;
+  if (nu2 > 27.0) var *= nu2 / 27.0;
+  // 5. Kalman update, Joseph form.
+  const Mat3 sm = h * w.p * h.transpose() + var * Mat3::Identity();
+  const Mat<2, 3> k = w.p * h.transpose() * sm.inverse();
+  w.k += k * r;
+  const Mat2 ikh = Mat2::Identity() - k * h;
+  w.p = ikh * w.p * ikh.transpose() + var * k * k.transpose();
+  w.p = 0.5 * (w.p + w.p.transpose()).eval();
+  ++w.updates;
+  // 6. The new common part to every sensor.
+  fix_gauge();
+  for (int j = 0; j < n_; ++j) renew(j);
 }
 
 void SelfCalibration::update(int i, double t) {
@@ -293,7 +428,7 @@ bool SelfCalibration::reacquire(SensorState& s, const Vec2& h) {
 
 void SelfCalibration::fix_gauge() {
   // The median over the sensors not run away of log sqrt(s_x s_y) and of
-  // delta: the majority keeps its configured scale and yaw.
+  // delta is set to the gauge's: the majority carries the common part.
   std::array<real, kMaxSensors> logs{}, yaws{};
   int m = 0;
   for (int j = 0; j < n_; ++j) {
@@ -309,13 +444,32 @@ void SelfCalibration::fix_gauge() {
     const auto h = static_cast<std::size_t>(m / 2);
     return m % 2 == 1 ? v[h] : 0.5 * (v[h - 1] + v[h]);
   };
-  const real g = std::exp(-median(logs)), d = median(yaws);
+  const SelfCalibrationEstimate target = gauge();
+  const real g = std::exp(std::log(target.scale_x) - median(logs)),
+             d = median(yaws) - target.yaw_offset;
   for (int j = 0; j < n_; ++j) {
     SensorState& o = state_[static_cast<std::size_t>(j)];
     o.theta.scale_x *= g;
     o.theta.scale_y *= g;
     o.theta.yaw_offset -= d;
   }
+}
+
+SelfCalibrationEstimate SelfCalibration::applied_gauge() const {
+  const SelfCalibrationEstimate g = gauge();
+  const real scale = std::abs(g.scale_x - 1.0) > options_.isotropic_deadband ? g.scale_x : 1.0;
+  return {scale, scale, std::abs(g.yaw_offset) > options_.deadband ? g.yaw_offset : 0.0};
+}
+
+SelfCalibrationEstimate SelfCalibration::gauge() const {
+  // k = a + i b = G e^(-iD) (kWheels); its prior (1, 0) is the configured gauge.
+  const real a = wheel_.k.x(), b = wheel_.k.y();
+  if (options_.gauge != SelfCalibrationGauge::kWheels || wheel_.updates == 0 ||
+      !(std::isfinite(a) && std::isfinite(b) && a > 0.0)) {
+    return {};
+  }
+  const real g = std::hypot(a, b);
+  return {g, g, std::atan2(-b, a)};
 }
 
 }  // namespace moa

@@ -28,6 +28,10 @@ OdometryOptions resolve_odometry_options(OdometryOptions o, std::string_view est
   if (o.estimator == EstimatorKind::kWheels && no_wheels) {
     throw Error("--estimator wheels and --no-wheels exclude each other");
   }
+  if (o.self_calibration.enabled && o.self_calibration.gauge == SelfCalibrationGauge::kWheels &&
+      no_wheels) {
+    throw Error("--self-calibration-gauge wheels and --no-wheels exclude each other");
+  }
   if (!sensors.empty()) {
     o.sensors = 0;
     for (const auto& name : sensors) {

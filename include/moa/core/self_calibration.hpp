@@ -31,10 +31,49 @@
 //
 // Gauge: a common isotropic scale of all sensors is a rigid twist scaled,
 // invisible to any redundancy; a common yaw offset is invisible in
-// translation (it rotates v) and only weakly visible in rotation. Both are
-// fixed by the majority: after every update the median over the sensors of
-// log sqrt(s_x s_y) is removed from every scale and the median delta from
-// every delta, so one drifting sensor among four is recovered whole.
+// translation (it rotates v) and only weakly visible in rotation. After
+// every update the median over the sensors of log sqrt(s_x s_y) and of
+// delta is set to the gauge's (log G, D), so one drifting sensor among four
+// is recovered whole; the relative calibration comes from the redundancy
+// alone. `gauge` chooses (G, D):
+// - kSensors (default): (1, 0), the majority keeps its configured scale and
+//   yaw.
+// - kWheels: the array's common scale G and yaw offset D measured against the
+//   wheels' twist, (1, 0) until the wheels told something (so without wheels
+//   it is kSensors). Let x_a = (v_a, omega_a) be the least-squares twist of
+//   the sensors the estimate used (robot frame, m/s and rad/s), from counts
+//   corrected by the relative calibration theta_i / (G, D) (median 1, 0),
+//   and x_w the wheels' twist averaged over the same epoch. All sensors
+//   reading G R(-D) times the true point velocity (each at yaw + D, its
+//   counts times G) give
+//     v_a = G R(-D) v_w,   omega_a = G cos(D) omega_w
+//   (the radial field G sin(D) omega p_i a common yaw adds in rotation
+//   projects onto v and omega only through the array's centroid, zero for a
+//   symmetric array; neglected). As complex numbers, k = a + i b =
+//   G e^(-iD) with the 2-state linear model, per block of `block` s of
+//   epochs summed (V = sum v dt in m, Theta = sum omega dt in rad, robot
+//   frame at each epoch, so the sums keep the relation):
+//     [V_a,x]   [V_w,x     -V_w,y] [a]
+//     [V_a,y] = [V_w,y      V_w,x] [b]
+//     [r Th_a]  [r Th_w     0    ]
+//   with r (m) the sensors' rms distance from the robot origin (a rotation
+//   moves the points by r Theta). A Kalman filter on (a, b) with random walk
+//   gauge_walk^2 per second on each (a floor change dims all sensors alike),
+//   capped at the prior (prior_scale_sd), measurement variance
+//   (wheel_noise d)^2 + the array twist's, d = sqrt(|V_w|^2 + (r Th_w)^2)
+//   (m); G = |k|, D = atan2(-b, a). Observable: translation tells both a and
+//   b (scale and yaw), rotation alone a = G cos D, i.e. the scale (D only to
+//   second order: b keeps its estimate and its variance grows). Not used:
+//   epochs without a wheel twist or a mice estimate (a fallback to the
+//   wheels), with a used sensor over 0.8 times its rated speed, blocks with
+//   d under min_speed times their length, and blocks whose residual exceeds
+//   `gate` times d (the wheels slipped grossly). The measurement w of each
+//   sensor's update (above) is predicted from the others' corrections, which
+//   carry the applied common part (Gc, Dc) (see Deadband), and is taken into
+//   theta's gauge: times (Gc / G) R(D - Dc). The wheels' bias is the
+//   gauge's: the simulator's systematic slip (4.4-6.2 % per wheel plus 11 %
+//   per m/s, about 8 % on its scenarios) becomes the array's scale, hence
+//   not the default.
 //
 // A sensor whose estimate runs away (|s - 1| > runaway_scale on an axis or
 // |delta| > runaway_yaw) is reported by runaway() and left out of the
@@ -60,7 +99,10 @@
 // is mostly one axis against the other, while a drift (dust) dims both
 // alike: hence the narrower isotropic band (docs/self-calibration.md).
 // Within the bands the counts are used as configured, so a clean log gives
-// the same odometry.
+// the same odometry. The bands judge the relative calibration theta_i / (G,
+// D); the gauge's common part is applied apart, G once it is
+// isotropic_deadband from 1 and D once it is deadband from 0 (with kSensors
+// it is (1, 0): the bands judge theta_i).
 //
 // Fixed-size state, no allocation: runs in the heap-free core.
 #pragma once
@@ -68,6 +110,8 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <optional>
+#include <string_view>
 
 #include "moa/core/array.hpp"
 #include "moa/core/robust_estimate.hpp"
@@ -75,8 +119,19 @@
 
 namespace moa {
 
+/// What fixes the common scale and yaw of all sensors (see above).
+enum class SelfCalibrationGauge {
+  kSensors,  ///< the sensors' median keeps the configured values
+  kWheels,   ///< the wheels' twist, when the epochs have one
+};
+/// "sensors", "wheels".
+const char* describe(SelfCalibrationGauge gauge);
+/// The gauge named by describe(); nullopt for any other name.
+std::optional<SelfCalibrationGauge> self_calibration_gauge_from_name(std::string_view name);
+
 struct SelfCalibrationOptions {
   bool enabled = false;
+  SelfCalibrationGauge gauge = SelfCalibrationGauge::kSensors;
   real block = 0.1;       ///< s of epochs summed per update
   real min_speed = 0.05;  ///< m/s, mean predicted point speed of a block
   /// 1/sqrt(s), random walk of a scale (forgetting). Tuned on faults-drift
@@ -107,6 +162,12 @@ struct SelfCalibrationOptions {
   int reacquire_blocks = 20;
   real reacquire_spread = 0.05;  ///< sd of their log scale and rotation (rad) that agrees
   real apply_step = 5e-4;        ///< change of an estimate that renews the applied correction
+  /// kWheels: 1/sqrt(s), random walk of the common scale (of a and b, above).
+  real gauge_walk = 0.001;
+  /// kWheels: sd of a block's wheel displacement, fraction of it (the
+  /// simulator's noisy wheels: random slip 0.05 per wheel, correlated over
+  /// 0.3 s).
+  real wheel_noise = 0.05;
   /// Empty when usable, else what is wrong, naming the field.
   const char* validate() const;
 };
@@ -127,8 +188,10 @@ class SelfCalibration {
   void correct(ArraySample& sample) const;
 
   /// Updates from one epoch: `raw` the uncorrected counts, `estimate` the
-  /// estimator's output on the corrected counts.
-  void observe(const ArraySample& raw, const RobustEstimate& estimate);
+  /// estimator's output on the corrected counts, `wheels` the wheels' twist
+  /// averaged over the epoch when there is one (used by the kWheels gauge).
+  void observe(const ArraySample& raw, const RobustEstimate& estimate,
+               const std::optional<Twist2>& wheels = std::nullopt);
 
   /// The filter's estimate (theta) of sensor i.
   const SelfCalibrationEstimate& calibration(int i) const {
@@ -148,13 +211,19 @@ class SelfCalibration {
   /// The estimate ran away: the sensor is left out (kCalibration).
   bool runaway(int i) const { return state_[static_cast<std::size_t>(i)].runaway; }
   SensorMask runaways() const;
-  /// The health monitor excluded sensor i as drift and its correction is
-  /// applied: it stays out (Exclusion::kDrift) until the correction is back
-  /// to as configured. A sensor that changed enough to be excluded is not
-  /// trusted back on a correction whose own error (0.3-0.7 %, the filter's
-  /// scatter) would bias the rotation: on selfcal-step it cost 7 mm.
+  /// The health monitor excluded sensor i as drift and its own correction
+  /// (beyond the gauge's common part) is applied: it stays out
+  /// (Exclusion::kDrift) until that correction is back inside the bands. A sensor that changed
+  /// enough to be excluded is not trusted back on a correction whose own error (0.3-0.7 %, the
+  /// filter's scatter) would bias the rotation: on selfcal-step it cost 7 mm.
   bool held_as_drift(int i) const;
   int size() const { return n_; }
+  /// The common part (G, G, D) the gauge sets the median over the sensors
+  /// of the filter's isotropic scale and yaw offset to: (1, 1, 0) with
+  /// kSensors, and with kWheels until the wheels told something.
+  SelfCalibrationEstimate gauge() const;
+  /// kWheels: blocks of wheel twists used so far.
+  long gauge_updates() const { return wheel_.updates; }
 
  private:
   /// Blocks over the gate in a row: running mean and sum of squared
@@ -174,16 +243,33 @@ class SelfCalibration {
     double last_update = -1.0;                    ///< s; < 0: never
     long updates = 0;
     bool runaway = false;
-    long reacquired = 0;   ///< restarts by reacquire()
-    bool drifted = false;  ///< excluded as drift since the correction was last 1, 1, 0
-    GrossRun gross;        ///< the blocks over the gate in a row
+    long reacquired = 0;                 ///< restarts by reacquire()
+    bool corrected = false;              ///< its own correction (beyond the gauge's) is applied
+    bool drifted = false;                ///< excluded as drift since it was last not corrected
+    GrossRun gross;                      ///< the blocks over the gate in a row
     Mat2 correction = Mat2::Identity();  ///< counts -> corrected counts
+  };
+  /// kWheels: the array's twist against the wheels', summed over a block.
+  struct WheelGauge {
+    Vec2 k{1.0, 0.0};  ///< (a, b): a + i b = G e^(-iD)
+    Mat2 p = Mat2::Zero();
+    Vec2 sum_v_array{0.0, 0.0}, sum_v_wheels{0.0, 0.0};  ///< m, robot frame
+    real sum_theta_array = 0.0, sum_theta_wheels = 0.0;  ///< rad
+    real sum_var = 0.0;                                  ///< m^2, the array twist's
+    real time = 0.0;                                     ///< s in the block
+    double last_update = -1.0;                           ///< s; < 0: never
+    long updates = 0;
   };
   void update(int i, double t);
   /// True when theta was restarted.
   bool reacquire(SensorState& s, const Vec2& h);
   void fix_gauge();
   void renew(int i);
+  void observe_wheels(const ArraySample& raw, SensorMask used, const Twist2& wheels);
+  void update_gauge(double t);
+  /// gauge() through its bands (isotropic_deadband, deadband): what the
+  /// corrections apply of it.
+  SelfCalibrationEstimate applied_gauge() const;
 
   SelfCalibrationOptions options_;
   int n_;
@@ -194,6 +280,8 @@ class SelfCalibration {
   std::array<real, 2 * kMaxSensors> chi2_gate_{};  ///< by degrees of freedom
   std::array<SensorState, kMaxSensors> state_{};
   PointMeasurements points_;
+  WheelGauge wheel_;
+  real radius_ = 0.0;  ///< m, rms distance of the sensors from the robot origin
 };
 
 }  // namespace moa
