@@ -259,6 +259,7 @@ extern "C" [[noreturn]] void moa_m4f_main() {
   options.use_wheels = header.use_wheels != 0;
   options.fuse_camera = header.fuse_camera != 0;
   options.sensors = header.selected;
+  options.self_calibration.enabled = header.self_calibrate != 0;
   options.rate = header.rate;
   options.max_row_interval = header.max_row_interval;
   options.max_gap = header.max_gap;

@@ -28,12 +28,12 @@ struct StreamHeader {
   std::uint32_t estimator;  ///< moa::EstimatorKind
   std::uint32_t use_wheels;
   std::uint32_t fuse_camera;
-  std::uint32_t selected;  ///< OdometryOptions::sensors (bit i: sensor i)
-  std::uint32_t pad;
-  double rate;              ///< Hz
-  double max_row_interval;  ///< s
-  double max_gap;           ///< s
-  double t0;                ///< s, the first epoch's start (the log's first row)
+  std::uint32_t selected;        ///< OdometryOptions::sensors (bit i: sensor i)
+  std::uint32_t self_calibrate;  ///< OdometryOptions::self_calibration.enabled
+  double rate;                   ///< Hz
+  double max_row_interval;       ///< s
+  double max_gap;                ///< s
+  double t0;                     ///< s, the first epoch's start (the log's first row)
 };
 static_assert(sizeof(StreamHeader) == 64);
 

@@ -4,9 +4,9 @@
 # an emulated Cortex-M4F against the host's `moa odometry` on the same log.
 #  1. brings the Cortex-M4F builds up to date: BINARY_DIR (the core in
 #     double, as on the host) and FLOAT_BINARY_DIR if given (MOA_M4F_SCALAR=float);
-#  2. simulates a log on the host (`moa simulate --scenario faults-dirty`:
+#  2. simulates logs on the host (`moa simulate --scenario faults-dirty`:
 #     four HDNS-2051 sensors, 17 s at 100 Hz, a dirty floor patch, wheels and
-#     camera);
+#     camera; and faults-drift for the self-calibration);
 #  3. per case (estimator, options): `moa odometry` writes odometry.csv;
 #     `qemu_stream pack` packs the log for the device; QEMU runs
 #     odometry_qemu.elf on mps2-an386 (Cortex-M4 with FPU) under -icount
@@ -64,15 +64,24 @@ endforeach()
 
 file(REMOVE_RECURSE ${WORK_DIR})
 file(MAKE_DIRECTORY ${WORK_DIR})
-set(log ${WORK_DIR}/log)
-execute_process(COMMAND ${MOA} simulate --scenario faults-dirty --seed 1 --out ${log} --quiet
-                COMMAND_ERROR_IS_FATAL ANY)
+foreach(scenario faults-dirty faults-drift)
+  execute_process(COMMAND ${MOA} simulate --scenario ${scenario} --seed 1
+                          --out ${WORK_DIR}/${scenario} --quiet COMMAND_ERROR_IS_FATAL ANY)
+endforeach()
 
-# name; flags of `moa odometry` and `qemu_stream pack`
-set(cases "consensus\;--estimator\;consensus" "sekimori\;--estimator\;sekimori"
-          "ls\;--estimator\;ls" "consensus-camera\;--estimator\;consensus\;--fuse-camera")
+# name; scenario; flags of `moa odometry` and `qemu_stream pack`. The online
+# self-calibration on faults-drift, where m2's scale falls by 10 % and its
+# correction is applied (docs/self-calibration.md).
+set(cases
+    "consensus\;faults-dirty\;--estimator\;consensus"
+    "sekimori\;faults-dirty\;--estimator\;sekimori"
+    "ls\;faults-dirty\;--estimator\;ls"
+    "consensus-camera\;faults-dirty\;--estimator\;consensus\;--fuse-camera"
+    "consensus-self-calibration\;faults-drift\;--estimator\;consensus\;--self-calibrate")
 foreach(case IN LISTS cases)
   list(POP_FRONT case name)
+  list(POP_FRONT case scenario)
+  set(log ${WORK_DIR}/${scenario})
   set(dir ${WORK_DIR}/${name})
   file(MAKE_DIRECTORY ${dir})
   execute_process(COMMAND ${MOA} odometry --config ${log}/robot.yaml --log ${log} ${case}
@@ -98,6 +107,16 @@ foreach(case IN LISTS cases)
     message("[${tag}] ${console}")
     if(NOT ran EQUAL 0)
       message(FATAL_ERROR "[${tag}] QEMU: ${ran}")
+    endif()
+    if(name STREQUAL "consensus-self-calibration" AND scalar STREQUAL "float")
+      # The self-calibration decides by thresholds (a deadband crossed, a
+      # block gated, a correction renewed): in float one of them falls a
+      # block earlier or later than in the host's doubles (on this log at
+      # 2.1 s, then the poses differ by up to 4.7 mm), so the float device
+      # is run (no fault, its instructions and stack reported) but not held
+      # to the host's odometry.csv; the double device is, to 1e-12.
+      message("[${tag}] ran; not compared with the host's doubles (thresholds)")
+      continue()
     endif()
     execute_process(
       COMMAND ${STREAM} compare ${log}/robot.yaml ${dir}/odometry.csv ${dir}/${scalar}.bin

@@ -1,7 +1,7 @@
 // The host side of the Cortex-M4F program under QEMU (embedded/odometry_qemu.cpp):
 //
 //   qemu_stream pack CONFIG LOG OUT.bin [--estimator E] [--sensors A,B] [--rate HZ]
-//                                       [--no-wheels] [--fuse-camera]
+//                                       [--no-wheels] [--fuse-camera] [--self-calibrate]
 //     packs a log for the device (embedded/qemu_stream.hpp): the config's
 //     mounts, the options (resolved as `moa odometry` resolves its flags), then
 //     mice rows (with faults.csv's fault bits for the oracle), wheel rows and
@@ -44,7 +44,7 @@ namespace q = moa::qemu;
 int usage() {
   std::cerr
       << "usage: qemu_stream pack CONFIG LOG OUT.bin [--estimator E] [--sensors A,B] "
-         "[--rate HZ] [--no-wheels] [--fuse-camera]\n"
+         "[--rate HZ] [--no-wheels] [--fuse-camera] [--self-calibrate]\n"
          "       qemu_stream compare CONFIG ODOMETRY.csv POSES.bin POSE_TOL TWIST_TOL PER_TICK\n"
          "       qemu_stream csv POSES.bin OUT.csv\n";
   return 2;
@@ -60,7 +60,7 @@ int pack(int argc, char** argv) {
   const std::string config_path = argv[2];
   std::string estimator = "consensus";
   double rate = moa::OdometryOptions{}.rate;
-  bool no_wheels = false, fuse_camera = false;
+  bool no_wheels = false, fuse_camera = false, self_calibrate = false;
   std::vector<std::string> sensors;
   for (int i = 5; i < argc; ++i) {
     const std::string a = argv[i];
@@ -79,6 +79,8 @@ int pack(int argc, char** argv) {
       no_wheels = true;
     } else if (a == "--fuse-camera") {
       fuse_camera = true;
+    } else if (a == "--self-calibrate") {
+      self_calibrate = true;
     } else {
       return usage();
     }
@@ -87,6 +89,7 @@ int pack(int argc, char** argv) {
   moa::OdometryOptions o;
   o.rate = rate;
   o.fuse_camera = fuse_camera;
+  o.self_calibration.enabled = self_calibrate;
   o = moa::io::resolve_odometry_options(o, estimator, sensors, no_wheels, config, config_path);
   const moa::io::LogFiles log = moa::io::resolve_log(argv[3]);
   moa::io::MiceReader mice(log.mice, config);
@@ -113,6 +116,7 @@ int pack(int argc, char** argv) {
   header.use_wheels = o.use_wheels ? 1 : 0;
   header.fuse_camera = o.fuse_camera ? 1 : 0;
   header.selected = o.sensors;
+  header.self_calibrate = o.self_calibration.enabled ? 1 : 0;
   header.rate = o.rate;
   header.max_row_interval = o.max_row_interval;
   header.max_gap = o.max_gap;
