@@ -76,6 +76,26 @@ TEST(CarelessCalls, SelfCalibrationFileOntoAnInputOrTheOdometryIsRefused) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+// --self-calibration takes a file name: not an empty one (nothing would be
+// written) nor the next option (`--self-calibration --quiet` wrote a file
+// named --quiet); a usage error (exit 2) naming the option, nothing written.
+TEST(CarelessCalls, SelfCalibrationFileNameIsNotAnOption) {
+  const fs::path dir = example_copy("careless-self-calibration-name");
+  const fs::path out = dir / "odometry.csv";
+  for (const std::string& value : {std::string("--quiet"), std::string("''"), std::string("-")}) {
+    for (const std::string& command :
+         {odometry(dir, "--out " + out.string()),
+          "live --config " + (dir / "robot.yaml").string() + " --replay " + dir.string() +
+              " --speed 1000 --quiet --out " + out.string()}) {
+      const auto r = test::run_moa(command + " --self-calibration " + value);
+      EXPECT_EQ(r.exit_code, io::kExitUsage) << command << " " << value << "\n" << r.err;
+      EXPECT_THAT(r.err, HasSubstr("--self-calibration: ")) << value;
+      EXPECT_FALSE(fs::exists(out)) << command << " " << value;
+      EXPECT_FALSE(fs::exists(fs::current_path() / "--quiet"));
+    }
+  }
+}
+
 // Every command that writes refuses an output that names one of its
 // inputs, before it writes anything (issue #20); `what` is the start of
 // the message after the option and path.
@@ -135,6 +155,19 @@ TEST(CarelessCalls, ImportLiveAndSimulateRefuseAnOutputOntoAnInput) {
       live + "--record " + (dir / "r").string() + " --out " + (dir / "r" / "mice.csv").string(),
       "--out", dir / "r" / "mice.csv", "is written by --record too");
   EXPECT_FALSE(fs::exists(dir / "r"));
+  // --self-calibration FILE: not an input, not the recording, not the --out.
+  expect_refused(live + "--out " + (dir / "o.csv").string() + " --self-calibration " +
+                     (dir / "mice.csv").string(),
+                 "--self-calibration", dir / "mice.csv");
+  expect_refused(live + "--self-calibration " + config, "--self-calibration", config);
+  expect_refused(live + "--record " + (dir / "r").string() + " --self-calibration " +
+                     (dir / "r" / "mice.csv").string(),
+                 "--self-calibration", dir / "r" / "mice.csv", "is written by --record too");
+  EXPECT_FALSE(fs::exists(dir / "r"));
+  expect_refused(live + "--out " + (dir / "o.csv").string() + " --self-calibration " +
+                     (dir / "o.csv").string(),
+                 "--self-calibration", dir / "o.csv", "is the --out of this run");
+  EXPECT_FALSE(fs::exists(dir / "o.csv"));
 
   // simulate replaces its --out directory whole: not one holding the scenario.
   const fs::path run = dir / "run";

@@ -76,7 +76,22 @@ struct RunawayRun {
   std::vector<std::string> excluded;  ///< odometry.csv's `excluded`, row by row
   std::vector<double> t;
   std::vector<io::SelfCalibrationRow> calibration;  ///< self-calibration.csv
+  double max_error = NAN;                           ///< m, moa evaluate's against truth.csv
 };
+
+/// moa evaluate's max translation error (m) of `odometry` against `truth`.
+double max_error(const fs::path& truth, const fs::path& odometry) {
+  const auto r = test::run_moa("evaluate --json --truth " + truth.string() + " --odometry " +
+                               odometry.string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  std::smatch m;
+  const std::regex key("\"max_translation_m\": ([0-9.eE+-]+)");
+  if (!std::regex_search(r.out, m, key)) {
+    ADD_FAILURE() << r.out;
+    return NAN;
+  }
+  return std::stod(m[1]);
+}
 
 RunawayRun run_misconfigured(const std::string& m2_truth, int seed, bool self_calibrate) {
   const fs::path dir = test::scratch_dir("self-calibration-runaway");
@@ -103,6 +118,7 @@ RunawayRun run_misconfigured(const std::string& m2_truth, int seed, bool self_ca
     r.excluded.push_back(row.back());
   }
   if (self_calibrate) r.calibration = io::read_self_calibration_csv(cal);
+  r.max_error = max_error(fs::path(log) / "truth.csv", out);
   return r;
 }
 
@@ -150,9 +166,20 @@ double expect_m2_reported_and_excluded(const RunawayRun& r, int seed) {
 // stderr, with the time it ran away; from that epoch on it is excluded as
 // `calibration` to the end (it comes back only within 0.8 times the bound,
 // 20 %, and its truth stays 27.5 % off); no other sensor ever is.
+//
+// And the pose does not pay for it: the estimate walks from 1 to 1.275 over
+// about 2 s before it runs away, and while it moves m2 is held out (a
+// partial correction let it pass as consistent: 180 mm on seeds 1-3,
+// against 3.5-5.2 mm for the consensus alone, which leaves m2 out as
+// inconsistent). Bound: the consensus alone's max error plus 5 mm, a few
+// times the 1-2 mm that the max error of this path varies by over seeds
+// (sekimori-a, docs/self-calibration.md).
 TEST(SelfCalibrationCli, SensorConfiguredAQuarterOffIsReportedAndExcluded) {
   for (int seed = 101; seed <= 103; ++seed) {
-    expect_m2_reported_and_excluded(run_misconfigured(built_at_cpi(1020), seed, true), seed);
+    const RunawayRun r = run_misconfigured(built_at_cpi(1020), seed, true);
+    expect_m2_reported_and_excluded(r, seed);
+    const RunawayRun plain = run_misconfigured(built_at_cpi(1020), seed, false);
+    EXPECT_LE(r.max_error, plain.max_error + 0.005) << seed;
   }
 }
 
@@ -165,35 +192,38 @@ TEST(SelfCalibrationCli, NoCalibrationReasonWithoutSelfCalibrate) {
 
 // Calibrations far off, beyond the 30 % relative residual over which a
 // block does not update the filter: m2 built at 1200 cpi (counts 1.5 times
-// the config's), at 560 cpi (0.7 times), or turned by 30 degrees
-// (0.5236 rad). The blocks over the gate agree with one scale and rotation,
-// so the estimate restarts there (reacquire) and then runs away: reported,
-// excluded as `calibration` to the end, as above. And the filter's final
-// estimate is the truth: within the 2 % on each scale (the good
-// sensors' estimates scatter up to 1.2 % on cruise, docs/self-calibration.md)
-// and 0.01 rad on the yaw offset (the true yaw errors of the other sensors,
-// whose median is the gauge, differ from 0 by up to 0.0017 rad).
+// the config's), at 560 cpi (0.7 times), turned by 30 degrees (0.5236
+// rad), or 1.4 times on its x axis alone. The blocks over the gate agree with one scale and
+// rotation, so the estimate restarts there (reacquire) and then runs away: reported, excluded as
+// `calibration` to the end, as above. And the filter's final estimate is the truth: within the
+// issue's 2 % on each scale (the good sensors' estimates scatter up to 1.2 % on cruise,
+// docs/self-calibration.md) and 0.01 rad on the yaw offset (the true yaw errors of the other
+// sensors, whose median is the gauge, differ from 0 by up to 0.0017 rad).
 TEST(SelfCalibrationCli, CalibrationsFarOffAreReacquiredReportedAndExcluded) {
   struct Case {
     std::string truth;
-    double scale, yaw;  ///< m2's truth relative to its config
+    double scale_x, scale_y, yaw;  ///< m2's truth relative to its config
   };
   const std::vector<Case> cases{
-      {built_at_cpi(1200), 1.5, -0.0017},
-      {built_at_cpi(560), 0.7, -0.0017},
-      {"position_error: [-0.0002, 0.0001], yaw_error: 0.5236", 1.0, 0.5236}};
+      {built_at_cpi(1200), 1.5, 1.5, -0.0017},
+      {built_at_cpi(560), 0.7, 0.7, -0.0017},
+      {"position_error: [-0.0002, 0.0001], yaw_error: 0.5236", 1.0, 1.0, 0.5236},
+      {"position_error: [-0.0002, 0.0001], yaw_error: -0.0017, scale: [1.4, 1.0]", 1.4, 1.0,
+       -0.0017}};
   for (const Case& c : cases) {
     for (int seed = 101; seed <= 103; ++seed) {
       SCOPED_TRACE(c.truth + ", seed " + std::to_string(seed));
       const RunawayRun r = run_misconfigured(c.truth, seed, true);
       expect_m2_reported_and_excluded(r, seed);
+      const RunawayRun plain = run_misconfigured(c.truth, seed, false);
+      EXPECT_LE(r.max_error, plain.max_error + 0.005);  // as above
       const io::SelfCalibrationRow* last = nullptr;
       for (const auto& row : r.calibration) {
         if (row.sensor == "m2") last = &row;
       }
       ASSERT_NE(last, nullptr);
-      EXPECT_NEAR(last->filter.scale_x / c.scale, 1.0, 0.02);
-      EXPECT_NEAR(last->filter.scale_y / c.scale, 1.0, 0.02);
+      EXPECT_NEAR(last->filter.scale_x / c.scale_x, 1.0, 0.02);
+      EXPECT_NEAR(last->filter.scale_y / c.scale_y, 1.0, 0.02);
       EXPECT_NEAR(last->filter.yaw_offset, c.yaw, 0.01);
     }
   }

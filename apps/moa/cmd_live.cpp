@@ -151,6 +151,18 @@ int run_live(LiveArgs args) {
                                     "written by --record too");
     }
   }
+  if (const std::string& cal = args.odometry.self_calibration_out; !cal.empty()) {
+    io::refuse_output_onto_inputs(cal, "--self-calibration", inputs);
+    if (!args.record.empty()) {
+      const fs::path dir(args.record);
+      io::refuse_output_onto_inputs(cal, "--self-calibration",
+                                    {dir / "mice.csv", dir / "robot.yaml"},
+                                    "written by --record too");
+    }
+    if (!args.out.empty() && !to_stdout) {
+      io::refuse_output_onto_inputs(cal, "--self-calibration", {args.out}, "the --out of this run");
+    }
+  }
 
   LiveSource live = open_source(args.source, config, args.config, hooks);
   io::FrameSource* source = live.source.get();

@@ -77,7 +77,17 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
   cmd->add_option("--self-calibration", f.self_calibration_out,
                   "With --self-calibrate (implied): write the calibration to this CSV, "
                   "about once a second per sensor (t,sensor,scale_x,scale_y,yaw_offset as "
-                  "applied, then the filter's filter_scale_x,filter_scale_y,filter_yaw_offset)");
+                  "applied, then the filter's filter_scale_x,filter_scale_y,filter_yaw_offset)")
+      ->type_name("FILE")
+      ->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            // Not "" (nothing would be written) nor an option taken for a
+            // file name (--self-calibration --quiet).
+            if (v.empty()) return "an empty file name";
+            if (v[0] == '-') return "'" + v + "' is not a file name (write ./" + v + " for one)";
+            return {};
+          },
+          ""));
   cmd->add_option("--self-calibration-gauge", f.self_calibration_gauge,
                   live ? "With --self-calibrate (implied): what fixes the common scale and yaw "
                          "of all sensors, which the redundancy cannot see: sensors (their "

@@ -47,6 +47,8 @@ const char* SelfCalibrationOptions::validate() const {
     return "self_calibration.runaway_scale: must be in (0, 1)";
   if (!positive(runaway_yaw)) return "self_calibration.runaway_yaw: must be positive (rad)";
   if (reacquire_blocks < 2) return "self_calibration.reacquire_blocks: must be at least 2";
+  if (!positive(settle_time) || !positive(settle_threshold))
+    return "self_calibration.settle_time, settle_threshold: must be positive and finite";
   if (!positive(reacquire_spread))
     return "self_calibration.reacquire_spread: must be positive and finite";
   if (!(std::isfinite(deadband) && deadband >= 0.0))
@@ -89,7 +91,7 @@ Vec3 SelfCalibration::sd(int i) const {
 
 bool SelfCalibration::held_as_drift(int i) const {
   const SensorState& s = state_[static_cast<std::size_t>(i)];
-  return s.drifted && s.corrected;
+  return s.corrected && (s.settling || s.drifted);
 }
 
 SensorMask SelfCalibration::runaways() const {
@@ -336,6 +338,7 @@ void SelfCalibration::update(int i, double t) {
       }
     }
   }
+  const real elapsed = s.last_update >= 0.0 ? static_cast<real>(t - s.last_update) : 0.0;
   s.last_update = t;
   const real c = std::cos(s.theta.yaw_offset), sn = std::sin(s.theta.yaw_offset);
   const Vec2 rw(c * w.x() + sn * w.y(), -sn * w.x() + c * w.y());  // R(-delta) w
@@ -366,6 +369,25 @@ void SelfCalibration::update(int i, double t) {
     s.p = 0.5 * (s.p + s.p.transpose()).eval();
     ++s.updates;
   }
+  // Settling: theta against its own exponential average over settle_time
+  // (lagged <- lagged + (theta - lagged) min(1, elapsed / settle_time)).
+  // A ramp of rate r per second leaves them r settle_time apart (0.1 % on
+  // faults-cruise); a step, or an estimate walking to a calibration far off,
+  // moves theta several per cent within a second.
+  // Judged on the relative calibration theta / (G, D): a change of the
+  // wheels' gauge moves every sensor alike and is not a sensor's change.
+  const SelfCalibrationEstimate common = gauge();
+  const SelfCalibrationEstimate rel{s.theta.scale_x / common.scale_x,
+                                    s.theta.scale_y / common.scale_y,
+                                    s.theta.yaw_offset - common.yaw_offset};
+  const real a = std::min<real>(1.0, elapsed / options_.settle_time);
+  s.lagged.scale_x += a * (rel.scale_x - s.lagged.scale_x);
+  s.lagged.scale_y += a * (rel.scale_y - s.lagged.scale_y);
+  s.lagged.yaw_offset += a * (rel.yaw_offset - s.lagged.yaw_offset);
+  const real apart =
+      std::max({std::abs(rel.scale_x - s.lagged.scale_x), std::abs(rel.scale_y - s.lagged.scale_y),
+                std::abs(rel.yaw_offset - s.lagged.yaw_offset)});
+  s.settling = apart > (s.settling ? 0.5 : 1.0) * options_.settle_threshold;
   fix_gauge();
   for (int j = 0; j < n_; ++j) {
     SensorState& o = state_[static_cast<std::size_t>(j)];

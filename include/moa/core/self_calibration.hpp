@@ -161,7 +161,13 @@ struct SelfCalibrationOptions {
   /// (a calibration far off: docs/self-calibration.md "Runaway").
   int reacquire_blocks = 20;
   real reacquire_spread = 0.05;  ///< sd of their log scale and rotation (rad) that agrees
-  real apply_step = 5e-4;        ///< change of an estimate that renews the applied correction
+  /// A corrected sensor whose estimate moves (more than settle_threshold,
+  /// in scale or rad, from its own average over settle_time s) is held out
+  /// of the estimate until it has settled (under half of it): a partial
+  /// correction would let a sensor still off pass as consistent.
+  real settle_time = 1.0;
+  real settle_threshold = 0.015;
+  real apply_step = 5e-4;  ///< change of an estimate that renews the applied correction
   /// kWheels: 1/sqrt(s), random walk of the common scale (of a and b, above).
   real gauge_walk = 0.001;
   /// kWheels: sd of a block's wheel displacement, fraction of it (the
@@ -211,11 +217,14 @@ class SelfCalibration {
   /// The estimate ran away: the sensor is left out (kCalibration).
   bool runaway(int i) const { return state_[static_cast<std::size_t>(i)].runaway; }
   SensorMask runaways() const;
-  /// The health monitor excluded sensor i as drift and its own correction
-  /// (beyond the gauge's common part) is applied: it stays out
-  /// (Exclusion::kDrift) until that correction is back inside the bands. A sensor that changed
-  /// enough to be excluded is not trusted back on a correction whose own error (0.3-0.7 %, the
-  /// filter's scatter) would bias the rotation: on selfcal-step it cost 7 mm.
+  /// Sensor i is held out (Exclusion::kDrift) while its own correction
+  /// (beyond the gauge's common part) is applied and either its estimate
+  /// settles (settle_time, settle_threshold) or the health monitor has
+  /// excluded it as drift since the correction was last inside the bands
+  /// (an estimate moving inside them is noise or the start: not held). A sensor
+  /// that changed enough to be excluded is not trusted back on a correction
+  /// whose own error (0.3-0.7 %, the filter's scatter) would bias the
+  /// rotation (on selfcal-step it cost 7 mm).
   bool held_as_drift(int i) const;
   int size() const { return n_; }
   /// The common part (G, G, D) the gauge sets the median over the sensors
@@ -244,6 +253,8 @@ class SelfCalibration {
     long updates = 0;
     bool runaway = false;
     long reacquired = 0;                 ///< restarts by reacquire()
+    SelfCalibrationEstimate lagged;      ///< theta / (G, D) averaged over settle_time
+    bool settling = false;               ///< theta is moving away from lagged
     bool corrected = false;              ///< its own correction (beyond the gauge's) is applied
     bool drifted = false;                ///< excluded as drift since it was last not corrected
     GrossRun gross;                      ///< the blocks over the gate in a row
