@@ -183,6 +183,31 @@ TEST(SelfCalibrationCli, SensorConfiguredAQuarterOffIsReportedAndExcluded) {
   }
 }
 
+// --self-calibrate where it cannot learn says so (and runs): with the
+// wheels estimator (no mice) and with fewer than three sensors (no
+// redundancy); with three or more it says nothing.
+TEST(SelfCalibrationCli, WarnsWhereItCannotLearn) {
+  const fs::path dir = test::scratch_dir("self-calibration-warnings");
+  const std::string log = (dir / "log").string();
+  ASSERT_EQ(test::run_moa("simulate --scenario sekimori-a --seed 101 --out " + log).exit_code, 0);
+  const std::string odometry = "odometry --config " + log + "/robot.yaml --log " + log + " --out " +
+                               (dir / "o.csv").string() + " --self-calibrate ";
+  const auto wheels = test::run_moa(odometry + "--estimator wheels");
+  EXPECT_EQ(wheels.exit_code, 0) << wheels.err;
+  EXPECT_THAT(wheels.err, HasSubstr("warning: --self-calibrate with --estimator wheels"));
+  const auto two = test::run_moa(odometry + "--sensors m1,m2");
+  EXPECT_EQ(two.exit_code, 0) << two.err;
+  EXPECT_THAT(two.err, HasSubstr("warning: --self-calibrate with 2 sensor(s)"));
+  const auto three = test::run_moa(odometry + "--sensors m1,m2,m3");
+  EXPECT_EQ(three.exit_code, 0) << three.err;
+  EXPECT_THAT(three.err, ::testing::Not(HasSubstr("--self-calibrate with")));
+  const auto live = test::run_moa("live --config " + log + "/robot.yaml --replay " + log +
+                                  " --speed 1000 --quiet --out " + (dir / "l.csv").string() +
+                                  " --self-calibrate --sensors m1,m2");
+  EXPECT_EQ(live.exit_code, 0) << live.err;
+  EXPECT_THAT(live.err, HasSubstr("moa live: warning: --self-calibrate with 2 sensor(s)"));
+}
+
 // Without --self-calibrate nothing is ever excluded as `calibration`.
 TEST(SelfCalibrationCli, NoCalibrationReasonWithoutSelfCalibrate) {
   const RunawayRun r = run_misconfigured(built_at_cpi(1020), 101, false);

@@ -114,6 +114,9 @@ int run_live(LiveArgs args) {
   const io::RobotConfig config = io::read_config(args.config);
   const OdometryOptions odometry_options =
       resolve_odometry_flags(args.odometry, config, args.config);
+  for (const auto& w : self_calibration_warnings(odometry_options)) {
+    fmt::print(stderr, "moa live: warning: {}\n", w);
+  }
   const bool status = !args.quiet && isatty(STDERR_FILENO);
   const bool to_stdout = args.out == "-";
   const auto started = std::chrono::steady_clock::now();

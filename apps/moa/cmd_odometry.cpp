@@ -29,6 +29,9 @@ struct OdometryArgs {
 int run_odometry(const OdometryArgs& args) {
   const io::RobotConfig config = io::read_config(args.config);
   const OdometryOptions options = resolve_odometry_flags(args.flags, config, args.config);
+  for (const auto& w : self_calibration_warnings(options)) {
+    fmt::print(stderr, "moa odometry: warning: {}\n", w);
+  }
   io::LogFiles log = io::resolve_log(args.log);
   if (!args.faults.empty()) log.faults = args.faults;
   if (options.self_calibration.enabled &&

@@ -137,6 +137,22 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
       ->needs(fuse);
 }
 
+std::vector<std::string> self_calibration_warnings(const OdometryOptions& o) {
+  std::vector<std::string> out;
+  if (!o.self_calibration.enabled) return out;
+  if (o.estimator == EstimatorKind::kWheels) {
+    out.emplace_back(
+        "--self-calibrate with --estimator wheels: the mice are not used, nothing is learnt "
+        "(the calibration stays 1, 1, 0)");
+  } else if (count_sensors(o.sensors) < 3) {
+    out.emplace_back(fmt::format(
+        "--self-calibrate with {} sensor(s): it needs three or more (each sensor is predicted "
+        "from the others); the calibration stays 1, 1, 0",
+        count_sensors(o.sensors)));
+  }
+  return out;
+}
+
 OdometryOptions resolve_odometry_flags(const OdometryFlags& f, const io::RobotConfig& config,
                                        const std::string& config_path) {
   OdometryOptions o = f.options;

@@ -43,6 +43,11 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& flags, bool live = false);
 
 /// The options for `config`: estimator and sensor names resolved, options
 /// validated. Throws io::Error naming the flag.
+/// What --self-calibrate cannot do with these options, one line each (empty
+/// when it can): the wheels estimator uses no mice; fewer than three
+/// selected sensors leave no redundancy to learn from.
+std::vector<std::string> self_calibration_warnings(const OdometryOptions& options);
+
 OdometryOptions resolve_odometry_flags(const OdometryFlags& flags, const io::RobotConfig& config,
                                        const std::string& config_path);
 
