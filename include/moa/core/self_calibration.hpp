@@ -163,8 +163,9 @@ struct SelfCalibrationOptions {
   real reacquire_spread = 0.05;  ///< sd of their log scale and rotation (rad) that agrees
   /// A corrected sensor whose estimate moves (more than settle_threshold,
   /// in scale or rad, from its own average over settle_time s) is held out
-  /// of the estimate until it has settled (under half of it): a partial
-  /// correction would let a sensor still off pass as consistent.
+  /// of the estimate (as drift: then it stays out while corrected, see
+  /// held_as_drift): a partial correction would let a sensor still off
+  /// pass as consistent.
   real settle_time = 1.0;
   real settle_threshold = 0.015;
   real apply_step = 5e-4;  ///< change of an estimate that renews the applied correction
@@ -219,9 +220,10 @@ class SelfCalibration {
   SensorMask runaways() const;
   /// Sensor i is held out (Exclusion::kDrift) while its own correction
   /// (beyond the gauge's common part) is applied and either its estimate
-  /// settles (settle_time, settle_threshold) or the health monitor has
-  /// excluded it as drift since the correction was last inside the bands
-  /// (an estimate moving inside them is noise or the start: not held). A sensor
+  /// moves (settle_time, settle_threshold) or it has been excluded as drift
+  /// (by the health monitor, or held out so) since the correction was last
+  /// inside the bands (an estimate moving inside them is noise or the
+  /// start: not held). A sensor
   /// that changed enough to be excluded is not trusted back on a correction
   /// whose own error (0.3-0.7 %, the filter's scatter) would bias the
   /// rotation (on selfcal-step it cost 7 mm).
