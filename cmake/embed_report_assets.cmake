@@ -1,7 +1,7 @@
 # cmake -DOUTPUT=FILE.cpp [-DCHART_JS=...] -DPAGE_JS=... -DPAGE_CSS=... [-DNAMESPACE=...]
 #       [-DHEADER=...] -P embed_report_assets.cmake
 #
-# Writes the definitions of src/io/report_assets.hpp (or, with NAMESPACE and
+# Writes the definitions of src/web/report_assets.hpp (or, with NAMESPACE and
 # HEADER, of another page's assets: the dashboard's): each asset as raw
 # string literals of at most 32 kB (compilers need not accept longer ones).
 # Lines of a banner comment that hold a web address are left out (the

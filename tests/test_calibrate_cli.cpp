@@ -12,7 +12,7 @@
 #include <random>
 #include <string>
 
-#include "moa/io/config.hpp"
+#include "moa/formats/config.hpp"
 #include "support/calibration_data.hpp"
 #include "support/run.hpp"
 

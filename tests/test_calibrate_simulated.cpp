@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "moa/core/se2.hpp"
-#include "moa/io/config.hpp"
+#include "moa/formats/config.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"
 

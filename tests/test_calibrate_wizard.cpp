@@ -18,7 +18,7 @@
 
 #include "moa/calibration/guided_steps.hpp"
 #include "moa/core/array.hpp"
-#include "moa/io/config.hpp"
+#include "moa/formats/config.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"
 

@@ -11,7 +11,7 @@
 #include <utility>
 #include <vector>
 
-#include "moa/io/error.hpp"
+#include "exit_codes.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"
 
@@ -48,12 +48,12 @@ TEST(CarelessCalls, OutputOntoItsOwnInputIsRefusedAndTheInputKept) {
   const fs::path dir = example_copy("careless-out");
   const std::string before = slurp(dir / "mice.csv");
   const auto r = test::run_moa(odometry(dir, "--out " + (dir / "mice.csv").string()));
-  EXPECT_EQ(r.exit_code, io::kExitBadInput);
+  EXPECT_EQ(r.exit_code, cli::kExitBadInput);
   EXPECT_THAT(r.err, HasSubstr("--out " + (dir / "mice.csv").string() + ": is an input"));
   EXPECT_EQ(slurp(dir / "mice.csv"), before);
   // The same file by another spelling.
   const auto r2 = test::run_moa(odometry(dir, "--out " + (dir / "." / "robot.yaml").string()));
-  EXPECT_EQ(r2.exit_code, io::kExitBadInput);
+  EXPECT_EQ(r2.exit_code, cli::kExitBadInput);
   EXPECT_THAT(r2.err, HasSubstr("is an input"));
 }
 
@@ -64,13 +64,13 @@ TEST(CarelessCalls, SelfCalibrationFileOntoAnInputOrTheOdometryIsRefused) {
     const std::string before = slurp(target);
     const auto r = test::run_moa(
         odometry(dir, "--out " + out.string() + " --self-calibration " + target.string()));
-    EXPECT_EQ(r.exit_code, io::kExitBadInput) << r.err;
+    EXPECT_EQ(r.exit_code, cli::kExitBadInput) << r.err;
     EXPECT_THAT(r.err, HasSubstr("--self-calibration " + target.string() + ": is an input"));
     EXPECT_EQ(slurp(target), before);
   }
   const auto r =
       test::run_moa(odometry(dir, "--out " + out.string() + " --self-calibration " + out.string()));
-  EXPECT_EQ(r.exit_code, io::kExitBadInput) << r.err;
+  EXPECT_EQ(r.exit_code, cli::kExitBadInput) << r.err;
   EXPECT_THAT(r.err,
               HasSubstr("--self-calibration " + out.string() + ": is the --out of this run"));
   EXPECT_FALSE(fs::exists(out));
@@ -88,7 +88,7 @@ TEST(CarelessCalls, SelfCalibrationFileNameIsNotAnOption) {
           "live --config " + (dir / "robot.yaml").string() + " --replay " + dir.string() +
               " --speed 1000 --quiet --out " + out.string()}) {
       const auto r = test::run_moa(command + " --self-calibration " + value);
-      EXPECT_EQ(r.exit_code, io::kExitUsage) << command << " " << value << "\n" << r.err;
+      EXPECT_EQ(r.exit_code, cli::kExitUsage) << command << " " << value << "\n" << r.err;
       EXPECT_THAT(r.err, HasSubstr("--self-calibration: ")) << value;
       EXPECT_FALSE(fs::exists(out)) << command << " " << value;
       EXPECT_FALSE(fs::exists(fs::current_path() / "--quiet"));
@@ -103,7 +103,7 @@ void expect_refused(const std::string& args, const std::string& option, const fs
                     const std::string& what = "is an input of this run") {
   const std::string before = fs::is_regular_file(out) ? slurp(out) : std::string();
   const auto r = test::run_moa(args);
-  EXPECT_EQ(r.exit_code, io::kExitBadInput) << args << "\n" << r.err;
+  EXPECT_EQ(r.exit_code, cli::kExitBadInput) << args << "\n" << r.err;
   EXPECT_THAT(r.err, HasSubstr(option + " " + out.string() + ": " + what)) << args;
   if (fs::is_regular_file(out)) {
     EXPECT_EQ(slurp(out), before) << args;
@@ -185,13 +185,13 @@ TEST(CarelessCalls, NotANumberIsRefusedNamingTheOption) {
   for (const std::string option : {"--rate", "--max-row-interval", "--alpha", "--e-th"}) {
     const auto r = test::run_moa("odometry --config " + kExample + "/robot.yaml --log " + kExample +
                                  " " + option + " nan --out " + out.string());
-    EXPECT_EQ(r.exit_code, io::kExitUsage) << option;
+    EXPECT_EQ(r.exit_code, cli::kExitUsage) << option;
     EXPECT_THAT(r.err, HasSubstr(option)) << option;
     EXPECT_THAT(r.err, HasSubstr("not a finite number")) << option << r.err;
   }
   const auto r = test::run_moa("odometry --config " + kExample + "/robot.yaml --log " + kExample +
                                " --initial-pose nan,0,0 --out " + out.string());
-  EXPECT_EQ(r.exit_code, io::kExitUsage);
+  EXPECT_EQ(r.exit_code, cli::kExitUsage);
   EXPECT_THAT(r.err, HasSubstr("--initial-pose"));
   // Every subcommand's floating-point options, not only odometry's.
   const auto s = test::run_moa("evaluate --truth " + kExample + "/truth.csv --odometry " +
@@ -220,7 +220,7 @@ TEST(CarelessCalls, InfinityAndOutOfRangeNumbersGetOneShortMessage) {
   };
   for (const auto& [args, message] : cases) {
     const auto r = test::run_moa(args);
-    EXPECT_EQ(r.exit_code, io::kExitUsage) << args;
+    EXPECT_EQ(r.exit_code, cli::kExitUsage) << args;
     EXPECT_EQ(r.err, message + "Run with --help for more information.\n") << args;
   }
   EXPECT_FALSE(fs::exists(out));
@@ -236,7 +236,7 @@ TEST(CarelessCalls, DuplicatedRowIsRefusedWithItsLine) {
   text.insert(b, text.substr(a, b - a));
   std::ofstream(dir / "mice.csv") << text;
   const auto r = test::run_moa(odometry(dir, "--estimator ls --out " + (dir / "o.csv").string()));
-  EXPECT_EQ(r.exit_code, io::kExitBadInput);
+  EXPECT_EQ(r.exit_code, cli::kExitBadInput);
   EXPECT_THAT(r.err, HasSubstr("mice.csv:101: duplicate row: sensor"));
   EXPECT_THAT(r.err, HasSubstr("(line 100)"));
   EXPECT_FALSE(fs::exists(dir / "o.csv"));
@@ -259,7 +259,7 @@ TEST(CarelessCalls, SilentSensorIsRefusedForLeastSquaresAndWarnedForConsensus) {
   }
   std::ofstream(dir / "mice.csv") << kept;
   const auto r = test::run_moa(odometry(dir, "--estimator ls --out " + (dir / "o.csv").string()));
-  EXPECT_EQ(r.exit_code, io::kExitBadInput);
+  EXPECT_EQ(r.exit_code, cli::kExitBadInput);
   EXPECT_THAT(r.err, HasSubstr("sensor '" + silent + "'"));
   EXPECT_THAT(r.err, HasSubstr("never reports"));
   EXPECT_FALSE(fs::exists(dir / "o.csv"));
@@ -281,7 +281,7 @@ TEST(CarelessCalls, ImpossibleCountsAreRefusedWithTheLine) {
   text.replace(c2 + 1, c3 - c2 - 1, "2000000000");
   std::ofstream(dir / "mice.csv") << text;
   const auto r = test::run_moa(odometry(dir, "--estimator ls --out " + (dir / "o.csv").string()));
-  EXPECT_EQ(r.exit_code, io::kExitBadInput);
+  EXPECT_EQ(r.exit_code, cli::kExitBadInput);
   EXPECT_THAT(r.err, HasSubstr("mice.csv:10: row at t = "));
   EXPECT_THAT(r.err, HasSubstr("far beyond what the sensor can track"));
   EXPECT_FALSE(fs::exists(dir / "o.csv"));
@@ -289,10 +289,10 @@ TEST(CarelessCalls, ImpossibleCountsAreRefusedWithTheLine) {
 
 TEST(CarelessCalls, UnknownCommandAndUnknownOptionAreNamed) {
   const auto r = test::run_moa("foo");
-  EXPECT_EQ(r.exit_code, io::kExitUsage);
+  EXPECT_EQ(r.exit_code, cli::kExitUsage);
   EXPECT_THAT(r.err, HasSubstr("unknown command 'foo'"));
   const auto s = test::run_moa("odometry --bogus");
-  EXPECT_EQ(s.exit_code, io::kExitUsage);
+  EXPECT_EQ(s.exit_code, cli::kExitUsage);
   EXPECT_THAT(s.err, HasSubstr("unknown option or argument '--bogus'"));
 }
 
@@ -303,11 +303,11 @@ TEST(CarelessCalls, ExitCodesAreDocumentedInHelp) {
   const auto m = test::run_moa("odometry --config " + kExample +
                                "/robot.yaml --log /no/such/dir "
                                "--out /tmp/x.csv");
-  EXPECT_EQ(m.exit_code, io::kExitUsage);  // CLI11's existence check: a usage error
+  EXPECT_EQ(m.exit_code, cli::kExitUsage);  // CLI11's existence check: a usage error
   const auto missing = test::scratch_dir("careless-io");
   const auto w = test::run_moa(
       odometry(fs::path(kExample), "--out " + (missing / "no-dir" / "o.csv").string()));
-  EXPECT_EQ(w.exit_code, io::kExitIo) << w.err;
+  EXPECT_EQ(w.exit_code, cli::kExitIo) << w.err;
 }
 
 }  // namespace

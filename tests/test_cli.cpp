@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "moa/analysis/evaluate.hpp"
-#include "moa/io/log.hpp"
+#include "moa/formats/log.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"
 

@@ -14,8 +14,8 @@
 #include <utility>
 #include <vector>
 
-#include "moa/io/config.hpp"
-#include "moa/io/error.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/formats/error.hpp"
 #include "support/error_of.hpp"
 
 namespace moa::io {

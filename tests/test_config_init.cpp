@@ -11,9 +11,9 @@
 #include <string>
 
 #include "moa/analysis/evaluate.hpp"
-#include "moa/io/config.hpp"
-#include "moa/io/config_init.hpp"
-#include "moa/io/log.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/formats/config_init.hpp"
+#include "moa/formats/log.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"
 

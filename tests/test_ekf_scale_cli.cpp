@@ -12,9 +12,9 @@
 
 #include "moa/analysis/evaluate.hpp"
 #include "moa/core/odometry.hpp"
-#include "moa/io/config.hpp"
-#include "moa/io/log.hpp"
-#include "moa/io/odometry_csv.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/formats/log.hpp"
+#include "moa/formats/odometry_csv.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"
 

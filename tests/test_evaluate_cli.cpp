@@ -8,7 +8,7 @@
 #include <regex>
 #include <string>
 
-#include "moa/io/log.hpp"
+#include "moa/formats/log.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"
 

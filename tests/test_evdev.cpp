@@ -18,8 +18,8 @@
 #include <thread>
 #include <vector>
 
-#include "moa/io/error.hpp"
-#include "moa/io/evdev.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/sources/evdev.hpp"
 #include "support/error_of.hpp"
 #include "support/synth.hpp"
 

@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "moa/io/error.hpp"
-#include "moa/io/evemu.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/sources/evemu.hpp"
 #include "support/error_of.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"

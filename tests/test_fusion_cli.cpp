@@ -8,8 +8,8 @@
 #include <random>
 
 #include "moa/analysis/evaluate.hpp"
-#include "moa/io/config.hpp"
-#include "moa/io/log.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/formats/log.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"
 

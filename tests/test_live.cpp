@@ -20,8 +20,8 @@
 #include <vector>
 
 #include "moa/core/se2.hpp"
-#include "moa/io/config.hpp"
-#include "moa/io/serial_protocol.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/sources/serial_protocol.hpp"
 #include "support/pty.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"

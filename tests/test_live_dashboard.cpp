@@ -17,11 +17,11 @@
 #include <sstream>
 #include <thread>
 
-#include "moa/io/config.hpp"
-#include "moa/io/dashboard.hpp"
-#include "moa/io/error.hpp"
-#include "moa/io/log.hpp"
-#include "moa/io/replay_reader.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/web/dashboard.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/formats/log.hpp"
+#include "moa/sources/replay_reader.hpp"
 #include "support/browser.hpp"
 #include "support/http.hpp"
 #include "support/run.hpp"

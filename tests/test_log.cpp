@@ -12,10 +12,10 @@
 #include <string>
 #include <vector>
 
-#include "moa/io/atomic_file.hpp"
-#include "moa/io/config.hpp"
-#include "moa/io/error.hpp"
-#include "moa/io/log.hpp"
+#include "moa/formats/atomic_file.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/formats/log.hpp"
 #include "support/error_of.hpp"
 
 namespace moa::io {

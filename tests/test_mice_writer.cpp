@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
-#include "moa/io/config.hpp"
-#include "moa/io/error.hpp"
-#include "moa/io/log.hpp"
-#include "moa/io/mice_writer.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/formats/log.hpp"
+#include "moa/formats/mice_writer.hpp"
 #include "support/error_of.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"

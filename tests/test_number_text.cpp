@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "moa/io/csv.hpp"
+#include "moa/formats/csv.hpp"
 #include "support/synth.hpp"
 
 namespace moa::io {

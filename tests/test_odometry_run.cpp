@@ -14,12 +14,12 @@
 #include <vector>
 
 // Internal to the io layer (not installed): included from the source tree.
-#include "../src/io/batch_queue.hpp"
-#include "moa/io/config.hpp"
-#include "moa/io/error.hpp"
-#include "moa/io/log.hpp"
-#include "moa/io/odometry_csv.hpp"
-#include "moa/io/odometry_run.hpp"
+#include "../src/runs/batch_queue.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/formats/log.hpp"
+#include "moa/formats/odometry_csv.hpp"
+#include "moa/runs/odometry_run.hpp"
 #include "support/error_of.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"

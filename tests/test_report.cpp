@@ -15,10 +15,10 @@
 #include <numbers>
 #include <sstream>
 
-#include "moa/io/config.hpp"
-#include "moa/io/error.hpp"
-#include "moa/io/log.hpp"
-#include "moa/io/report.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/formats/log.hpp"
+#include "moa/web/report.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"
 

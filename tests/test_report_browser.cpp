@@ -11,8 +11,8 @@
 #include <regex>
 #include <sstream>
 
-#include "moa/io/config.hpp"
-#include "moa/io/report.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/web/report.hpp"
 #include "support/browser.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"

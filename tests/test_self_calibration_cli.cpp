@@ -16,8 +16,8 @@
 #include <string>
 #include <vector>
 
-#include "moa/io/error.hpp"
-#include "moa/io/self_calibration_csv.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/formats/self_calibration_csv.hpp"
 #include "moa/sim/scenario.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"

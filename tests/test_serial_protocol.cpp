@@ -9,8 +9,8 @@
 #include <variant>
 #include <vector>
 
-#include "moa/io/error.hpp"
-#include "moa/io/serial_protocol.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/sources/serial_protocol.hpp"
 
 namespace moa::io::serial {
 namespace {

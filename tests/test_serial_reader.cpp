@@ -17,9 +17,9 @@
 #include <thread>
 #include <vector>
 
-#include "moa/io/config.hpp"
-#include "moa/io/error.hpp"
-#include "moa/io/serial_reader.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/sources/serial_reader.hpp"
 #include "support/error_of.hpp"
 #include "support/pty.hpp"
 #include "support/synth.hpp"

@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "moa/io/config.hpp"
-#include "moa/io/log.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/formats/log.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"
 

@@ -9,7 +9,7 @@
 #include <numbers>
 #include <sstream>
 
-#include "moa/io/error.hpp"
+#include "moa/formats/error.hpp"
 #include "moa/sim/scenario.hpp"
 
 namespace moa::sim {

@@ -20,10 +20,10 @@
 
 #include "moa/core/odometry.hpp"
 #include "moa/core/sensor.hpp"
-#include "moa/io/config.hpp"
-#include "moa/io/json.hpp"
-#include "moa/io/mice_writer.hpp"
-#include "moa/io/odometry_run.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/formats/json.hpp"
+#include "moa/formats/mice_writer.hpp"
+#include "moa/runs/odometry_run.hpp"
 
 namespace moa::cli {
 namespace fs = std::filesystem;

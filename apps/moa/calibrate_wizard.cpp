@@ -31,10 +31,10 @@
 
 #include "moa/calibration/calibrate.hpp"
 #include "moa/calibration/guided_steps.hpp"
-#include "moa/io/config.hpp"
-#include "moa/io/error.hpp"
-#include "moa/io/odometry_run.hpp"
-#include "moa/io/output_path.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/runs/odometry_run.hpp"
+#include "moa/runs/output_path.hpp"
 
 namespace moa::cli {
 namespace {

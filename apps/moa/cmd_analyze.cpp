@@ -14,9 +14,9 @@
 
 #include "commands.hpp"
 #include "moa/analysis/sensitivity.hpp"
-#include "moa/io/config.hpp"
-#include "moa/io/error.hpp"
-#include "moa/io/json.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/formats/json.hpp"
 #include "odometry_options.hpp"
 
 namespace moa::cli {

@@ -20,7 +20,7 @@
 #include "moa/core/consensus.hpp"
 #include "moa/core/estimate.hpp"
 #include "moa/core/sekimori.hpp"
-#include "moa/io/json.hpp"
+#include "moa/formats/json.hpp"
 #include "odometry_options.hpp"
 
 namespace moa::cli {

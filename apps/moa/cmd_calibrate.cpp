@@ -1,6 +1,6 @@
 // moa calibrate: where the sensors really sit (docs/formats/cli.md,
 // docs/calibration.md). Parses the flags, runs io::calibrate_log
-// (moa/io/calibration_run.hpp: pairing, checks and report), writes the
+// (moa/runs/calibration_run.hpp: pairing, checks and report), writes the
 // calibrated config and prints the report.
 #include <fmt/core.h>
 
@@ -13,11 +13,11 @@
 
 #include "calibrate_wizard.hpp"
 #include "commands.hpp"
-#include "moa/io/calibration_run.hpp"
-#include "moa/io/config.hpp"
-#include "moa/io/error.hpp"
-#include "moa/io/odometry_run.hpp"
-#include "moa/io/output_path.hpp"
+#include "moa/runs/calibration_run.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/runs/odometry_run.hpp"
+#include "moa/runs/output_path.hpp"
 #include "odometry_options.hpp"
 
 namespace moa::cli {

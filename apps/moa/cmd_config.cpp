@@ -12,9 +12,9 @@
 
 #include "commands.hpp"
 #include "moa/core/array.hpp"
-#include "moa/io/config_init.hpp"
-#include "moa/io/csv.hpp"
-#include "moa/io/error.hpp"
+#include "moa/formats/config_init.hpp"
+#include "moa/formats/csv.hpp"
+#include "moa/formats/error.hpp"
 
 namespace moa::cli {
 namespace {

@@ -12,11 +12,11 @@
 
 #include "commands.hpp"
 #include "moa/analysis/evaluate.hpp"
-#include "moa/io/config.hpp"
-#include "moa/io/error.hpp"
-#include "moa/io/evaluate.hpp"
-#include "moa/io/json.hpp"
-#include "moa/io/log.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/runs/evaluate.hpp"
+#include "moa/formats/json.hpp"
+#include "moa/formats/log.hpp"
 
 namespace moa::cli {
 namespace {

@@ -11,7 +11,7 @@
 #include "commands.hpp"
 #include "moa/experiments/experiment.hpp"
 #include "moa/experiments/report.hpp"
-#include "moa/io/error.hpp"
+#include "moa/formats/error.hpp"
 
 namespace moa::cli {
 namespace {

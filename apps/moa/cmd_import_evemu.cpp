@@ -12,10 +12,10 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "moa/io/error.hpp"
-#include "moa/io/evemu.hpp"
-#include "moa/io/mice_writer.hpp"
-#include "moa/io/output_path.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/sources/evemu.hpp"
+#include "moa/formats/mice_writer.hpp"
+#include "moa/runs/output_path.hpp"
 #include "sensor_binding.hpp"
 
 namespace moa::cli {

@@ -8,10 +8,10 @@
 #include <string>
 
 #include "commands.hpp"
-#include "moa/io/config.hpp"
-#include "moa/io/error.hpp"
-#include "moa/io/odometry_run.hpp"
-#include "moa/io/output_path.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/runs/odometry_run.hpp"
+#include "moa/runs/output_path.hpp"
 #include "odometry_options.hpp"
 
 namespace moa::cli {

@@ -7,10 +7,10 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "moa/io/error.hpp"
-#include "moa/io/odometry_run.hpp"
-#include "moa/io/output_path.hpp"
-#include "moa/io/report.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/runs/odometry_run.hpp"
+#include "moa/runs/output_path.hpp"
+#include "moa/web/report.hpp"
 
 namespace moa::cli {
 namespace {

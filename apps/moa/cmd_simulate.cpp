@@ -11,7 +11,7 @@
 #include <system_error>
 
 #include "commands.hpp"
-#include "moa/io/output_path.hpp"
+#include "moa/runs/output_path.hpp"
 #include "moa/sim/log_writer.hpp"
 #include "moa/sim/scenario.hpp"
 

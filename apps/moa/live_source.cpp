@@ -2,8 +2,8 @@
 
 #include <fmt/core.h>
 
-#include "moa/io/error.hpp"
-#include "moa/io/odometry_run.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/runs/odometry_run.hpp"
 #include "odometry_options.hpp"
 #include "sensor_binding.hpp"
 

@@ -10,11 +10,11 @@
 #include <string>
 #include <vector>
 
-#include "moa/io/config.hpp"
-#include "moa/io/evdev.hpp"
-#include "moa/io/live.hpp"
-#include "moa/io/replay_reader.hpp"
-#include "moa/io/serial_reader.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/sources/evdev.hpp"
+#include "moa/sources/live.hpp"
+#include "moa/sources/replay_reader.hpp"
+#include "moa/sources/serial_reader.hpp"
 
 namespace moa::cli {
 

@@ -6,8 +6,9 @@
 #include <string_view>
 
 #include "commands.hpp"
-#include "moa/io/cleanup.hpp"
-#include "moa/io/error.hpp"
+#include "exit_codes.hpp"
+#include "moa/formats/cleanup.hpp"
+#include "moa/formats/error.hpp"
 #include "odometry_options.hpp"
 
 namespace {
@@ -76,7 +77,7 @@ int main(int argc, char** argv) {
   if (argc > 1 && argv[1][0] != '-' && !known(argv[1])) {
     fmt::print(stderr, "moa: unknown command '{}' (commands: {}; moa --help)\n", argv[1],
                subcommand_names(app));
-    return moa::io::kExitUsage;
+    return moa::cli::kExitUsage;
   }
   try {
     app.parse(argc, argv);
@@ -94,14 +95,14 @@ int main(int argc, char** argv) {
       if (!extras.empty()) {
         fmt::print(stderr, "moa {}: unknown option or argument '{}' (moa {} --help)\n",
                    sub->get_name(), extras.front(), sub->get_name());
-        return moa::io::kExitUsage;
+        return moa::cli::kExitUsage;
       }
     }
     app.exit(e);
-    return moa::io::kExitUsage;
+    return moa::cli::kExitUsage;
   } catch (const CLI::ParseError& e) {
     app.exit(e);
-    return moa::io::kExitUsage;
+    return moa::cli::kExitUsage;
   }
   // "config init": the chain of subcommands given, for the error line.
   std::string name;
@@ -113,12 +114,12 @@ int main(int argc, char** argv) {
     return action();
   } catch (const moa::io::IoError& e) {
     fmt::print(stderr, "moa {}: error: {}\n", name, e.what());
-    return moa::io::kExitIo;
+    return moa::cli::kExitIo;
   } catch (const moa::io::Error& e) {
     fmt::print(stderr, "moa {}: error: {}\n", name, e.what());
-    return moa::io::kExitBadInput;
+    return moa::cli::kExitBadInput;
   } catch (const std::exception& e) {
     fmt::print(stderr, "moa {}: internal error: {}\n", name, e.what());
-    return moa::io::kExitInternal;
+    return moa::cli::kExitInternal;
   }
 }

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <limits>
 
-#include "moa/io/error.hpp"
-#include "moa/io/odometry_run.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/runs/odometry_run.hpp"
 
 namespace moa::cli {
 

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "moa/core/odometry.hpp"
-#include "moa/io/config.hpp"
+#include "moa/formats/config.hpp"
 
 namespace moa::cli {
 

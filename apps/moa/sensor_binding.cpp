@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-#include "moa/io/error.hpp"
+#include "moa/formats/error.hpp"
 
 namespace moa::cli {
 

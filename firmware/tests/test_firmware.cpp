@@ -18,7 +18,7 @@
 
 #include "avr_bench.hpp"
 #include "firmware_builds.hpp"
-#include "moa/io/serial_protocol.hpp"
+#include "moa/sources/serial_protocol.hpp"
 
 namespace moa::firmware_sim {
 

@@ -28,8 +28,8 @@
 
 #include "experiments_list.hpp"
 #include "moa/calibration/exact.hpp"
-#include "moa/io/error.hpp"
-#include "moa/io/json.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/formats/json.hpp"
 
 namespace moa::experiments {
 namespace {

@@ -26,8 +26,8 @@
 #include "moa/calibration/exact.hpp"
 #include "moa/calibration/kimlee.hpp"
 #include "moa/core/estimate.hpp"
-#include "moa/io/error.hpp"
-#include "moa/io/json.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/formats/json.hpp"
 
 namespace moa::experiments {
 namespace {

@@ -8,10 +8,10 @@
 #include <vector>
 
 #include "moa/experiments/simulated_run.hpp"
-#include "moa/io/error.hpp"
-#include "moa/io/log.hpp"
-#include "moa/io/odometry_run.hpp"
-#include "moa/io/report.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/formats/log.hpp"
+#include "moa/runs/odometry_run.hpp"
+#include "moa/web/report.hpp"
 #include "moa/sim/log_writer.hpp"
 #include "moa/sim/scenario.hpp"
 

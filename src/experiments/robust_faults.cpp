@@ -13,7 +13,7 @@
 
 #include "experiments_list.hpp"
 #include "moa/experiments/simulated_run.hpp"
-#include "moa/io/json.hpp"
+#include "moa/formats/json.hpp"
 
 namespace moa::experiments {
 namespace {

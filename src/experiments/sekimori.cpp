@@ -11,8 +11,8 @@
 
 #include "experiments_list.hpp"
 #include "moa/experiments/simulated_run.hpp"
-#include "moa/io/json.hpp"
-#include "moa/io/log.hpp"
+#include "moa/formats/json.hpp"
+#include "moa/formats/log.hpp"
 
 namespace moa::experiments {
 namespace {

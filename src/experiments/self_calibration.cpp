@@ -25,7 +25,7 @@
 
 #include "experiments_list.hpp"
 #include "moa/experiments/simulated_run.hpp"
-#include "moa/io/json.hpp"
+#include "moa/formats/json.hpp"
 #include "moa/sim/scenario.hpp"
 
 namespace moa::experiments {

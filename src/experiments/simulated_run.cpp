@@ -6,9 +6,9 @@
 #include <random>
 #include <stdexcept>
 
-#include "moa/io/evaluate.hpp"
-#include "moa/io/odometry_run.hpp"
-#include "moa/io/self_calibration_csv.hpp"
+#include "moa/runs/evaluate.hpp"
+#include "moa/runs/odometry_run.hpp"
+#include "moa/formats/self_calibration_csv.hpp"
 #include "moa/sim/log_writer.hpp"
 #include "moa/sim/scenario.hpp"
 
@@ -124,7 +124,7 @@ Spread spread(const std::vector<double>& values) {
 
 }  // namespace moa::experiments
 
-#include "moa/io/json.hpp"
+#include "moa/formats/json.hpp"
 
 namespace moa::experiments {
 

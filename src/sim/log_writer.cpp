@@ -17,10 +17,10 @@
 #include <system_error>
 #include <vector>
 
-#include "moa/io/atomic_file.hpp"
-#include "moa/io/cleanup.hpp"
-#include "moa/io/config.hpp"
-#include "moa/io/error.hpp"
+#include "moa/formats/atomic_file.hpp"
+#include "moa/formats/cleanup.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/formats/error.hpp"
 
 namespace moa::sim {
 namespace {

@@ -16,9 +16,9 @@
 #include <system_error>
 
 #include "builtin_scenarios.hpp"
-#include "moa/io/csv.hpp"
-#include "moa/io/error.hpp"
-#include "moa/io/yaml.hpp"
+#include "moa/formats/csv.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/formats/yaml.hpp"
 
 namespace moa::sim {
 namespace {

@@ -6,8 +6,8 @@
 #include <optional>
 #include <string_view>
 
-#include "moa/io/config.hpp"
-#include "moa/io/error.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/formats/error.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);

@@ -5,7 +5,7 @@
 #include <span>
 #include <vector>
 
-#include "moa/io/evdev.hpp"
+#include "moa/sources/evdev.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size == 0) return 0;

@@ -4,8 +4,8 @@
 #include <cstdint>
 
 #include "fuzz_input.hpp"
-#include "moa/io/error.hpp"
-#include "moa/io/evemu.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/sources/evemu.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const auto file = moa::fuzz::input_file("m1.events", data, size);

@@ -4,9 +4,9 @@
 #include <cstdint>
 
 #include "fuzz_input.hpp"
-#include "moa/io/config.hpp"
-#include "moa/io/error.hpp"
-#include "moa/io/log.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/formats/log.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   static const moa::io::RobotConfig config = moa::io::parse_config(

@@ -4,8 +4,8 @@
 #include <cstdint>
 #include <string_view>
 
-#include "moa/io/config.hpp"
-#include "moa/io/error.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/formats/error.hpp"
 #include "moa/sim/scenario.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <variant>
 
-#include "moa/io/serial_protocol.hpp"
+#include "moa/sources/serial_protocol.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   namespace serial = moa::io::serial;

@@ -3,7 +3,7 @@
 
 #include <string>
 
-#include "moa/io/error.hpp"
+#include "moa/formats/error.hpp"
 
 namespace moa::test {
 

@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <variant>
 
-#include "moa/io/serial_protocol.hpp"
+#include "moa/sources/serial_protocol.hpp"
 
 namespace moa::test {
 

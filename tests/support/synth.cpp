@@ -5,7 +5,7 @@
 #include <random>
 #include <vector>
 
-#include "moa/io/config.hpp"
+#include "moa/formats/config.hpp"
 
 namespace moa::test {
 

@@ -30,11 +30,11 @@
 #include <string>
 #include <vector>
 
-#include "moa/io/config.hpp"
-#include "moa/io/csv.hpp"
-#include "moa/io/log.hpp"
-#include "moa/io/odometry_csv.hpp"
-#include "moa/io/odometry_run.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/formats/csv.hpp"
+#include "moa/formats/log.hpp"
+#include "moa/formats/odometry_csv.hpp"
+#include "moa/runs/odometry_run.hpp"
 #include "qemu_stream.hpp"
 
 namespace {

@@ -12,8 +12,8 @@
 
 #include "moa/analysis/evaluate.hpp"
 #include "moa/core/odometry.hpp"
-#include "moa/io/config.hpp"
-#include "moa/io/self_calibration_csv.hpp"
+#include "moa/formats/config.hpp"
+#include "moa/formats/self_calibration_csv.hpp"
 
 namespace moa::experiments {
 

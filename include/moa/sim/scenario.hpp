@@ -12,7 +12,7 @@
 #include <string_view>
 #include <vector>
 
-#include "moa/io/config.hpp"
+#include "moa/formats/config.hpp"
 #include "moa/sim/camera.hpp"
 #include "moa/sim/optical.hpp"
 #include "moa/sim/trajectory.hpp"

@@ -1,0 +1,117 @@
+// Calibration over the files of a log, with its report: what `moa
+// calibrate`, the Python bindings and any other front end run.
+//
+//   kimlee, exact   mice.csv against the reference twists of wheels.csv
+//   guided          count totals of a push along x (and y) and a spin
+//
+// Pairing of mice counts and reference (kimlee, exact): each wheels.csv row
+// is the twist averaged over the interval from the previous row to its t,
+// so the mice rows are integrated over exactly those intervals
+// (IntervalAccumulator: a row's counts spread in proportion to overlap, as
+// the Synchroniser does); the first wheels row only opens the first
+// interval, and intervals outside the span of mice.csv are not used.
+// min_interval merges consecutive wheels rows (duration-weighted mean
+// twist, reference_intervals()) into longer intervals when the rows are
+// shorter than the mice rows.
+//
+// Why in io and not in calibration: this reads wheels.csv and mice.csv (the
+// guided recordings too) and writes its report as JSON with io::JsonWriter,
+// as io::run_odometry runs the pipeline over a log. The calibration layer
+// keeps what needs no file: the solvers, the pairing (IntervalAccumulator,
+// reference_intervals, merge_samples) and the plausibility checks.
+#pragma once
+
+#include <array>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include "moa/calibration/calibrate.hpp"
+#include "moa/calibration/exact.hpp"
+#include "moa/calibration/guided.hpp"
+#include "moa/calibration/kimlee.hpp"
+#include "moa/formats/config.hpp"
+
+namespace moa::io {
+
+enum class CalibrationMethod { kKimLee, kExact, kGuided };
+/// "kimlee", "exact", "guided".
+const char* describe(CalibrationMethod method);
+/// The method of that name; nullopt otherwise.
+std::optional<CalibrationMethod> calibration_method_from_name(std::string_view name);
+
+struct CalibrationOptions {
+  /// kimlee, exact: longest interval one mice.csv row may cover, s.
+  double max_row_interval = 0.05;
+  /// kimlee, exact: merge consecutive wheels.csv rows into intervals of at
+  /// least this many seconds. Unset: 0.05 for exact (sums of counts over
+  /// longer intervals carry less quantisation), 0 for kimlee.
+  std::optional<double> min_interval;
+  /// kimlee, exact: sum the intervals into this many measurements of equal
+  /// duration; 0: every interval. Unset: 10 for kimlee (the paper's M), 0
+  /// for exact.
+  std::optional<int> measurements;
+  /// guided: log directories (or mice.csv files) of a push along the
+  /// robot's x axis, optionally one along y, and whole turns about the
+  /// robot's centre.
+  std::filesystem::path push_x, push_y, spin;
+  std::optional<double> distance;  ///< guided: m, length of each push
+  std::optional<double> turns;     ///< guided: whole turns of the spin (negative: clockwise)
+  GuidedTolerances tolerances;     ///< guided: 1-sigma of the procedure
+  /// exact: return a calibration whose model does not explain the data
+  /// (ExactModelCheck::misfit()) with a warning instead of refusing it.
+  bool force = false;
+};
+
+/// Checks that the options fit the method (`log` empty: none given); throws
+/// io::Error in the command line's words ("--method guided needs --spin DIR").
+void check_calibration_options(CalibrationMethod method, const std::filesystem::path& log,
+                               const CalibrationOptions& options);
+
+/// What every method reports per sensor.
+struct SensorCalibrationReport {
+  std::string name;
+  SensorMount nominal;
+  SensorMount calibrated;
+  MountVector sigma = MountVector::Zero();             ///< 1-sigma of (px, py, yaw, sx, sy)
+  std::array<bool, kMountParameters> estimated{};      ///< false: kept at nominal
+  bool mirror_from_data = false;                       ///< mirroring decided by the data
+  std::optional<double> residual_rms;                  ///< m/s (kimlee, exact)
+  std::optional<double> push_misfit;                   ///< m (guided)
+  std::optional<MountVector> information_eigenvalues;  ///< exact: observability.hpp
+};
+
+/// A calibration's result and report, as Ceres' Solver::Summary.
+struct CalibrationSummary {
+  CalibrationMethod method = CalibrationMethod::kExact;
+  /// The nominal config with the calibrated mounts: what `moa calibrate --out` writes.
+  RobotConfig calibrated;
+  std::vector<SensorCalibrationReport> sensors;
+  /// Facts about the data and the solve, one line each (the report's head).
+  std::vector<std::string> facts;
+  std::vector<std::string> warnings;
+  /// The method's own result.
+  std::variant<KimLeeCalibration, ExactCalibration, GuidedCalibration> result;
+
+  /// One line: method, sensors, the largest 1-sigma, warnings.
+  std::string brief_report() const;
+  /// The full text report: facts, a table per sensor, warnings (lines end in '\n').
+  std::string full_report() const;
+  /// One JSON object (SI units, no newline); `out`, when given, as its "out" member.
+  std::string to_json(std::string_view out = {}) const;
+};
+
+/// Calibrates `config` (read from `config_path`) with `method` from the log
+/// `log` (kimlee, exact: a directory with mice.csv and wheels.csv; guided:
+/// empty, the recordings are in `options`). Throws io::Error naming the
+/// file, row or option on anything wrong, when the method cannot compute a
+/// result, and (exact, unless options.force) when the calibrated model does
+/// not explain the data (docs/calibration.md, "Refused calibrations").
+CalibrationSummary calibrate_log(const RobotConfig& config, const std::string& config_path,
+                                 const std::filesystem::path& log, CalibrationMethod method,
+                                 const CalibrationOptions& options = {});
+
+}  // namespace moa::io

@@ -1,0 +1,80 @@
+// The odometry pipeline (moa/core/odometry.hpp) over the files of a log
+// directory: mice.csv, and when present and asked for wheels.csv,
+// camera.csv, faults.csv, merged in time order. `moa odometry`, the
+// experiments and the Python bindings all run this.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "moa/core/odometry.hpp"
+#include "moa/formats/config.hpp"
+
+namespace moa::io {
+
+/// The files of a log (log format v1), found from the directory or its
+/// mice.csv: the one resolver of "log directory or mice.csv".
+struct LogFiles {
+  std::filesystem::path dir;
+  std::filesystem::path mice;
+  std::optional<std::filesystem::path> wheels, camera, truth, faults;
+  /// mice and the optional files present: what an output must not name.
+  std::vector<std::filesystem::path> files() const;
+};
+/// Throws io::Error when `log` is neither a directory with mice.csv nor a file.
+LogFiles resolve_log(const std::filesystem::path& log);
+
+/// The pipeline's options as a front end names them: `estimator` by name,
+/// `sensors` by config name (empty: all), wheels off with `no_wheels`;
+/// then validated (OdometryOptions::validate). `moa odometry`, `moa live`
+/// and the Python bindings resolve their options with this. Throws io::Error
+/// in the command line's words ("--sensors: unknown sensor 'x' (robot.yaml
+/// has m1, m2)", "invalid option: rate: must be positive and finite (Hz)").
+OdometryOptions resolve_odometry_options(OdometryOptions options, std::string_view estimator,
+                                         const std::vector<std::string>& sensors, bool no_wheels,
+                                         const RobotConfig& config, const std::string& config_path);
+
+struct OdometryRun {
+  std::size_t rows = 0;          ///< mice rows read
+  std::size_t steps = 0;         ///< epochs written
+  double t0 = 0.0, t_end = 0.0;  ///< s, first epoch's start, last row's time
+  FixCounts fixes;
+  /// What the caller should tell the user (a configured sensor that never
+  /// reported, used as still by a robust estimator).
+  std::vector<std::string> warnings;
+};
+
+using StepCallback = std::function<void(const OdometryStep&)>;
+/// Called now and then with the mice rows read so far and their time (s).
+using ProgressCallback = std::function<void(std::size_t rows, double t)>;
+
+/// Runs the pipeline: wheels.csv is fed when options.use_wheels and it
+/// exists, camera.csv when options.fuse_camera (required then), faults.csv
+/// (or `faults`) when the estimator is the oracle (required then). Throws
+/// io::Error naming the file, line or option on anything wrong. A selected
+/// sensor that never reports is refused for least squares and the oracle
+/// (they would take it as still) and a warning for the robust estimators.
+OdometryRun run_odometry(const RobotConfig& config, const std::string& config_path,
+                         const LogFiles& log, const OdometryOptions& options,
+                         const StepCallback& on_step, const ProgressCallback& progress = {});
+
+/// run_odometry writing odometry.csv (written whole on success, else not at all)
+/// and, when `calibration_out` is not empty and options.self_calibration is
+/// enabled, the self-calibration's estimates (io/self_calibration_csv.hpp).
+OdometryRun write_odometry(const RobotConfig& config, const std::string& config_path,
+                           const LogFiles& log, const OdometryOptions& options,
+                           const std::filesystem::path& out, const ProgressCallback& progress = {},
+                           const std::filesystem::path& calibration_out = {});
+
+/// Builds the pipeline in place on the heap (it is large), or throws
+/// io::Error naming `config_path` for a geometry the estimator refuses and
+/// the option for invalid options.
+std::unique_ptr<Odometry> make_odometry(const RobotConfig& config, const std::string& config_path,
+                                        double t0, const OdometryOptions& options);
+
+}  // namespace moa::io

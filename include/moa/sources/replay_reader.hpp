@@ -1,0 +1,55 @@
+// A recorded log played back at the pace it was recorded, as a live
+// FrameSource: `moa live --replay DIR` and `moa calibrate --guided --live
+// --replay DIR` run demos and tests through the same path as USB mice and
+// the serial board, without hardware.
+//
+// Row k of mice.csv (time t_k) is handed out no earlier than wall time
+// start + (t_k - t0) / speed, t0 the log's start time and start the moment
+// start_time() is first called. While it waits, the reader calls
+// LiveHooks::tick every tick_period and stops when LiveHooks::stop says so,
+// as the device readers do. A caller slower than the log does not skip rows:
+// it catches up (rows come back-to-back until it is on time again).
+#pragma once
+
+#include <chrono>
+#include <filesystem>
+#include <memory>
+#include <optional>
+
+#include "moa/formats/config.hpp"
+#include "moa/sources/live.hpp"
+#include "moa/formats/log.hpp"
+
+namespace moa::io {
+
+struct ReplayOptions {
+  /// Playback speed: 1 is real time, 2 twice as fast. Positive and finite.
+  double speed = 1.0;
+  /// Empty when usable, else what is wrong, naming the field.
+  const char* validate() const;
+};
+
+class ReplayReader : public FrameSource {
+ public:
+  /// Opens the log (directory or its mice.csv, sensors resolved against
+  /// `config`); throws io::Error for a bad log or invalid options.
+  ReplayReader(const std::filesystem::path& log, const RobotConfig& config,
+               const ReplayOptions& options, LiveHooks hooks);
+  ~ReplayReader() override;
+  double start_time() override;
+  std::optional<SensorRow> next() override;
+
+  /// Rows handed out so far.
+  std::size_t rows() const { return rows_; }
+
+ private:
+  MiceReader reader_;
+  ReplayOptions options_;
+  LiveHooks hooks_;
+  std::optional<double> t0_;
+  std::chrono::steady_clock::time_point started_;
+  std::chrono::steady_clock::time_point last_tick_;
+  std::size_t rows_ = 0;
+};
+
+}  // namespace moa::io

@@ -1,0 +1,285 @@
+#include "moa/formats/config.hpp"
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <span>
+#include <sstream>
+#include <system_error>
+
+#include "moa/formats/atomic_file.hpp"
+#include "moa/formats/csv.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/formats/yaml.hpp"
+
+namespace moa::io {
+namespace {
+
+constexpr int kConfigVersion = 1;
+
+// Prefixes every message with where it is: "FILE: " or "FILE: sensor 'm1': ".
+// For configs built in code (format_config); files are read by YamlFields.
+class Context {
+ public:
+  Context(std::string_view source, std::string where) : source_(source), where_(std::move(where)) {}
+  [[noreturn]] void fail(std::string_view what) const {
+    if (where_.empty()) throw Error(printable(fmt::format("{}: {}", source_, what)));
+    throw Error(printable(fmt::format("{}: {}: {}", source_, where_, what)));
+  }
+  [[noreturn]] void fail_key(std::string_view key, std::string_view what) const {
+    fail(fmt::format("key '{}': {}", key, what));
+  }
+  std::string_view source() const { return source_; }
+
+ private:
+  std::string_view source_;
+  std::string where_;
+};
+
+// Names are matched against the sensor column of mice.csv, which has no
+// quoting and trims spaces: a name with a comma, a space or a control
+// character could never match a row.
+bool is_valid_name(std::string_view name) {
+  if (name.empty()) return false;
+  return std::none_of(name.begin(), name.end(), [](char c) {
+    const auto u = static_cast<unsigned char>(c);
+    return c == ',' || c == ' ' || u < 0x20 || u == 0x7f;
+  });
+}
+
+// Range checks on values, shared by parsing (bad input) and formatting (a
+// config built in code must not produce a file that cannot be read back).
+void check_mount(const Context& context, const SensorMount& m) {
+  if (!std::isfinite(m.position.x()) || !std::isfinite(m.position.y())) {
+    context.fail_key("position", "not finite");
+  }
+  if (!std::isfinite(m.yaw)) context.fail_key("yaw", "not finite");
+  if (!std::isfinite(m.cpi) || m.cpi <= 0.0) {
+    context.fail_key("cpi", fmt::format("must be > 0 (found {})", m.cpi));
+  }
+  for (int i = 0; i < 2; ++i) {
+    if (!std::isfinite(m.scale[i]) || m.scale[i] <= 0.0) {
+      context.fail_key("scale", fmt::format("must be > 0 (found {})", m.scale[i]));
+    }
+  }
+  if (m.max_speed && (!std::isfinite(*m.max_speed) || *m.max_speed <= 0.0)) {
+    context.fail_key("max_speed", fmt::format("must be > 0 (found {})", *m.max_speed));
+  }
+  if (m.noise && (!std::isfinite(*m.noise) || *m.noise < 0.0)) {
+    context.fail_key("noise", fmt::format("must be >= 0 (found {})", *m.noise));
+  }
+}
+
+void check_count(const Context& context, std::size_t n) {
+  if (n == 0) context.fail("no sensors (key 'sensors' is an empty list)");
+  if (n > static_cast<std::size_t>(kMaxSensors)) {
+    context.fail(fmt::format("{} sensors, at most {} are supported", n, kMaxSensors));
+  }
+}
+
+std::string sensor_label(std::size_t index, const std::string& name) {
+  return name.empty() ? fmt::format("sensor {}", index + 1) : fmt::format("sensor '{}'", name);
+}
+
+// The sensor's name, read first so that every later message can say which sensor it is.
+std::string sensor_name(const YamlSource& source, const YAML::Node& node, std::size_t index) {
+  const std::string unnamed = sensor_label(index, {});
+  if (!node.IsMap()) {
+    source.fail(node, fmt::format("{}: expected a map, found {}", unnamed, describe_kind(node)));
+  }
+  for (const auto& entry : node) {
+    if (!entry.first.IsScalar() || entry.first.Scalar() != "name") continue;
+    const YAML::Node& value = entry.second;
+    if (!value.IsScalar()) {
+      source.fail(value, fmt::format("{}: key 'name': expected a name, found {}", unnamed,
+                                     describe_kind(value)));
+    }
+    if (!is_valid_name(value.Scalar())) {
+      source.fail(value, fmt::format("{}: key 'name': invalid name '{}' (empty, or a comma, space "
+                                     "or control character: it could not appear in mice.csv)",
+                                     unnamed, value.Scalar()));
+    }
+    return value.Scalar();
+  }
+  source.fail(node, fmt::format("{}: missing key 'name'", unnamed));
+}
+
+SensorMount parse_sensor(const YamlSource& source, const YAML::Node& node, std::size_t index,
+                         std::string& name) {
+  name = sensor_name(source, node, index);
+  const YamlFields f(source, node, "",
+                     {"name", "position", "yaw", "cpi", "scale", "mirrored", "max_speed", "noise"},
+                     sensor_label(index, name));
+  SensorMount m;
+  const auto position = f.numbers("position", 2);
+  m.position = {position[0], position[1]};
+  m.yaw = f.number("yaw");
+  m.cpi = f.positive("cpi");
+  if (f.has("scale")) {
+    const auto scale = f.numbers("scale", 2);
+    if (!(scale[0] > 0.0 && scale[1] > 0.0)) {
+      f.fail("scale", fmt::format("must be > 0 (found [{}, {}])", scale[0], scale[1]));
+    }
+    m.scale = {scale[0], scale[1]};
+  }
+  m.mirrored = f.boolean("mirrored", m.mirrored);
+  if (f.has("max_speed")) m.max_speed = f.positive("max_speed");
+  if (f.has("noise")) m.noise = f.non_negative("noise", 0.0);
+  check_mount(Context(source.name(), sensor_label(index, name)), m);
+  return m;
+}
+
+// Plain YAML when the name reads back as the same string, double-quoted
+// otherwise ("null", "-x", "&a" and the like would not).
+std::string yaml_name(const std::string& name) {
+  const bool plain_chars = std::all_of(name.begin(), name.end(), [](char c) {
+    return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' ||
+           c == '.' || c == '-' || c == '/' || c == '+';
+  });
+  const char first = name.empty() ? '\0' : name.front();
+  const bool plain_start = (first >= 'a' && first <= 'z') || (first >= 'A' && first <= 'Z') ||
+                           (first >= '0' && first <= '9') || first == '_';
+  static constexpr std::array<std::string_view, 4> kNulls{"null", "Null", "NULL", "~"};
+  if (plain_chars && plain_start && std::find(kNulls.begin(), kNulls.end(), name) == kNulls.end()) {
+    return name;
+  }
+  std::string quoted = "\"";
+  for (const char c : name) {
+    if (c == '"' || c == '\\') quoted += '\\';
+    quoted += c;
+  }
+  quoted += '"';
+  return quoted;
+}
+
+// `limits: {accel: m/s^2, angular_accel: rad/s^2}`, each optional (a key
+// left out keeps RobotLimits' default).
+RobotLimits parse_limits(const YamlSource& source, const YAML::Node& node) {
+  const YamlFields f(source, node, "limits", {"accel", "angular_accel"});
+  RobotLimits limits;
+  limits.accel = f.positive("accel", limits.accel);
+  limits.angular_accel = f.positive("angular_accel", limits.angular_accel);
+  if (const char* e = limits.validate(); *e) source.fail(node, e);
+  return limits;
+}
+
+}  // namespace
+
+std::optional<int> RobotConfig::index_of(std::string_view name) const {
+  const auto it = std::find(names.begin(), names.end(), name);
+  if (it == names.end()) return std::nullopt;
+  return static_cast<int>(it - names.begin());
+}
+
+RobotConfig parse_config(std::string_view yaml, std::string_view source_name) {
+  const YamlSource source(source_name);
+  const YAML::Node root = load_yaml(yaml, source_name);
+  if (root.IsNull()) source.fail("empty config (expected keys 'version' and 'sensors')");
+  if (!root.IsMap())
+    source.fail(root, fmt::format("expected a map, found {}", describe_kind(root)));
+
+  // The version before anything else: a newer file may well have keys this
+  // reader does not know, and "unsupported version" is the useful message.
+  bool has_version = false;
+  for (const auto& entry : root) {
+    if (!entry.first.IsScalar() || entry.first.Scalar() != "version") continue;
+    has_version = true;
+    const YAML::Node& v = entry.second;
+    if (!v.IsScalar()) {
+      source.fail(v, fmt::format("key 'version': expected an integer, found {}", describe_kind(v)));
+    }
+    if (v.Scalar() != std::to_string(kConfigVersion)) {
+      source.fail(
+          v, fmt::format("version {} is not supported (expected {})", v.Scalar(), kConfigVersion));
+    }
+  }
+  if (!has_version) source.fail(root, "missing key 'version'");
+
+  const YamlFields top(source, root, "", {"version", "sensors", "limits"});
+  const YAML::Node sensors = top.required("sensors");
+  if (!sensors.IsSequence()) {
+    top.fail("sensors",
+             fmt::format("expected a list of sensors, found {}", describe_kind(sensors)));
+  }
+  check_count(Context(source_name, {}), sensors.size());
+
+  RobotConfig config;
+  std::vector<SensorMount> mounts;
+  for (std::size_t i = 0; i < sensors.size(); ++i) {
+    std::string name;
+    mounts.push_back(parse_sensor(source, sensors[i], i, name));
+    if (config.index_of(name)) {
+      source.fail(sensors[i], fmt::format("duplicate sensor name '{}'", name));
+    }
+    config.names.push_back(std::move(name));
+  }
+  config.array = SensorArray(std::move(mounts));
+  if (const auto limits = top.get("limits")) config.limits = parse_limits(source, *limits);
+  return config;
+}
+
+RobotConfig read_config(const std::filesystem::path& path) {
+  const std::string source = path.string();
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    throw Error(fmt::format("{}: cannot open (is a directory)", source));
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(fmt::format("{}: cannot open", source));
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw Error(fmt::format("{}: read error", source));
+  return parse_config(text.str(), source);
+}
+
+std::string format_config(const RobotConfig& config) {
+  const Context context("config", {});
+  const std::size_t n = config.array.mounts().size();
+  if (config.names.size() != n) {
+    context.fail(fmt::format("{} names for {} sensors", config.names.size(), n));
+  }
+  check_count(context, n);
+
+  // "{}" is fmt's shortest representation that reads back as the same double.
+  std::string out = fmt::format("version: {}\nsensors:\n", kConfigVersion);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::string& name = config.names[i];
+    const SensorMount& m = config.array.mounts()[i];
+    const Context sensor(context.source(), sensor_label(i, is_valid_name(name) ? name : ""));
+    if (!is_valid_name(name)) sensor.fail_key("name", fmt::format("invalid name '{}'", name));
+    if (config.index_of(name) != static_cast<int>(i)) {
+      context.fail(fmt::format("duplicate sensor name '{}'", name));
+    }
+    check_mount(sensor, m);
+    out += fmt::format("  - name: {}\n", yaml_name(name));
+    out += fmt::format("    position: [{}, {}]\n", m.position.x(), m.position.y());
+    out += fmt::format("    yaw: {}\n", m.yaw);
+    out += fmt::format("    cpi: {}\n", m.cpi);
+    out += fmt::format("    scale: [{}, {}]\n", m.scale.x(), m.scale.y());
+    out += fmt::format("    mirrored: {}\n", m.mirrored);
+    if (m.max_speed) out += fmt::format("    max_speed: {}\n", *m.max_speed);
+    if (m.noise) out += fmt::format("    noise: {}\n", *m.noise);
+  }
+  if (config.limits) {
+    if (const char* e = config.limits->validate(); *e) context.fail(e);
+    out += fmt::format("limits:\n  accel: {}\n  angular_accel: {}\n", config.limits->accel,
+                       config.limits->angular_accel);
+  }
+  return out;
+}
+
+void write_config(const RobotConfig& config, const std::filesystem::path& path) {
+  std::string text = format_config(config);
+  AtomicFile file(path);
+  file.stream() << text;
+  file.commit();
+}
+
+}  // namespace moa::io

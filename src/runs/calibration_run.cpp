@@ -1,0 +1,714 @@
+#include "moa/runs/calibration_run.hpp"
+
+#include <fmt/core.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <initializer_list>
+#include <iterator>
+#include <numbers>
+#include <utility>
+#include <vector>
+
+#include "moa/calibration/reference.hpp"
+#include "moa/core/odometry.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/formats/json.hpp"
+#include "moa/formats/log.hpp"
+#include "moa/runs/odometry_run.hpp"
+
+namespace moa::io {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr double kRadToDeg = 180.0 / std::numbers::pi;
+
+std::string yes_no(bool b) { return b ? "yes" : "no"; }
+
+std::string list_kept(const std::array<bool, kMountParameters>& estimated) {
+  std::vector<std::string> kept;
+  for (int p = 0; p < kMountParameters; ++p) {
+    if (!estimated[static_cast<std::size_t>(p)])
+      kept.emplace_back(describe(static_cast<MountParameter>(p)));
+  }
+  return fmt::format("{}", fmt::join(kept, ", "));
+}
+
+// ------------------------------------------------------------ reading
+
+// A row whose counts imply a speed far beyond what its sensor can track is
+// a corrupt value (2e9 counts), refused as `moa odometry` refuses it
+// (core/odometry.hpp: 10 x max_speed, 50 m/s unrated). The row's interval
+// is taken as at least max_row_interval (odometry: one epoch, shorter), so
+// nothing odometry accepts is refused here.
+class CountsCheck {
+ public:
+  CountsCheck(const RobotConfig& config, double t0, double max_row_interval)
+      : max_row_interval_(max_row_interval),
+        last_(static_cast<std::size_t>(config.array.size()), t0) {
+    for (int i = 0; i < config.array.size(); ++i) {
+      to_velocity_.push_back(config.array[i].robot_velocity_from_counts());
+      const auto& rated = config.array[i].max_speed;
+      limit_.push_back(rated ? kImpossibleSpeedFactor * *rated : kImpossibleUnratedSpeed);
+    }
+  }
+  void check(const SensorRow& row, const MiceReader& reader) {
+    const auto i = static_cast<std::size_t>(row.sensor);
+    const double dt = std::max(row.t - last_[i], max_row_interval_);  // s
+    last_[i] = std::max(last_[i], row.t);
+    if (!((to_velocity_[i] * row.counts).norm() <= limit_[i] * dt)) {
+      throw Error(fmt::format("{}:{}: row at t = {} s: {}", reader.file(), reader.line(), row.t,
+                              describe(OdometryError::kImpossibleCounts)));
+    }
+  }
+
+ private:
+  double max_row_interval_;
+  std::vector<double> last_;                  // s, per sensor
+  std::vector<Eigen::Matrix2d> to_velocity_;  // counts -> m of the sensor point
+  std::vector<double> limit_;                 // m/s
+};
+
+struct ReferenceData {
+  std::vector<CalibrationSample> samples;
+  fs::path wheels;
+  std::size_t wheel_rows = 0;
+  std::size_t repeated_rows = 0;
+  std::size_t intervals = 0;  // intervals defined by the wheels rows (after merging)
+  std::size_t covered = 0;    // of those, within the time span of mice.csv
+  std::size_t unusable = 0;   // of those, with a lift or overflow flag
+  int measurements = 0;       // groups the usable intervals were summed into (0: none)
+};
+
+// Shortest reference interval. Counts summed over longer intervals carry
+// the same information about a model linear in the twist but less of the
+// rows' quantisation (a sum of carried roundings is exact to one count):
+// exact merges wheels rows into intervals of at least 50 ms by default.
+double min_interval_of(CalibrationMethod method, const CalibrationOptions& options) {
+  if (options.min_interval) return *options.min_interval;
+  return method == CalibrationMethod::kExact ? 0.05 : 0.0;
+}
+
+// Kim & Lee's M: the paper's ten measurements unless told otherwise.
+int measurements_of(CalibrationMethod method, const CalibrationOptions& options) {
+  if (options.measurements) return *options.measurements;
+  return method == CalibrationMethod::kKimLee ? 10 : 0;
+}
+
+ReferenceData read_reference(const RobotConfig& config, const fs::path& log,
+                             CalibrationMethod method, const CalibrationOptions& options) {
+  const LogFiles files = resolve_log(log);
+  ReferenceData ref;
+  ref.wheels = files.dir / "wheels.csv";
+  if (!files.wheels) {
+    throw Error(fmt::format(
+        "{}: not found: --method {} needs the reference twists (t,vx,vy,omega) of the robot",
+        ref.wheels.string(), describe(method)));
+  }
+  const auto rows = read_all<WheelRow>(ref.wheels);
+  ref.wheel_rows = rows.size();
+  if (rows.size() < 2) {
+    throw Error(fmt::format(
+        "{}: {} data rows: needs at least two (the first only opens the first interval)",
+        ref.wheels.string(), rows.size()));
+  }
+  std::vector<double> t;
+  std::vector<Twist2> twist;
+  for (const auto& row : rows) {
+    t.push_back(row.t);
+    twist.push_back(row.twist);
+  }
+  const ReferenceIntervals reference =
+      reference_intervals(t, twist, min_interval_of(method, options));
+  ref.repeated_rows = reference.repeated_rows;
+  ref.intervals = reference.twists.size();
+
+  MiceReader reader(files.mice, config);
+  const double t0 = reader.start_time();
+  IntervalAccumulator intervals(config.array.size(), t0, reference.times, options.max_row_interval);
+  CountsCheck counts(config, t0, options.max_row_interval);
+  std::size_t n_rows = 0;
+  while (const auto row = reader.next()) {
+    ++n_rows;
+    counts.check(*row, reader);
+    if (const auto error = intervals.add(*row)) {
+      throw Error(
+          fmt::format("{}: row {} (t = {} s): {}", log.string(), n_rows, row->t, describe(*error)));
+    }
+  }
+  std::vector<CalibrationSample> samples;
+  for (const auto& iv : intervals.covered()) {
+    const CalibrationSample s{iv.sample, reference.twists[static_cast<std::size_t>(iv.index)]};
+    ++ref.covered;
+    if (usable_sample(s, config.array.size())) {
+      samples.push_back(s);
+    } else {
+      ++ref.unusable;
+    }
+  }
+  ref.measurements = measurements_of(method, options);
+  ref.samples = merge_samples(samples, ref.measurements);
+  return ref;
+}
+
+struct Totals {
+  std::vector<Eigen::Vector2d> counts;
+  std::vector<std::uint8_t> flags;
+};
+
+Totals count_totals(const fs::path& dir, const RobotConfig& config, double max_row_interval) {
+  MiceReader reader(resolve_log(dir).mice, config);
+  CountsCheck counts(config, reader.start_time(), max_row_interval);
+  Totals t;
+  t.counts.assign(static_cast<std::size_t>(config.array.size()), Eigen::Vector2d::Zero());
+  t.flags.assign(static_cast<std::size_t>(config.array.size()), 0);
+  while (const auto row = reader.next()) {
+    counts.check(*row, reader);
+    const auto i = static_cast<std::size_t>(row->sensor);
+    t.counts[i] += row->counts;
+    t.flags[i] |= row->flags;
+  }
+  return t;
+}
+
+// ------------------------------------------------------------ methods
+
+void common_sample_lines(CalibrationSummary& r, const ReferenceData& ref,
+                         const CalibrationOptions& options) {
+  const double min_interval = min_interval_of(r.method, options);
+  r.facts.push_back(fmt::format(
+      "reference: {} ({} rows, {} intervals{}); {} within mice.csv, {} usable{}",
+      ref.wheels.string(), ref.wheel_rows, ref.intervals,
+      min_interval > 0.0 ? fmt::format(" of >= {} s", min_interval) : std::string(), ref.covered,
+      ref.covered - ref.unusable,
+      ref.measurements > 0 &&
+              static_cast<std::size_t>(ref.measurements) < ref.covered - ref.unusable
+          ? fmt::format(", summed into {} measurements of equal duration", ref.samples.size())
+          : std::string()));
+  if (ref.unusable > 0) {
+    r.warnings.push_back(fmt::format(
+        "{} intervals skipped: a sensor reported lift or counter overflow", ref.unusable));
+  }
+  if (ref.repeated_rows > 0) {
+    r.warnings.push_back(fmt::format("{}: {} rows repeat the previous time and were not used",
+                                     ref.wheels.string(), ref.repeated_rows));
+  }
+}
+
+void check_sample_count(const ReferenceData& ref, CalibrationMethod method) {
+  const std::size_t need = method == CalibrationMethod::kExact ? 3 : 1;
+  if (ref.samples.size() < need) {
+    throw Error(fmt::format(
+        "{}: {} usable reference interval(s) within the time span of mice.csv; --method {} needs "
+        "at least {}",
+        ref.wheels.string(), ref.samples.size(), describe(method), need));
+  }
+}
+
+template <class Result>
+Result solved(std::variant<Result, CalibrationError>&& result, const std::string& where,
+              CalibrationMethod method) {
+  if (const auto* e = std::get_if<CalibrationError>(&result)) {
+    throw Error(fmt::format("{}: --method {}: {}", where, describe(method), describe(*e)));
+  }
+  return std::get<Result>(std::move(result));
+}
+
+SensorCalibrationReport sensor_report(const std::string& name, const SensorCalibration& c) {
+  SensorCalibrationReport s;
+  s.name = name;
+  s.nominal = c.nominal;
+  s.calibrated = c.calibrated;
+  s.sigma = c.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  s.estimated = c.estimated;
+  s.mirror_from_data = c.mirror_from_data;
+  return s;
+}
+
+void run_kimlee(CalibrationSummary& r, const RobotConfig& config, const fs::path& log,
+                const CalibrationOptions& options) {
+  const ReferenceData ref = read_reference(config, log, r.method, options);
+  check_sample_count(ref, r.method);
+  const KimLeeCalibration cal =
+      solved(calibrate_kimlee(config.array, ref.samples), log.string(), r.method);
+  common_sample_lines(r, ref, options);
+  const int n = config.array.size();
+  r.facts.push_back(fmt::format(
+      "Kim & Lee eqs. (44)-(47): S is {} x {}, rank {} of {} (singular values above {:.3g})",
+      cal.measurements + 2, 2 * n, cal.rank, 2 * n, cal.threshold));
+  r.facts.push_back(
+      fmt::format("singular values of S: {:.6g}", fmt::join(cal.singular_values, " ")));
+  r.facts.push_back(
+      fmt::format("threshold = 3 x {:.3g} m/s (velocity noise) x (sqrt({}) + sqrt({}))",
+                  cal.velocity_noise, cal.measurements + 2, 2 * n));
+  r.facts.push_back("positions only, as in the paper: yaw, scale and mirroring stay nominal");
+  for (int i = 0; i < n; ++i) {
+    SensorCalibrationReport s;
+    s.name = config.names[static_cast<std::size_t>(i)];
+    s.nominal = config.array[i];
+    s.calibrated = cal.calibrated[i];
+    s.sigma(0) = std::sqrt(std::max(cal.covariance(2 * i, 2 * i), 0.0));
+    s.sigma(1) = std::sqrt(std::max(cal.covariance(2 * i + 1, 2 * i + 1), 0.0));
+    s.estimated = {true, true, false, false, false};
+    s.residual_rms = cal.residual_rms[static_cast<std::size_t>(i)];
+    r.sensors.push_back(s);
+  }
+  if (cal.rank_deficient()) {
+    r.warnings.push_back(fmt::format(
+        "S is rank deficient ({} < {}): the motion determines only {} combinations of the {} "
+        "position corrections; this is the minimum-norm correction (Kim & Lee's S has rank 3 for "
+        "any motion to first order: row 3 of every S_k is omega (p - 2 p_nominal)); the 1-sigma "
+        "covers the determined combinations only, along the other {} directions the data say "
+        "nothing; use --method exact for the true positions",
+        cal.rank, 2 * n, cal.rank, 2 * n, 2 * n - cal.rank));
+  }
+  if (cal.too_few_measurements()) {
+    r.warnings.push_back(fmt::format("M = {} measurements < 2N - 2 = {} (Kim & Lee eq. (49))",
+                                     cal.measurements, 2 * n - 2));
+  }
+  r.calibrated.array = cal.calibrated;
+  r.result = cal;
+}
+
+// The model check of the exact method (ExactModelCheck): a fact line
+// always; a misfit is refused (io::Error) unless forced, then a warning.
+void model_check(CalibrationSummary& r, const ExactModelCheck& check, const RobotConfig& config,
+                 const fs::path& log, bool force) {
+  const std::string residual =
+      check.tested
+          ? fmt::format(
+                "residual {:.3g} counts per interval and axis against the counts' own noise {:.3g} "
+                "(best rigid-motion fit): variance ratio {:.3g}, accepted up to {:.3g}",
+                std::sqrt(check.residual_variance), std::sqrt(check.noise_variance),
+                check.variance_ratio(), check.bound)
+          : std::string("residual not tested (too few samples to know the counts' noise)");
+  const std::string& worst = config.names[static_cast<std::size_t>(check.min_eigenvalue_sensor)];
+  r.facts.push_back(fmt::format(
+      "model check: {}; smallest information eigenvalue {:.3g} ({}), accepted down to -1", residual,
+      check.min_eigenvalue, worst));
+  if (!check.misfit()) return;
+  std::vector<std::string> why;
+  if (check.residual_too_large()) {
+    why.push_back(fmt::format(
+        "at the calibrated mounts the counts disagree with a rigid motion by {:.3g} counts per "
+        "interval and axis, {:.3g} times their own noise of {:.3g} (accepted up to {:.3g} times)",
+        std::sqrt(check.residual_variance), std::sqrt(check.variance_ratio()),
+        std::sqrt(check.noise_variance), std::sqrt(check.bound)));
+  }
+  if (check.information_indefinite()) {
+    why.push_back(fmt::format(
+        "the information of sensor '{}' is not positive definite (eigenvalue {:.3g}): wheels.csv "
+        "and mice.csv disagree about the motion",
+        worst, check.min_eigenvalue));
+  }
+  const std::string reason = fmt::format("{}", fmt::join(why, "; "));
+  if (force) {
+    r.warnings.push_back(fmt::format(
+        "the calibrated model does not explain the data, kept as forced (--force): {}", reason));
+    return;
+  }
+  throw Error(fmt::format(
+      "{}: --method exact: refused, the calibrated model does not explain the data: {}; is "
+      "wheels.csv the twist of this robot in its frame (vx, vy in m/s, omega in rad/s) over the "
+      "same time as mice.csv? Nothing written (--force writes it anyway)",
+      log.string(), reason));
+}
+
+void run_exact(CalibrationSummary& r, const RobotConfig& config, const fs::path& log,
+               const CalibrationOptions& options) {
+  const ReferenceData ref = read_reference(config, log, r.method, options);
+  check_sample_count(ref, r.method);
+  const ExactCalibration cal =
+      solved(calibrate_exact(config.array, ref.samples), log.string(), r.method);
+  common_sample_lines(r, ref, options);
+  const Eigen::Vector3d ref_sd = cal.noise.reference_covariance.diagonal().cwiseSqrt();
+  r.facts.push_back(fmt::format(
+      "reference noise (estimated, 1-sigma per interval): vx {:.4g} m/s, vy {:.4g} m/s, omega "
+      "{:.4g} rad/s",
+      ref_sd(0), ref_sd(1), ref_sd(2)));
+  const auto& var = cal.noise.counts_variance;
+  if (std::all_of(var.begin(), var.end(), [&](double v) { return v == var.front(); })) {
+    r.facts.push_back(
+        fmt::format("count noise (estimated, every sensor): {:.3g} counts per interval and axis",
+                    std::sqrt(var.front())));
+  } else {
+    std::vector<std::string> count_sd;
+    for (std::size_t i = 0; i < var.size(); ++i) {
+      count_sd.push_back(fmt::format("{} {:.3g}", config.names[i], std::sqrt(var[i])));
+    }
+    r.facts.push_back(
+        fmt::format("count noise (counts per interval and axis): {}", fmt::join(count_sd, ", ")));
+  }
+  r.facts.push_back(
+      fmt::format("{} samples used, {} rejected as outliers, {} unusable (lift/overflow); "
+                  "{} iterations",
+                  cal.samples_used, cal.samples_rejected, cal.samples_unusable, cal.iterations));
+  r.facts.push_back(
+      "information: eigenvalues of the Fisher information in units of a generous mounting "
+      "error (10 mm, 10 mm, 0.1 rad, 5 %, 5 %); below 1 means not excited");
+  std::vector<std::string> unexcited;
+  for (std::size_t i = 0; i < cal.sensors.size(); ++i) {
+    const SensorCalibration& c = cal.sensors[i];
+    SensorCalibrationReport s = sensor_report(config.names[i], c);
+    s.residual_rms = c.residual_rms;
+    s.information_eigenvalues = c.scaled_eigenvalues;
+    r.sensors.push_back(s);
+    const std::string kept = list_kept(c.estimated);
+    if (!kept.empty()) {
+      unexcited.push_back(fmt::format("{}: {}", s.name, kept));
+      r.warnings.push_back(fmt::format(
+          "{}: {} not excited by the motion: kept at nominal{}", s.name, kept,
+          c.estimated[2] && c.estimated[3] && c.estimated[4] ? ""
+                                                             : "; mirroring kept from the config"));
+    }
+  }
+  r.facts.push_back(unexcited.empty()
+                        ? std::string("observability: every parameter of every sensor excited")
+                        : fmt::format("observability: kept at nominal (not excited): {}",
+                                      fmt::join(unexcited, "; ")));
+  if (cal.samples_rejected > 0) {
+    r.warnings.push_back(fmt::format(
+        "{} samples rejected as outliers (residual beyond the chi-square 1e-6 quantile): wheel "
+        "slip or a lifted sensor?",
+        cal.samples_rejected));
+  }
+  if (cal.model_misfit) {
+    r.warnings.push_back(
+        "more than 5 % of the samples disagree with the model beyond the noise: check the time "
+        "alignment of wheels.csv and mice.csv, wheel slip, sensors lifting");
+  }
+  if (cal.samples_unusable > 0) {
+    r.warnings.push_back(fmt::format(
+        "{} samples skipped: a sensor reported lift or counter overflow", cal.samples_unusable));
+  }
+  if (!cal.converged) r.warnings.push_back("the optimiser did not converge: the result is rough");
+  model_check(r, cal.check, config, log, options.force);
+  if (ref.samples.size() < 30) {
+    r.warnings.push_back(fmt::format(
+        "only {} samples: the noise levels (and so the 1-sigma) are rough", ref.samples.size()));
+  }
+  r.calibrated.array = cal.calibrated;
+  r.result = cal;
+}
+
+void run_guided(CalibrationSummary& r, const RobotConfig& config, const std::string& config_path,
+                const CalibrationOptions& options) {
+  const auto read = [&](const fs::path& dir, const char* what, bool all_must_count) {
+    const Totals t = count_totals(dir, config, options.max_row_interval);
+    for (std::size_t i = 0; i < t.counts.size(); ++i) {
+      if (all_must_count && t.counts[i].isZero()) {
+        throw Error(fmt::format(
+            "{}: sensor '{}' counted nothing during the {}: lifted, disconnected or not in the "
+            "recording?",
+            dir.string(), config.names[i], what));
+      }
+      if ((t.flags[i] & (kFlagLift | kFlagOverflow)) != 0) {
+        r.warnings.push_back(fmt::format(
+            "{}: sensor '{}' reported lift or overflow during the {}: its totals may be short",
+            dir.string(), config.names[i], what));
+      }
+    }
+    return t.counts;
+  };
+  GuidedInput in;
+  in.push_x = read(options.push_x, "push along x", true);
+  if (!options.push_y.empty()) in.push_y = read(options.push_y, "push along y", true);
+  in.spin = read(options.spin, "spin", false);
+  in.distance = *options.distance;
+  in.turns = *options.turns;
+  const GuidedTolerances& tol = options.tolerances;
+  const GuidedCalibration cal =
+      solved(calibrate_guided(config.array, in, tol), config_path, r.method);
+
+  r.facts.push_back(fmt::format("push along x: {}, {} m{}", options.push_x.string(), in.distance,
+                                cal.push_x_reversed ? " (done backwards: detected)" : ""));
+  if (in.push_y) {
+    r.facts.push_back(fmt::format("push along y: {}, {} m{}", options.push_y.string(), in.distance,
+                                  cal.push_y_reversed ? " (done backwards: detected)" : ""));
+  }
+  r.facts.push_back(fmt::format("spin: {}, {} turns {}", options.spin.string(), std::abs(in.turns),
+                                cal.spin_clockwise ? "clockwise" : "counter-clockwise"));
+  r.facts.push_back(fmt::format(
+      "1-sigma from the procedure's tolerances: distance {} m, spin angle {} rad, spin centre {} m "
+      "per axis, heading change during a push {} rad",
+      tol.distance_sd, tol.turn_sd, tol.centre_sd, tol.heading_sd));
+  r.facts.push_back("positions are relative to the point the robot was spun about");
+  for (std::size_t i = 0; i < cal.sensors.size(); ++i) {
+    SensorCalibrationReport s = sensor_report(config.names[i], cal.sensors[i]);
+    s.push_misfit = cal.push_misfit[i];
+    r.sensors.push_back(s);
+  }
+  if (cal.isotropic_scale) {
+    r.warnings.push_back(
+        "no --push-y: each sensor's scale taken equal on both axes (1-sigma includes a 2 % "
+        "difference) and mirroring judged by which puts the sensor nearer its nominal place");
+  }
+  if ((in.turns < 0.0) != cal.spin_clockwise) {
+    r.warnings.push_back(
+        fmt::format("--turns {} says {}, the counts say {}: used as the counts say", in.turns,
+                    in.turns < 0.0 ? "clockwise" : "counter-clockwise",
+                    cal.spin_clockwise ? "clockwise" : "counter-clockwise"));
+  }
+  if (cal.push_x_reversed) r.warnings.push_back("the push along x went towards -x: used as such");
+  if (cal.push_y_reversed) r.warnings.push_back("the push along y went towards -y: used as such");
+  if (cal.centroid_shift.norm() > 0.003) {
+    r.warnings.push_back(fmt::format(
+        "the sensors' mean position moved by ({:.1f}, {:.1f}) mm from nominal: if the spin was not "
+        "about the robot's centre, every position is shifted by that offset",
+        cal.centroid_shift.x() * 1e3, cal.centroid_shift.y() * 1e3));
+  }
+  for (std::size_t i = 0; i < cal.push_misfit.size(); ++i) {
+    if (cal.push_misfit[i] > 0.005 * in.distance) {
+      r.warnings.push_back(
+          fmt::format("{}: the two pushes disagree with one sensor frame by {:.1f} mm: were they "
+                      "perpendicular and without turning?",
+                      config.names[i], cal.push_misfit[i] * 1e3));
+    }
+  }
+  r.calibrated.array = cal.calibrated;
+  r.result = cal;
+}
+
+// ------------------------------------------------------------ JSON
+
+void json_vector(JsonWriter& json, std::initializer_list<double> xs) {
+  json.begin_array();
+  for (double x : xs) json.value(x);
+  json.end_array();
+}
+
+void json_mount(JsonWriter& json, const SensorMount& m) {
+  json.begin_object().key("position");
+  json_vector(json, {m.position.x(), m.position.y()});
+  json.member("yaw", m.yaw).key("scale");
+  json_vector(json, {m.scale.x(), m.scale.y()});
+  json.member("mirrored", m.mirrored).end_object();
+}
+
+template <class Vector>
+void json_array(JsonWriter& json, const Vector& xs) {
+  json.begin_array();
+  for (const double x : xs) json.value(x);
+  json.end_array();
+}
+
+}  // namespace
+
+const char* describe(CalibrationMethod method) {
+  switch (method) {
+    case CalibrationMethod::kKimLee:
+      return "kimlee";
+    case CalibrationMethod::kExact:
+      return "exact";
+    case CalibrationMethod::kGuided:
+      return "guided";
+  }
+  return "calibration method";
+}
+
+std::optional<CalibrationMethod> calibration_method_from_name(std::string_view name) {
+  for (const auto m :
+       {CalibrationMethod::kKimLee, CalibrationMethod::kExact, CalibrationMethod::kGuided}) {
+    if (name == describe(m)) return m;
+  }
+  return std::nullopt;
+}
+
+void check_calibration_options(CalibrationMethod method, const fs::path& log,
+                               const CalibrationOptions& o) {
+  const char* name = describe(method);
+  const auto need = [&](bool present, const char* flag) {
+    if (!present) throw Error(fmt::format("--method {} needs {}", name, flag));
+  };
+  const auto refuse = [&](bool present, const char* flag, const char* why) {
+    if (present) throw Error(fmt::format("{} is not used by --method {}: {}", flag, name, why));
+  };
+  if (method == CalibrationMethod::kGuided) {
+    refuse(!log.empty(), "--log",
+           "guided calibration takes --push-x, --push-y and --spin recordings");
+    need(!o.push_x.empty(), "--push-x DIR (a push of --distance metres along the robot's x axis)");
+    need(!o.spin.empty(), "--spin DIR (--turns whole turns about the robot's centre)");
+    need(o.distance.has_value(), "--distance METRES (the length of each push)");
+    need(o.turns.has_value(), "--turns K (whole turns of the spin)");
+    if (!(std::isfinite(*o.distance) && *o.distance > 0.0)) {
+      throw Error(fmt::format("--distance {}: must be a positive number of metres", *o.distance));
+    }
+    if (!std::isfinite(*o.turns) || *o.turns == 0.0) {
+      throw Error(fmt::format("--turns {}: must be a non-zero number of turns", *o.turns));
+    }
+    refuse(o.measurements.has_value(), "--measurements", "it has no reference intervals");
+    refuse(o.min_interval.has_value(), "--min-interval", "it has no reference intervals");
+  } else {
+    need(!log.empty(), "--log DIR (a log with mice.csv and wheels.csv)");
+    const char* why = "it belongs to --method guided";
+    refuse(!o.push_x.empty(), "--push-x", why);
+    refuse(!o.push_y.empty(), "--push-y", why);
+    refuse(!o.spin.empty(), "--spin", why);
+    refuse(o.distance.has_value(), "--distance", why);
+    refuse(o.turns.has_value(), "--turns", why);
+  }
+}
+
+CalibrationSummary calibrate_log(const RobotConfig& config, const std::string& config_path,
+                                 const fs::path& log, CalibrationMethod method,
+                                 const CalibrationOptions& options) {
+  check_calibration_options(method, log, options);
+  CalibrationSummary r;
+  r.method = method;
+  r.calibrated = config;
+  switch (method) {
+    case CalibrationMethod::kKimLee:
+      run_kimlee(r, config, log, options);
+      break;
+    case CalibrationMethod::kExact:
+      run_exact(r, config, log, options);
+      break;
+    case CalibrationMethod::kGuided:
+      run_guided(r, config, config_path, options);
+      break;
+  }
+  for (const auto& s : r.sensors) {
+    // A fit that ran away (a scale through zero: a flipped axis) gives no
+    // sensor a config can hold: refused, --force or not.
+    const MountVector p = mount_parameters(s.calibrated);
+    if (!p.allFinite() || !(s.calibrated.scale.minCoeff() > 0.0)) {
+      throw Error(fmt::format(
+          "{}: --method {}: refused, sensor '{}' calibrated to position ({:.4g}, {:.4g}) m, yaw "
+          "{:.4g} rad, scale ({:.4g}, {:.4g}): not a sensor mount (a scale must be positive); the "
+          "data do not fit "
+          "the model. Nothing written",
+          method == CalibrationMethod::kGuided ? config_path : log.string(), describe(method),
+          s.name, p(0), p(1), p(2), p(3), p(4)));
+    }
+    for (auto& w : plausibility_warnings(s.name, s.nominal, s.calibrated)) {
+      r.warnings.push_back(std::move(w));
+    }
+  }
+  return r;
+}
+
+std::string CalibrationSummary::brief_report() const {
+  double position = 0.0, yaw = 0.0, scale = 0.0;
+  for (const auto& s : sensors) {
+    position = std::max({position, s.sigma(0), s.sigma(1)});
+    yaw = std::max(yaw, s.sigma(2));
+    scale = std::max({scale, s.sigma(3), s.sigma(4)});
+  }
+  return fmt::format(
+      "moa calibrate --method {}: {} sensors; largest 1-sigma: position {:.3f} mm, yaw {:.3f} "
+      "deg, scale {:.2f} %; {} warning{}",
+      describe(method), sensors.size(), position * 1e3, yaw * kRadToDeg, scale * 100.0,
+      warnings.size(), warnings.size() == 1 ? "" : "s");
+}
+
+std::string CalibrationSummary::full_report() const {
+  std::string text;
+  auto out = std::back_inserter(text);
+  fmt::format_to(out, "moa calibrate --method {}\n", describe(method));
+  for (const auto& line : facts) fmt::format_to(out, "  {}\n", line);
+  for (const auto& s : sensors) {
+    fmt::format_to(out, "\nsensor {}\n", s.name);
+    fmt::format_to(out, "  {:<14} {:>12} {:>12} {:>12}\n", "parameter", "nominal", "calibrated",
+                   "1-sigma");
+    const MountVector a = mount_parameters(s.nominal);
+    const MountVector b = mount_parameters(s.calibrated);
+    const std::array<const char*, kMountParameters> labels{"position x m", "position y m",
+                                                           "yaw deg", "scale x", "scale y"};
+    for (int p = 0; p < kMountParameters; ++p) {
+      const double unit = p == 2 ? kRadToDeg : 1.0;
+      const int digits = p < 2 ? 5 : 4;
+      const std::string sigma = s.estimated[static_cast<std::size_t>(p)]
+                                    ? fmt::format("{:.{}f}", s.sigma(p) * unit, p < 2 ? 6 : 5)
+                                    : std::string("kept");
+      fmt::format_to(out, "  {:<14} {:>12.{}f} {:>12.{}f} {:>12}\n",
+                     labels[static_cast<std::size_t>(p)], a(p) * unit, digits, b(p) * unit, digits,
+                     sigma);
+    }
+    fmt::format_to(out, "  {:<14} {:>12} {:>12} {:>12}\n", "mirrored", yes_no(s.nominal.mirrored),
+                   yes_no(s.calibrated.mirrored), s.mirror_from_data ? "from data" : "kept");
+    if (s.residual_rms) {
+      fmt::format_to(out, "  {:<14} {:.3f} mm/s\n", "residual RMS", *s.residual_rms * 1e3);
+    }
+    if (s.push_misfit) {
+      fmt::format_to(out, "  {:<14} {:.3f} mm\n", "push misfit", *s.push_misfit * 1e3);
+    }
+    if (s.information_eigenvalues) {
+      fmt::format_to(out, "  {:<14} {:.3g}\n", "information",
+                     fmt::join(*s.information_eigenvalues, " "));
+    }
+  }
+  fmt::format_to(out, "\n");
+  if (warnings.empty()) {
+    fmt::format_to(out, "warnings: none\n");
+  } else {
+    fmt::format_to(out, "warnings:\n");
+    for (const auto& w : warnings) fmt::format_to(out, "  {}\n", w);
+  }
+  return text;
+}
+
+std::string CalibrationSummary::to_json(std::string_view out) const {
+  JsonWriter json;
+  json.begin_object().member("method", describe(method));
+  if (!out.empty()) json.member("out", out);
+  if (const auto* k = std::get_if<KimLeeCalibration>(&result)) {
+    json.member("samples", k->measurements)
+        .member("rank", k->rank)
+        .member("unknowns", 2 * calibrated.array.size())
+        .member("threshold", k->threshold)
+        .member("velocity_noise_m_s", k->velocity_noise)
+        .key("singular_values");
+    json_array(json, k->singular_values);
+  } else if (const auto* e = std::get_if<ExactCalibration>(&result)) {
+    const Eigen::Vector3d ref_sd = e->noise.reference_covariance.diagonal().cwiseSqrt();
+    json.member("samples", e->samples_used)
+        .member("samples_rejected", e->samples_rejected)
+        .member("samples_unusable", e->samples_unusable)
+        .key("reference_noise_sd");
+    json_array(json, ref_sd);
+    json.member("converged", e->converged);
+  } else if (const auto* g = std::get_if<GuidedCalibration>(&result)) {
+    json.member("isotropic_scale", g->isotropic_scale)
+        .member("push_x_reversed", g->push_x_reversed)
+        .member("push_y_reversed", g->push_y_reversed)
+        .member("spin_clockwise", g->spin_clockwise)
+        .key("centroid_shift");
+    json_array(json, g->centroid_shift);
+  }
+  json.key("sensors").begin_array();
+  for (const auto& s : sensors) {
+    json.begin_object().member("name", s.name).key("nominal");
+    json_mount(json, s.nominal);
+    json.key("calibrated");
+    json_mount(json, s.calibrated);
+    json.key("sigma").begin_object().key("position");
+    json_vector(json, {s.sigma(0), s.sigma(1)});
+    json.member("yaw", s.sigma(2)).key("scale");
+    json_vector(json, {s.sigma(3), s.sigma(4)});
+    json.end_object();
+    json.key("estimated")
+        .begin_object()
+        .member("position_x", s.estimated[0])
+        .member("position_y", s.estimated[1])
+        .member("yaw", s.estimated[2])
+        .member("scale_x", s.estimated[3])
+        .member("scale_y", s.estimated[4])
+        .end_object();
+    json.member("mirror_from_data", s.mirror_from_data);
+    if (s.residual_rms) json.member("residual_rms_m_s", *s.residual_rms);
+    if (s.push_misfit) json.member("push_misfit_m", *s.push_misfit);
+    if (s.information_eigenvalues) {
+      json.key("information_eigenvalues");
+      json_array(json, *s.information_eigenvalues);
+    }
+    json.end_object();
+  }
+  json.end_array().key("warnings").begin_array();
+  for (const auto& w : warnings) json.value(w);
+  json.end_array().end_object();
+  return json.str();
+}
+
+}  // namespace moa::io

@@ -1,0 +1,64 @@
+#include "moa/sources/replay_reader.hpp"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <cmath>
+#include <thread>
+
+#include "moa/formats/error.hpp"
+
+namespace moa::io {
+
+const char* ReplayOptions::validate() const {
+  if (!(std::isfinite(speed) && speed > 0.0)) return "speed: must be positive and finite";
+  return "";
+}
+
+namespace {
+const ReplayOptions& checked(const ReplayOptions& options) {
+  if (const char* why = options.validate(); *why) throw Error(fmt::format("replay: {}", why));
+  return options;
+}
+}  // namespace
+
+ReplayReader::ReplayReader(const std::filesystem::path& log, const RobotConfig& config,
+                           const ReplayOptions& options, LiveHooks hooks)
+    : reader_(log, config), options_(checked(options)), hooks_(std::move(hooks)) {}
+
+ReplayReader::~ReplayReader() = default;
+
+double ReplayReader::start_time() {
+  if (!t0_) {
+    t0_ = reader_.start_time();
+    started_ = std::chrono::steady_clock::now();
+    last_tick_ = started_;
+  }
+  return *t0_;
+}
+
+std::optional<SensorRow> ReplayReader::next() {
+  using Clock = std::chrono::steady_clock;
+  const double t0 = start_time();
+  if (hooks_.should_stop()) return std::nullopt;
+  auto row = reader_.next();
+  if (!row) return std::nullopt;
+  const auto due = started_ + std::chrono::duration_cast<Clock::duration>(
+                                  std::chrono::duration<double>((row->t - t0) / options_.speed));
+  const auto tick = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(std::max(hooks_.tick_period, 1e-3)));
+  for (;;) {
+    const auto now = Clock::now();
+    if (hooks_.tick && now - last_tick_ >= tick) {
+      last_tick_ = now;
+      hooks_.tick();
+    }
+    if (now >= due) break;
+    if (hooks_.should_stop()) return std::nullopt;
+    std::this_thread::sleep_until(std::min(due, last_tick_ + tick));
+  }
+  ++rows_;
+  return row;
+}
+
+}  // namespace moa::io

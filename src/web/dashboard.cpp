@@ -1,0 +1,431 @@
+#include "moa/web/dashboard.hpp"
+#include "moa/web/html.hpp"
+
+#include <fmt/core.h>
+#include <httplib.h>
+
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "dashboard_assets.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/formats/json.hpp"
+#include "moa/formats/odometry_csv.hpp"
+#include "report_assets.hpp"
+
+namespace moa::io {
+
+const char* DashboardOptions::validate() const {
+  if (host.empty()) return "host: must not be empty";
+  if (port < 0 || port > 65535) return "port: must be 0..65535";
+  if (max_clients < 1 || max_clients > 64) return "max_clients: must be 1..64";
+  if (client_queue < 1 || client_queue > 4096) return "client_queue: must be 1..4096";
+  if (!(std::isfinite(max_rate) && max_rate > 0.0 && max_rate <= 100.0)) {
+    return "max_rate: must be in (0, 100] events/s";
+  }
+  if (send_buffer < 1024 || send_buffer > (1 << 24)) return "send_buffer: must be 1 kB..16 MB";
+  if (history_points > 1000000) return "history_points: at most 1000000";
+  return "";
+}
+
+void parse_listen_address(std::string_view text, std::string_view flag, DashboardOptions& options) {
+  std::string_view host;
+  std::string_view port = text;
+  if (const auto colon = text.rfind(':'); colon != std::string_view::npos) {
+    host = text.substr(0, colon);
+    port = text.substr(colon + 1);
+    if (host.size() >= 2 && host.front() == '[' && host.back() == ']') {
+      host = host.substr(1, host.size() - 2);
+    }
+    if (host.empty()) {
+      throw Error(fmt::format("{} {}: empty host (give [HOST:]PORT)", flag, text));
+    }
+  }
+  int value = -1;
+  const auto [end, ec] = std::from_chars(port.data(), port.data() + port.size(), value);
+  if (port.empty() || ec != std::errc{} || end != port.data() + port.size() || value < 0 ||
+      value > 65535) {
+    throw Error(
+        fmt::format("{} {}: the port must be a number 0..65535 (give [HOST:]PORT)", flag, text));
+  }
+  if (!host.empty()) options.host = std::string(host);
+  options.port = value;
+}
+
+namespace {
+
+/// JSON text safe inside a <script> element: '<' only occurs in strings,
+/// where \u003c reads back the same.
+std::string script_safe(std::string json) {
+  std::string out;
+  out.reserve(json.size());
+  for (const char c : json) {
+    if (c == '<') {
+      out += "\\u003c";
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+std::string dashboard_page(const RobotConfig& config, std::string_view title) {
+  JsonWriter j;
+  j.begin_object().member("title", title).key("sensors").begin_array();
+  for (int i = 0; i < config.array.size(); ++i) {
+    const SensorMount& m = config.array[i];
+    j.begin_object()
+        .member("name", config.names[static_cast<std::size_t>(i)])
+        .member("x", m.position.x())
+        .member("y", m.position.y())
+        .member("yaw", m.yaw);
+    if (m.max_speed) j.member("max_speed", *m.max_speed);
+    j.end_object();
+  }
+  j.end_array().end_object();
+  std::string page;
+  page += "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n";
+  page += "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n";
+  page += fmt::format("<title>{}</title>\n<style>\n", html(title));
+  page += dashboard_assets::page_css();
+  page += "</style>\n</head>\n<body data-moa-status=\"loading\">\n";
+  page += fmt::format("<header><h1>{}</h1><p id=\"status\">connecting</p></header>\n", html(title));
+  page +=
+      "<div id=\"moa-errors\" class=\"errors\" hidden></div>\n"
+      "<main>\n"
+      "<section class=\"wide\"><h2>Trajectory</h2><div class=\"plot square\">"
+      "<canvas id=\"chart-trajectory\"></canvas></div></section>\n"
+      "<section><h2>Sensors</h2><div class=\"plot\"><canvas id=\"chart-health\"></canvas></div>"
+      "<table id=\"sensor-table\"><thead><tr><th>sensor</th><th>dx</th><th>dy</th><th>SQUAL</th>"
+      "<th>used</th><th>left out because</th></tr></thead><tbody></tbody></table></section>\n"
+      "<section><h2>Twist</h2><div class=\"plot\"><canvas id=\"chart-twist\"></canvas></div>"
+      "</section>\n"
+      "</main>\n";
+  page += "<script id=\"moa-config\" type=\"application/json\">" + script_safe(j.str()) +
+          "</script>\n<script>\n";
+  page += report_assets::chart_js();
+  page += "\n</script>\n<script>\n";
+  page += dashboard_assets::page_js();
+  page += "\n</script>\n</body>\n</html>\n";
+  return page;
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using Message = std::shared_ptr<const std::string>;
+
+struct Client {
+  std::deque<Message> queue;  ///< guarded by Impl::mutex
+};
+
+/// One epoch summed into the event being built.
+struct Pending {
+  int epochs = 0;
+  std::vector<Eigen::Vector2d> counts;
+  std::vector<int> squal;  ///< lowest (ArraySample: 255 when none reported)
+  std::vector<unsigned> flags;
+  std::vector<int> used;
+  std::vector<std::string> excluded;
+  void reset(int n) {
+    epochs = 0;
+    counts.assign(static_cast<std::size_t>(n), Eigen::Vector2d::Zero());
+    squal.assign(static_cast<std::size_t>(n), 255);
+    flags.assign(static_cast<std::size_t>(n), 0u);
+    used.assign(static_cast<std::size_t>(n), 0);
+    excluded.assign(static_cast<std::size_t>(n), std::string());
+  }
+};
+
+}  // namespace
+
+struct Dashboard::Impl {
+  RobotConfig config;
+  DashboardOptions options;
+  std::string page;
+  httplib::Server server;
+  std::thread listener;
+  int port = 0;
+
+  // Estimator thread only.
+  Pending pending;
+  Clock::time_point last_event{};
+
+  // Guarded by mutex.
+  mutable std::mutex mutex;
+  std::condition_variable wake;
+  std::vector<std::shared_ptr<Client>> clients;
+  std::deque<std::array<double, 3>> history;
+  bool finished = false;
+  bool stopping = false;
+  Stats stats;
+
+  std::string event_json(const OdometryStep& step, std::span<const Eigen::Vector2d> scales) const;
+  void broadcast(Message message);
+  std::string history_message() const;  // with mutex held
+  bool serve(const std::shared_ptr<Client>& client, httplib::DataSink& sink, bool& greeted);
+};
+
+std::string Dashboard::Impl::event_json(const OdometryStep& step,
+                                        std::span<const Eigen::Vector2d> scales) const {
+  const Twist2& v = step.estimate.estimate.twist;
+  JsonWriter j;
+  j.begin_object()
+      .member("t", step.t())
+      .member("x", step.pose.t.x())
+      .member("y", step.pose.t.y())
+      .member("theta", step.pose.theta)
+      .member("vx", v.v.x())
+      .member("vy", v.v.y())
+      .member("omega", v.omega)
+      .member("source", describe(step.estimate.source))
+      .member("epochs", pending.epochs)
+      .key("sensors")
+      .begin_array();
+  const SensorMask used = step.estimate.estimate.used;
+  for (std::size_t i = 0; i < config.names.size(); ++i) {
+    j.begin_object()
+        .member("name", config.names[i])
+        .member("dx", pending.counts[i].x())
+        .member("dy", pending.counts[i].y());
+    if (pending.squal[i] >= 255) {  // 255: no SQUAL reported
+      j.key("squal").null();
+    } else {
+      j.member("squal", pending.squal[i]);
+    }
+    j.member("flags", static_cast<int>(pending.flags[i]))
+        .member("used", ((used >> i) & 1u) != 0)
+        .member("used_share", pending.epochs > 0 ? static_cast<double>(pending.used[i]) /
+                                                       static_cast<double>(pending.epochs)
+                                                 : 0.0);
+    if (pending.excluded[i].empty()) {
+      j.key("excluded").null();
+    } else {
+      j.member("excluded", pending.excluded[i]);
+    }
+    j.end_object();
+  }
+  j.end_array();
+  if (!scales.empty()) {
+    j.key("scales").begin_array();
+    for (const auto& s : scales) j.begin_array().value(s.x()).value(s.y()).end_array();
+    j.end_array();
+  }
+  j.end_object();
+  return j.str();
+}
+
+void Dashboard::Impl::broadcast(Message message) {
+  {
+    const std::lock_guard lock(mutex);
+    for (const auto& client : clients) {
+      client->queue.push_back(message);
+      while (client->queue.size() > options.client_queue) {
+        client->queue.pop_front();
+        ++stats.dropped;
+      }
+    }
+  }
+  wake.notify_all();
+}
+
+std::string Dashboard::Impl::history_message() const {
+  JsonWriter j;
+  j.begin_object().key("points").begin_array();
+  for (const auto& p : history) j.begin_array().value(p[0]).value(p[1]).value(p[2]).end_array();
+  j.end_array().end_object();
+  return "event: history\ndata: " + j.str() + "\n\n";
+}
+
+// One turn of a client's stream: true to be called again.
+bool Dashboard::Impl::serve(const std::shared_ptr<Client>& client, httplib::DataSink& sink,
+                            bool& greeted) {
+  std::vector<Message> batch;
+  std::string greeting;
+  bool end = false;
+  {
+    std::unique_lock lock(mutex);
+    if (!greeted) {
+      greeting = "retry: 2000\n\n" + history_message();
+    } else {
+      wake.wait_for(lock, std::chrono::seconds(1),
+                    [&] { return stopping || finished || !client->queue.empty(); });
+    }
+    if (stopping) return false;
+    batch.assign(client->queue.begin(), client->queue.end());
+    client->queue.clear();
+    end = finished;
+  }
+  // Socket writes only from here on, with no lock held.
+  if (!greeted) {
+    greeted = true;
+    if (!sink.write(greeting.data(), greeting.size())) return false;
+  }
+  for (const auto& m : batch) {
+    if (!sink.write(m->data(), m->size())) return false;
+  }
+  if (end) {
+    static constexpr std::string_view kEnd = "event: end\ndata: {}\n\n";
+    sink.write(kEnd.data(), kEnd.size());
+    sink.done();
+    return true;
+  }
+  static constexpr std::string_view kIdle = ": idle\n\n";  // a comment: finds closed clients
+  if (batch.empty() && !sink.write(kIdle.data(), kIdle.size())) return false;
+  return true;
+}
+
+Dashboard::Dashboard(const RobotConfig& config, const DashboardOptions& options)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& s = *impl_;
+  if (const char* why = options.validate(); *why) throw Error(fmt::format("dashboard: {}", why));
+  s.config = config;
+  s.options = options;
+  s.page = dashboard_page(config, options.title);
+  s.pending.reset(config.array.size());
+
+  const int threads = options.max_clients + 2;  // the streams, and / or a 503 besides
+  s.server.new_task_queue = [threads] {
+    return new httplib::ThreadPool(static_cast<std::size_t>(threads));
+  };
+  // Accepted sockets inherit the listening socket's SO_SNDBUF (Linux).
+  s.server.set_socket_options([buffer = options.send_buffer](socket_t sock) {
+    const int yes = 1;
+    setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+    setsockopt(sock, SOL_SOCKET, SO_SNDBUF, &buffer, sizeof buffer);
+  });
+  s.server.set_keep_alive_timeout(1);
+  s.server.set_read_timeout(2, 0);
+  s.server.set_write_timeout(2, 0);  // a client that reads nothing for 2 s is dropped
+  s.server.Get("/", [this](const httplib::Request&, httplib::Response& res) {
+    res.set_header("Cache-Control", "no-store");
+    res.set_content(impl_->page, "text/html; charset=utf-8");
+  });
+  s.server.Get("/events", [this](const httplib::Request&, httplib::Response& res) {
+    Impl& d = *impl_;
+    auto client = std::make_shared<Client>();
+    {
+      const std::lock_guard lock(d.mutex);
+      if (d.stopping || static_cast<int>(d.clients.size()) >= d.options.max_clients) {
+        ++d.stats.refused;
+        res.status = 503;
+        res.set_content("too many clients\n", "text/plain");
+        return;
+      }
+      d.clients.push_back(client);
+    }
+    res.set_header("Cache-Control", "no-store");
+    auto greeted = std::make_shared<bool>(false);
+    res.set_chunked_content_provider(
+        "text/event-stream",
+        [this, client, greeted](std::size_t, httplib::DataSink& sink) {
+          return impl_->serve(client, sink, *greeted);
+        },
+        [this, client](bool) {
+          const std::lock_guard lock(impl_->mutex);
+          std::erase(impl_->clients, client);
+        });
+  });
+  s.port = options.port == 0
+               ? s.server.bind_to_any_port(options.host)
+               : (s.server.bind_to_port(options.host, options.port) ? options.port : -1);
+  if (s.port < 0) {
+    throw Error(
+        fmt::format("{}:{}: cannot listen (address in use, or not an address of this computer?)",
+                    options.host, options.port));
+  }
+  s.listener = std::thread([this] { impl_->server.listen_after_bind(); });
+  for (int i = 0; i < 500 && !s.server.is_running(); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+}
+
+Dashboard::~Dashboard() {
+  Impl& s = *impl_;
+  finish();
+  // Let the streams send what they have and the end (at most ~1 s).
+  for (int i = 0; i < 100; ++i) {
+    {
+      const std::lock_guard lock(s.mutex);
+      if (s.clients.empty()) break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  {
+    const std::lock_guard lock(s.mutex);
+    s.stopping = true;
+  }
+  s.wake.notify_all();
+  s.server.stop();
+  if (s.listener.joinable()) s.listener.join();
+}
+
+int Dashboard::port() const { return impl_->port; }
+
+std::string Dashboard::url() const {
+  const std::string& host = impl_->options.host;
+  return host.find(':') != std::string::npos ? fmt::format("http://[{}]:{}/", host, impl_->port)
+                                             : fmt::format("http://{}:{}/", host, impl_->port);
+}
+
+void Dashboard::publish(const OdometryStep& step, std::span<const Eigen::Vector2d> scales) {
+  Impl& s = *impl_;
+  Pending& p = s.pending;
+  const RobustEstimate& e = step.estimate;
+  const int n = static_cast<int>(s.config.names.size());
+  for (int i = 0; i < n; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    if (step.sample) {
+      p.counts[k] += step.sample->counts[k];
+      p.squal[k] = std::min<int>(p.squal[k], step.sample->squal[k]);
+      p.flags[k] |= step.sample->flags[k];
+    }
+    if ((e.estimate.used >> i) & 1u) {
+      ++p.used[k];
+    } else {
+      p.excluded[k] = describe_exclusion(e.excluded[k], e.noise_flags[k]);
+    }
+  }
+  ++p.epochs;
+  const auto now = Clock::now();
+  if (now - s.last_event < std::chrono::duration<double>(1.0 / s.options.max_rate)) return;
+  s.last_event = now;
+  auto message =
+      std::make_shared<const std::string>("data: " + s.event_json(step, scales) + "\n\n");
+  {
+    const std::lock_guard lock(s.mutex);
+    ++s.stats.events;
+    if (s.options.history_points > 0) {
+      if (s.history.size() >= s.options.history_points) s.history.pop_front();
+      s.history.push_back({step.t(), step.pose.t.x(), step.pose.t.y()});
+    }
+  }
+  s.broadcast(std::move(message));
+  p.reset(n);
+}
+
+void Dashboard::finish() {
+  {
+    const std::lock_guard lock(impl_->mutex);
+    impl_->finished = true;
+  }
+  impl_->wake.notify_all();
+}
+
+Dashboard::Stats Dashboard::stats() const {
+  const std::lock_guard lock(impl_->mutex);
+  Stats out = impl_->stats;
+  out.clients = impl_->clients.size();
+  return out;
+}
+
+}  // namespace moa::io
