@@ -9,10 +9,10 @@
 #include <variant>
 #include <vector>
 
-#include "baselines.hpp"
 #include "moa/core/consensus.hpp"
 #include "moa/core/estimate.hpp"
 #include "moa/core/sekimori.hpp"
+#include "moa_bench/baselines.hpp"
 
 namespace {
 

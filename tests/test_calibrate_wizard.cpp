@@ -16,6 +16,7 @@
 #include <numbers>
 #include <string>
 
+#include "moa/calibration/guided_session.hpp"
 #include "moa/calibration/guided_steps.hpp"
 #include "moa/core/array.hpp"
 #include "moa/formats/config.hpp"
@@ -174,6 +175,25 @@ class Epochs {
   std::optional<MotionSummary> run(MotionWatcher& watcher, const Twist2& twist, double seconds,
                                    std::uint8_t flags = 0) {
     std::optional<MotionSummary> out;
+    each(twist, seconds, flags, [&](const OdometryStep& step) {
+      if (auto s = watcher.feed(step)) out = s;
+    });
+    return out;
+  }
+  /// The same epochs fed to a session: the events it said, in order.
+  std::vector<GuidedSession::Event> run(GuidedSession& session, const Twist2& twist,
+                                        double seconds) {
+    std::vector<GuidedSession::Event> events;
+    each(twist, seconds, 0, [&](const OdometryStep& step) {
+      const auto e = session.feed(step);
+      if (e != GuidedSession::Event::kNone) events.push_back(e);
+    });
+    return events;
+  }
+
+ private:
+  template <class Feed>
+  void each(const Twist2& twist, double seconds, std::uint8_t flags, Feed&& feed) {
     const double dt = 0.01;
     for (int k = 0; k < static_cast<int>(std::lround(seconds / dt)); ++k) {
       sample_.t += dt;
@@ -188,12 +208,10 @@ class Epochs {
       step.sample = &sample_;
       step.estimate.estimate.twist = twist;
       step.pose = pose_;
-      if (auto s = watcher.feed(step)) out = s;
+      feed(step);
     }
-    return out;
   }
 
- private:
   SensorArray array_;
   ArraySample sample_;
   Pose2 pose_;
@@ -269,6 +287,93 @@ TEST(MotionWatcher, LimitsValidateNamingTheField) {
   limits = {};
   limits.turns = 0.0;
   EXPECT_STREQ(limits.validate(), "turns: must be finite and not 0");
+}
+
+// ------------------------------------------------ the session's decisions
+
+TEST(GuidedSession, AsksForEachMotionInTurnAndHandsTheKeptTotalsToTheSolver) {
+  using E = GuidedSession::Event;
+  const SensorArray array = square_array();
+  GuidedSession session(array, MotionLimits{}, /*push_y=*/true);
+  ASSERT_EQ(session.steps(),
+            (std::vector<GuidedStep>{GuidedStep::kPushX, GuidedStep::kPushY, GuidedStep::kSpin}));
+  EXPECT_EQ(session.pending(), nullptr);
+  EXPECT_FALSE(session.keep(/*force=*/true));  // nothing watched yet
+  EXPECT_FALSE(session.redo());
+  session.begin_step();
+  Epochs epochs(array);
+  // Still, then 1 m along x at 0.25 m/s, then still: ready, moving, watched.
+  EXPECT_EQ(epochs.run(session, Twist2{}, 1.0), (std::vector<E>{E::kReady}));
+  EXPECT_EQ(epochs.run(session, {{0.25, 0.0}, 0.0}, 4.0), (std::vector<E>{E::kMoving}));
+  EXPECT_EQ(epochs.run(session, Twist2{}, 1.0), (std::vector<E>{E::kWatched}));
+  ASSERT_NE(session.pending(), nullptr);
+  EXPECT_TRUE(session.pending()->good());
+  // Redone: the same motion is asked for again, and watched again.
+  EXPECT_TRUE(session.redo());
+  EXPECT_EQ(session.current(), 0u);
+  EXPECT_EQ(session.pending(), nullptr);
+  epochs.run(session, Twist2{}, 1.0);
+  epochs.run(session, {{0.25, 0.0}, 0.0}, 4.0);
+  EXPECT_EQ(epochs.run(session, Twist2{}, 1.0), (std::vector<E>{E::kWatched}));
+  EXPECT_TRUE(session.keep(/*force=*/false));
+  EXPECT_EQ(session.current(), 1u);
+  // A push along y that stops short (0.5 m of 1 m) fails: kept only by force.
+  epochs.run(session, Twist2{}, 1.0);
+  epochs.run(session, {{0.0, 0.25}, 0.0}, 2.0);
+  epochs.run(session, Twist2{}, 1.0);
+  ASSERT_NE(session.pending(), nullptr);
+  EXPECT_FALSE(session.pending()->good());
+  EXPECT_FALSE(session.keep(/*force=*/false));
+  EXPECT_EQ(session.current(), 1u);
+  EXPECT_TRUE(session.keep(/*force=*/true));
+  // Three turns counter-clockwise.
+  epochs.run(session, Twist2{}, 1.0);
+  epochs.run(session, {{0.0, 0.0}, std::numbers::pi}, 6.0);
+  epochs.run(session, Twist2{}, 1.0);
+  EXPECT_TRUE(session.keep(/*force=*/false));
+  EXPECT_TRUE(session.complete());
+
+  // The totals are the measurement model's counts of each kept motion.
+  const GuidedInput in = session.input();
+  ASSERT_TRUE(in.push_y);
+  for (int i = 0; i < 4; ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    EXPECT_LT((in.push_x[u] - array[i].counts({{1.0, 0.0}, 0.0}, 1.0)).norm(), 1e-6) << i;
+    EXPECT_LT(((*in.push_y)[u] - array[i].counts({{0.0, 0.5}, 0.0}, 1.0)).norm(), 1e-6) << i;
+    EXPECT_LT((in.spin[u] - array[i].counts({{0.0, 0.0}, 6.0 * std::numbers::pi}, 1.0)).norm(),
+              1e-6)
+        << i;
+  }
+  EXPECT_EQ(in.distance, MotionLimits{}.distance);
+  EXPECT_EQ(in.turns, MotionLimits{}.turns);
+}
+
+TEST(GuidedSession, WithoutThePushAlongYAsksForTwoMotionsAndGivesNoPushY) {
+  const SensorArray array = square_array();
+  GuidedSession session(array, MotionLimits{}, /*push_y=*/false);
+  EXPECT_EQ(session.steps(), (std::vector<GuidedStep>{GuidedStep::kPushX, GuidedStep::kSpin}));
+  session.begin_step();
+  Epochs epochs(array);
+  for (const Twist2& motion : {Twist2{{0.25, 0.0}, 0.0}, Twist2{{0.0, 0.0}, std::numbers::pi}}) {
+    epochs.run(session, Twist2{}, 1.0);
+    epochs.run(session, motion, motion.omega != 0.0 ? 6.0 : 4.0);
+    epochs.run(session, Twist2{}, 1.0);
+    EXPECT_TRUE(session.keep(false));
+  }
+  EXPECT_TRUE(session.complete());
+  EXPECT_FALSE(session.input().push_y);
+}
+
+TEST(GuidedSession, InstructionsSayTheDistanceAndTheDirectionOfTheTurns) {
+  MotionLimits limits;
+  limits.distance = 0.5;
+  EXPECT_THAT(instructions(GuidedStep::kPushX, limits), HasSubstr("Push it 0.5 m forward (+x)"));
+  EXPECT_THAT(instructions(GuidedStep::kPushY, limits), HasSubstr("0.5 m to its left (+y)"));
+  limits.turns = -1.0;
+  EXPECT_THAT(instructions(GuidedStep::kSpin, limits), HasSubstr("1 whole turn clockwise"));
+  limits.turns = 2.0;
+  EXPECT_THAT(instructions(GuidedStep::kSpin, limits),
+              HasSubstr("2 whole turns counter-clockwise"));
 }
 
 }  // namespace

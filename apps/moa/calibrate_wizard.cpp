@@ -1,10 +1,11 @@
 // moa calibrate --guided --live: walks the user through the guided
-// calibration (docs/calibration.md) with live data. For each motion it says
-// what to do, watches it in the nominal config's odometry
-// (moa::MotionWatcher, calibration/guided_steps.hpp), says whether it is
-// good enough or why not, and lets the user keep it or redo it with a key;
-// then it runs calibrate_guided on the three motions' count totals, writes
-// the config and prints the mounts before and after with their 1-sigma.
+// calibration (docs/calibration.md) with live data. The session
+// (moa::GuidedSession, calibration/guided_session.hpp) decides which motion
+// is asked for, watches it in the nominal config's odometry (the run loop of
+// `moa live`, runs/run_loop.hpp) and keeps or redoes it; this file says what
+// to do, prints how each motion went, maps keys to keep and redo, then runs
+// calibrate_guided on the kept motions' count totals, writes the config and
+// prints the mounts before and after with their 1-sigma.
 //
 // Keys (the terminal is put in non-canonical mode while it runs, so no
 // Enter is needed after a letter): Enter or y keeps a motion, r redoes it,
@@ -30,11 +31,13 @@
 #include <vector>
 
 #include "moa/calibration/calibrate.hpp"
+#include "moa/calibration/guided_session.hpp"
 #include "moa/calibration/guided_steps.hpp"
 #include "moa/formats/config.hpp"
 #include "moa/formats/error.hpp"
 #include "moa/runs/odometry_run.hpp"
 #include "moa/runs/output_path.hpp"
+#include "moa/runs/run_loop.hpp"
 
 namespace moa::cli {
 namespace {
@@ -97,29 +100,6 @@ void say(fmt::format_string<Args...> format, Args&&... args) {
   std::fflush(stdout);
 }
 
-std::string instructions(GuidedStep step, const MotionLimits& l) {
-  switch (step) {
-    case GuidedStep::kPushX:
-      return fmt::format(
-          "Put the robot's side against a straight edge and mark where it starts. Push it {} m "
-          "forward (+x) along the edge, without turning it, then hold it still.",
-          l.distance);
-    case GuidedStep::kPushY:
-      return fmt::format(
-          "Put the robot's front against the straight edge and mark where it starts. Push it {} m "
-          "to its left (+y) along the edge, without turning it, then hold it still.",
-          l.distance);
-    case GuidedStep::kSpin:
-      return fmt::format(
-          "Mark a point on the floor under the robot's centre and a line at its front. Spin it "
-          "{} whole turn{} {} about that point, stopping where the marks line up, then hold it "
-          "still.",
-          std::abs(l.turns), std::abs(l.turns) == 1.0 ? "" : "s",
-          l.turns > 0 ? "counter-clockwise (seen from above)" : "clockwise (seen from above)");
-  }
-  return {};
-}
-
 void print_mounts(const io::RobotConfig& config, const GuidedCalibration& cal) {
   const std::array<const char*, kMountParameters> labels{"x mm", "y mm", "yaw deg", "scale x",
                                                          "scale y"};
@@ -176,9 +156,8 @@ int run_wizard(const WizardArgs& args) {
   if (!std::isfinite(limits.turns) || limits.turns == 0.0) {
     throw io::Error(fmt::format("--turns {}: must be a non-zero number of turns", limits.turns));
   }
-  std::vector<GuidedStep> steps{GuidedStep::kPushX, GuidedStep::kPushY, GuidedStep::kSpin};
-  if (args.no_push_y) steps.erase(steps.begin() + 1);
-  std::vector<std::filesystem::path> inputs = source_files(args.source);
+  const io::LiveSourceSpec spec = source_spec(args.source, config, args.config);
+  std::vector<std::filesystem::path> inputs = io::live_source_files(spec);
   inputs.emplace_back(args.config);
   io::refuse_output_onto_inputs(args.out, "--out", inputs);
 
@@ -190,119 +169,90 @@ int run_wizard(const WizardArgs& args) {
     if (poll_keys) poll_keys();
   };
   hooks.warn = [](const std::string& text) { say("warning: {}\n", text); };
-  LiveSource live = open_source(args.source, config, args.config, hooks);
-  const double t0 = live.source->start_time();
-
-  // Consensus: a sensor the nominal config has badly wrong (mirrored, say)
-  // is left out of the estimate the checks judge.
-  OdometryOptions options;
-  options.estimator = EstimatorKind::kConsensus;
-  options.use_wheels = false;
-  options.max_gap = std::numeric_limits<double>::infinity();
-  // No health monitor: the config is the nominal one being calibrated, and
-  // its mount errors (a few mm at 0.1 m are a few percent in a spin) are
-  // what the monitor's drift test would exclude sensors for.
-  options.consensus.health.enabled = false;
-  const auto odometry = io::make_odometry(config, args.config, t0, options);
+  io::LiveSource live = io::open_live_source(spec, config, args.config, hooks);
 
   say("moa calibrate --guided --live: {} sensors of {}, from {}\n", config.names.size(),
       args.config, live.origin);
   say("Keys: Enter keeps a motion, r redoes it, q quits.\n");
 
-  MotionWatcher watcher(config.array, limits);
-  std::size_t current = 0;
-  std::vector<std::vector<Eigen::Vector2d>> kept(3);
-  std::optional<MotionSummary> pending;  // shown, waiting for a key
-  bool announced_ready = false, announced_moving = false, quit = false;
-
-  const auto begin_step = [&] {
-    const GuidedStep step = steps[current];
-    say("\nStep {} of {}: {}\n  {}\n  Hold the robot still...\n", current + 1, steps.size(),
-        describe(step), instructions(step, limits));
-    watcher.arm(step);
-    announced_ready = announced_moving = false;
+  GuidedSession session(config.array, limits, !args.no_push_y);
+  bool quit = false;
+  const auto announce_step = [&] {
+    const GuidedStep step = session.steps()[session.current()];
+    say("\nStep {} of {}: {}\n  {}\n  Hold the robot still...\n", session.current() + 1,
+        session.steps().size(), describe(step), instructions(step, limits));
   };
   const auto on_key = [&](char key) {
     if (key == 'q' || key == 'Q') {
       quit = true;
       return;
     }
-    if (!pending) return;
+    const MotionSummary* pending = session.pending();
+    if (pending == nullptr) return;
     const bool keep = key == '\n' || key == '\r' || key == 'y' || key == 'Y';
     const bool redo = key == 'r' || key == 'R' || (!pending->good() && keep);
     const bool force = key == 'k' || key == 'K';
     if (redo) {
+      session.redo();
       say("  Again.\n");
-      pending.reset();
-      begin_step();
-    } else if ((keep && pending->good()) || force) {
-      kept[static_cast<std::size_t>(pending->step)] = pending->totals;
+      announce_step();
+    } else if ((keep || force) && session.keep(force)) {
       say("  Kept.\n");
-      pending.reset();
-      if (++current < steps.size()) begin_step();
+      if (!session.complete()) announce_step();
     }
   };
   poll_keys = [&] {
     while (const auto key = terminal.key()) on_key(*key);
   };
-  const auto on_step = [&](const OdometryStep& step) {
-    auto summary = watcher.feed(step);
-    if (watcher.state() == MotionWatcher::State::kReady && !announced_ready) {
-      announced_ready = true;
-      say("  Ready: go.\n");
+  io::RunCallbacks callbacks;
+  callbacks.on_step = [&](const OdometryStep& step) {
+    if (quit || g_quit != 0) return;  // the last epochs, after the user quit
+    switch (session.feed(step)) {
+      case GuidedSession::Event::kNone:
+        return;
+      case GuidedSession::Event::kReady:
+        say("  Ready: go.\n");
+        return;
+      case GuidedSession::Event::kMoving:
+        say("  Moving...\n");
+        return;
+      case GuidedSession::Event::kWatched:
+        break;
     }
-    if (watcher.state() == MotionWatcher::State::kMoving && !announced_moving) {
-      announced_moving = true;
-      say("  Moving...\n");
-    }
-    if (!summary) return;
-    watcher.disarm();
-    say("  Watched: {}\n", summarise(*summary));
-    if (summary->good()) {
+    const MotionSummary& summary = *session.pending();
+    say("  Watched: {}\n", summarise(summary));
+    if (summary.good()) {
       say("  Good enough. Enter: keep it, r: redo\n");
-    } else {
-      say("  Not good enough:\n");
-      for (const auto problem : summary->problems) {
-        say("    - {}\n", explain(*summary, problem, limits));
-      }
-      if (summary->lifted_sensor >= 0) {
-        say("    (sensor {})\n", config.names[static_cast<std::size_t>(summary->lifted_sensor)]);
-      }
-      say("  r or Enter: redo, k: keep it anyway\n");
+      return;
     }
-    pending = std::move(summary);
+    say("  Not good enough:\n");
+    for (const auto problem : summary.problems) {
+      say("    - {}\n", explain(summary, problem, limits));
+    }
+    if (summary.lifted_sensor >= 0) {
+      say("    (sensor {})\n", config.names[static_cast<std::size_t>(summary.lifted_sensor)]);
+    }
+    say("  r or Enter: redo, k: keep it anyway\n");
   };
+  callbacks.on_row = [&](const io::InputRow&) { poll_keys(); };
+  callbacks.warn = hooks.warn;
 
-  begin_step();
-  double t_last = t0;
-  while (!quit && current < steps.size() && g_quit == 0) {
-    const auto row = live.source->next();
-    if (!row) break;
-    if (const auto e = odometry->push(*row, on_step)) {
-      throw io::Error(
-          fmt::format("{}: row at t = {} s: {}", live.where, row->t,
-                      e == OdometryError::kRow ? describe(odometry->row_error()) : describe(*e)));
-    }
-    t_last = row->t;
-    poll_keys();
-  }
-  (void)t_last;
+  session.begin_step();
+  announce_step();
+  io::LiveRunSource input(*live.source, config.array.size(), live.where,
+                          [&] { return quit || session.complete() || g_quit != 0; });
+  io::run_loop(config, args.config, guided_session_odometry_options(), input, live.where,
+               callbacks);
   if (quit || g_quit != 0) {
     say("\nCalibration abandoned: nothing written.\n");
     return 1;
   }
-  if (current < steps.size()) {
+  if (!session.complete()) {
     say("\nThe data ended before the calibration was complete: nothing written.\n");
     return 1;
   }
 
-  GuidedInput input;
-  input.push_x = kept[0];
-  if (!args.no_push_y) input.push_y = kept[1];
-  input.spin = kept[2];
-  input.distance = limits.distance;
-  input.turns = limits.turns;
-  const auto result = calibrate_guided(config.array, input, args.tolerances);
+  const auto result = calibrate_guided(config.array, session.input(), args.tolerances);
   if (const auto* e = std::get_if<CalibrationError>(&result)) {
     throw io::Error(fmt::format("the guided calibration failed: {}", describe(*e)));
   }

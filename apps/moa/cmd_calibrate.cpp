@@ -13,6 +13,7 @@
 
 #include "calibrate_wizard.hpp"
 #include "commands.hpp"
+#include "option_flags.hpp"
 #include "moa/runs/calibration_run.hpp"
 #include "moa/formats/config.hpp"
 #include "moa/formats/error.hpp"
@@ -36,7 +37,7 @@ struct CalibrateArgs {
   bool quiet = false;
 };
 
-int run_calibrate(CalibrateArgs args) {
+int calibrate_with_options(CalibrateArgs args) {
   const auto method = io::calibration_method_from_name(args.method);
   if (!method) throw io::Error(fmt::format("--method: unknown method '{}'", args.method));
   args.options.push_x = args.push_x;
@@ -68,6 +69,14 @@ int run_calibrate(CalibrateArgs args) {
     fmt::print("{}calibrated config written to {}\n", summary.full_report(), args.out);
   }
   return 0;
+}
+
+int run_calibrate(const CalibrateArgs& args) {
+  try {
+    return calibrate_with_options(args);
+  } catch (const io::OptionError& e) {
+    throw io::Error(with_flags(e));
+  }
 }
 
 }  // namespace

@@ -1,8 +1,9 @@
 // moa live: odometry from devices as they stream, optionally recorded.
 //
-// Data path: EvdevReader, SerialReader or ReplayReader (rows; live_source.hpp)
-// -> the same pipeline as `moa odometry` -> odometry rows (file or stdout), a
-// status line and, with --serve, the dashboard (io/dashboard.hpp).
+// Data path: EvdevReader, SerialReader or ReplayReader (rows;
+// runs/live_source.hpp) -> the run loop of `moa odometry` (io::run_loop,
+// runs/run_loop.hpp) -> odometry rows (file or stdout), a status line and,
+// with --serve, the dashboard (web/dashboard.hpp).
 // Recording: every row the pipeline sees goes to DIR/mice.csv, starting with
 // a zero row per sensor at the start time so that the log's clock starts
 // where the live run's did; `moa odometry --config DIR/robot.yaml --log DIR`
@@ -28,21 +29,25 @@
 #include <numbers>
 #include <optional>
 #include <string>
+#include <type_traits>
+#include <variant>
 #include <vector>
 
 #include "commands.hpp"
 #include "live_source.hpp"
 #include "moa/formats/config.hpp"
-#include "moa/web/dashboard.hpp"
 #include "moa/formats/error.hpp"
 #include "moa/formats/log.hpp"
 #include "moa/formats/mice_writer.hpp"
 #include "moa/formats/odometry_csv.hpp"
+#include "moa/formats/self_calibration_csv.hpp"
+#include "moa/formats/stream_csv.hpp"
 #include "moa/runs/odometry_run.hpp"
 #include "moa/runs/output_path.hpp"
-#include "moa/formats/self_calibration_csv.hpp"
+#include "moa/runs/run_loop.hpp"
+#include "moa/sources/stream_lines.hpp"
+#include "moa/web/dashboard.hpp"
 #include "odometry_options.hpp"
-#include "sensor_binding.hpp"
 
 namespace moa::cli {
 namespace {
@@ -86,6 +91,7 @@ struct LiveArgs {
   std::string record;
   std::string out;
   std::string serve;
+  std::string streams;  ///< --streams PATH|-
   OdometryFlags odometry;
   double duration = 0.0;
   bool quiet = false;
@@ -139,12 +145,18 @@ int run_live(LiveArgs args) {
   };
 
   // No output names an input (nor another output).
-  std::vector<fs::path> inputs = source_files(args.source);
+  const io::LiveSourceSpec spec = source_spec(args.source, config, args.config);
+  std::vector<fs::path> inputs = io::live_source_files(spec);
   inputs.emplace_back(args.config);
+  if (!args.streams.empty() && args.streams != "-") inputs.emplace_back(args.streams);
   if (!args.record.empty()) {
     const fs::path dir(args.record);
     io::refuse_output_onto_inputs(dir / "mice.csv", "--record", inputs);
     io::refuse_output_onto_inputs(dir / "robot.yaml", "--record", inputs);
+    if (!args.streams.empty()) {
+      io::refuse_output_onto_inputs(dir / "wheels.csv", "--record", inputs);
+      io::refuse_output_onto_inputs(dir / "camera.csv", "--record", inputs);
+    }
   }
   if (!args.out.empty() && !to_stdout) {
     io::refuse_output_onto_inputs(args.out, "--out", inputs);
@@ -167,10 +179,7 @@ int run_live(LiveArgs args) {
     }
   }
 
-  LiveSource live = open_source(args.source, config, args.config, hooks);
-  io::FrameSource* source = live.source.get();
-  const std::string& where = live.where;
-  const double t0 = source->start_time();
+  io::LiveSource live = io::open_live_source(spec, config, args.config, hooks);
 
   // Outputs. The odometry file appears whole at the end; the recording is
   // journalled (see MiceWriter::Durability::kJournal).
@@ -188,6 +197,11 @@ int run_live(LiveArgs args) {
     recording =
         std::make_unique<io::MiceWriter>(dir / "mice.csv", config.names, live.serial != nullptr,
                                          io::MiceWriter::Durability::kJournal, comments);
+  }
+  std::unique_ptr<io::StreamCsvWriter> stream_recording;
+  if (recording && !args.streams.empty()) {
+    stream_recording = std::make_unique<io::StreamCsvWriter>(
+        args.record, fmt::format("recorded by moa live from the streams of {}", args.streams));
   }
   std::unique_ptr<io::OdometryCsvWriter> odometry_out;
   if (to_stdout) {
@@ -211,9 +225,9 @@ int run_live(LiveArgs args) {
         args.odometry.self_calibration_out, config.names,
         odometry_options.sensors & all_sensors(config.array.size()));
   }
-  const auto odometry = io::make_odometry(config, args.config, t0, odometry_options);
   Pose2 pose = odometry_options.initial.value_or(Pose2{});
-  const auto on_step = [&](const OdometryStep& step) {
+  io::RunCallbacks callbacks;
+  callbacks.on_step = [&](const OdometryStep& step) {
     pose = step.pose;
     if (odometry_out) odometry_out->write(step);
     if (calibration_out) calibration_out->write(step);
@@ -221,8 +235,33 @@ int run_live(LiveArgs args) {
   };
 
   RateMeter meter;
-  std::size_t rows = 0;
+  callbacks.on_row = [&](const io::InputRow& row) {
+    if (const auto* mice = std::get_if<SensorRow>(&row)) {
+      if (recording) recording->write(*mice);
+      meter.add(1);
+    } else if (stream_recording) {
+      std::visit(
+          [&](const auto& r) {
+            if constexpr (!std::is_same_v<std::decay_t<decltype(r)>, SensorRow>) {
+              stream_recording->write(r);
+            }
+          },
+          row);
+    }
+  };
+  // The robot's streams: bad lines said once per kind, as they come.
+  std::unique_ptr<io::StreamLineReader> streams;
+  if (!args.streams.empty()) streams = std::make_unique<io::StreamLineReader>(args.streams);
+  const auto say_bad_lines = [&] {
+    if (!streams) return;
+    while (const auto bad = streams->take_new_error()) {
+      hooks.warning(fmt::format("--streams: {}: '{}' (more such lines are counted, not shown)",
+                                describe(bad->first), bad->second));
+    }
+  };
+  callbacks.warn = hooks.warn;
   show_status = [&] {
+    say_bad_lines();
     if (recording) recording->flush();
     if (to_stdout) odometry_out->flush();
     if (!status) return;
@@ -236,36 +275,24 @@ int run_live(LiveArgs args) {
     status_shown = true;
   };
 
-  double t_last = t0;
-  const auto feed = [&](const SensorRow& row) {
-    if (recording) recording->write(row);
-    if (const auto e = odometry->push(row, on_step)) {
-      throw io::Error(
-          fmt::format("{}: row at t = {} s: {}", where, row.t,
-                      e == OdometryError::kRow ? describe(odometry->row_error()) : describe(*e)));
-    }
-    t_last = row.t;
-    ++rows;
-    meter.add(1);
-  };
+  io::LiveRunSource input(*live.source, config.array.size(), live.where);
+  if (streams) input.add_streams(*streams, spec.replay.empty() ? 1.0 : spec.replay_options.speed);
+  io::OdometryRun run;
   try {
-    // The log's clock starts at t0 for every sensor (a no-op row for the
-    // synchroniser, whose sensors all start at t0).
-    for (int i = 0; i < config.array.size(); ++i) {
-      SensorRow start;
-      start.t = t0;
-      start.sensor = i;
-      feed(start);
-    }
-    while (const auto row = source->next()) feed(*row);
+    run = io::run_loop(config, args.config, odometry_options, input, live.where, callbacks);
   } catch (...) {
     // What was recorded is good data even if the run failed.
     if (recording) recording->commit();
+    if (stream_recording) stream_recording->commit();
     if (status_shown) fmt::print(stderr, "\n");
     throw;
   }
-  odometry->finish(t_last, on_step);
+  if (streams) {
+    streams->stop();
+    say_bad_lines();
+  }
   if (recording) recording->commit();
+  if (stream_recording) stream_recording->commit();
   if (odometry_out) odometry_out->commit();
   if (calibration_out) calibration_out->commit();
   if (status_shown) fmt::print(stderr, "\r\033[K");
@@ -275,19 +302,26 @@ int run_live(LiveArgs args) {
     fmt::print(
         report,
         "moa live: {} rows, {} samples over {:.3f} s; final pose x {} m, y {} m, theta {} rad\n",
-        rows, odometry->steps(), t_last - t0, pose.t.x(), pose.t.y(), pose.theta);
+        run.rows, run.steps, run.t_end - run.t0, pose.t.x(), pose.t.y(), pose.theta);
     if (live.evdev) {
-      const auto bindings = parse_bindings(args.source.mice, "--mouse");
-      for (std::size_t i = 0; i < bindings.size(); ++i) {
+      for (std::size_t i = 0; i < spec.mice.size(); ++i) {
         const auto& d = live.evdev->status(static_cast<int>(i));
         fmt::print(report, "moa live: mouse {}: {} frames, lost {} times, {} SYN_DROPPED\n",
-                   bindings[i].name, d.frames, d.lost, d.dropped);
+                   spec.mice[i].name, d.frames, d.lost, d.dropped);
       }
     }
     if (live.serial) {
       const auto& s = live.serial->stats();
       fmt::print(report, "moa live: {} DATA frames, {} lost, {} corrupt\n", s.data_frames,
                  s.lost_frames, s.corrupt);
+    }
+    if (streams) {
+      const auto st = streams->stats();
+      fmt::print(report,
+                 "moa live: streams: {} wheel rows and {} camera fixes read, {} and {} fed; {} bad "
+                 "lines, {} out of time order\n",
+                 st.wheels, st.fixes, run.wheel_rows, run.fix_rows, st.bad_total(),
+                 input.dropped());
     }
     if (recording) {
       fmt::print(report, "moa live: recorded to {} (replay: moa odometry --config {} --log {})\n",
@@ -331,6 +365,12 @@ void add_live(CLI::App& app, Action& action) {
   cmd->add_option("--serve", args->serve,
                   "[HOST:]PORT: serve the dashboard (a page at /, events at /events) while it "
                   "runs; HOST defaults to 127.0.0.1 (docs/live.md)");
+  cmd->add_option("--streams", args->streams,
+                  "PATH|-: the robot's wheel twists and camera fixes, one CSV line each "
+                  "(wheels,t,vx,vy,omega or camera,t,x,y[,theta[,sx,sy]]; t empty: stamped at "
+                  "arrival), from a FIFO, a file or standard input (docs/live.md); recorded "
+                  "by --record")
+      ->type_name("PATH|-");
   cmd->add_option("--duration", args->duration, "Stop after this many seconds (0: at Ctrl-C)")
       ->check(kNonNegative);
   cmd->add_flag("--quiet", args->quiet, "No status line and no summary");

@@ -7,6 +7,8 @@
 
 #include "moa/formats/error.hpp"
 #include "moa/runs/odometry_run.hpp"
+#include "moa/runs/option_error.hpp"
+#include "option_flags.hpp"
 
 namespace moa::cli {
 
@@ -170,7 +172,13 @@ OdometryOptions resolve_odometry_flags(const OdometryFlags& f, const io::RobotCo
   if (f.initial_pose.size() == 3) {
     o.initial = Pose2{{f.initial_pose[0], f.initial_pose[1]}, f.initial_pose[2]};
   }
-  return io::resolve_odometry_options(o, f.estimator, f.sensors, f.no_wheels, config, config_path);
+  try {
+    return io::resolve_odometry_options(o, f.estimator, f.sensors, f.no_wheels, config,
+                                        config_path);
+  } catch (const io::OptionError& e) {
+    throw io::Error(with_flags(e));
+  }
 }
+
 
 }  // namespace moa::cli

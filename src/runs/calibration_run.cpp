@@ -17,6 +17,7 @@
 #include "moa/formats/json.hpp"
 #include "moa/formats/log.hpp"
 #include "moa/runs/odometry_run.hpp"
+#include "moa/runs/option_error.hpp"
 
 namespace moa::io {
 namespace {
@@ -103,9 +104,9 @@ ReferenceData read_reference(const RobotConfig& config, const fs::path& log,
   ReferenceData ref;
   ref.wheels = files.dir / "wheels.csv";
   if (!files.wheels) {
-    throw Error(fmt::format(
-        "{}: not found: --method {} needs the reference twists (t,vx,vy,omega) of the robot",
-        ref.wheels.string(), describe(method)));
+    throw OptionError(fmt::format(
+        "{}: not found: {{method}} {} needs the reference twists (t,vx,vy,omega) of the robot",
+        OptionError::literal(ref.wheels.string()), describe(method)));
   }
   const auto rows = read_all<WheelRow>(ref.wheels);
   ref.wheel_rows = rows.size();
@@ -200,10 +201,10 @@ void common_sample_lines(CalibrationSummary& r, const ReferenceData& ref,
 void check_sample_count(const ReferenceData& ref, CalibrationMethod method) {
   const std::size_t need = method == CalibrationMethod::kExact ? 3 : 1;
   if (ref.samples.size() < need) {
-    throw Error(fmt::format(
-        "{}: {} usable reference interval(s) within the time span of mice.csv; --method {} needs "
-        "at least {}",
-        ref.wheels.string(), ref.samples.size(), describe(method), need));
+    throw OptionError(fmt::format(
+        "{}: {} usable reference interval(s) within the time span of mice.csv; {{method}} {} "
+        "needs at least {}",
+        OptionError::literal(ref.wheels.string()), ref.samples.size(), describe(method), need));
   }
 }
 
@@ -211,7 +212,8 @@ template <class Result>
 Result solved(std::variant<Result, CalibrationError>&& result, const std::string& where,
               CalibrationMethod method) {
   if (const auto* e = std::get_if<CalibrationError>(&result)) {
-    throw Error(fmt::format("{}: --method {}: {}", where, describe(method), describe(*e)));
+    throw OptionError(fmt::format("{}: {{method}} {}: {}", OptionError::literal(where),
+                                  describe(method), describe(*e)));
   }
   return std::get<Result>(std::move(result));
 }
@@ -261,7 +263,7 @@ void run_kimlee(CalibrationSummary& r, const RobotConfig& config, const fs::path
         "position corrections; this is the minimum-norm correction (Kim & Lee's S has rank 3 for "
         "any motion to first order: row 3 of every S_k is omega (p - 2 p_nominal)); the 1-sigma "
         "covers the determined combinations only, along the other {} directions the data say "
-        "nothing; use --method exact for the true positions",
+        "nothing; the exact method gives the true positions",
         cal.rank, 2 * n, cal.rank, 2 * n, 2 * n - cal.rank));
   }
   if (cal.too_few_measurements()) {
@@ -306,14 +308,14 @@ void model_check(CalibrationSummary& r, const ExactModelCheck& check, const Robo
   const std::string reason = fmt::format("{}", fmt::join(why, "; "));
   if (force) {
     r.warnings.push_back(fmt::format(
-        "the calibrated model does not explain the data, kept as forced (--force): {}", reason));
+        "the calibrated model does not explain the data, kept as forced: {}", reason));
     return;
   }
-  throw Error(fmt::format(
-      "{}: --method exact: refused, the calibrated model does not explain the data: {}; is "
+  throw OptionError(fmt::format(
+      "{}: {{method}} exact: refused, the calibrated model does not explain the data: {}; is "
       "wheels.csv the twist of this robot in its frame (vx, vy in m/s, omega in rad/s) over the "
-      "same time as mice.csv? Nothing written (--force writes it anyway)",
-      log.string(), reason));
+      "same time as mice.csv? Nothing written ({{force}} writes it anyway)",
+      OptionError::literal(log.string()), OptionError::literal(reason)));
 }
 
 void run_exact(CalibrationSummary& r, const RobotConfig& config, const fs::path& log,
@@ -442,12 +444,13 @@ void run_guided(CalibrationSummary& r, const RobotConfig& config, const std::str
   }
   if (cal.isotropic_scale) {
     r.warnings.push_back(
-        "no --push-y: each sensor's scale taken equal on both axes (1-sigma includes a 2 % "
+        "no push along y: each sensor's scale taken equal on both axes (1-sigma includes a 2 % "
         "difference) and mirroring judged by which puts the sensor nearer its nominal place");
   }
   if ((in.turns < 0.0) != cal.spin_clockwise) {
     r.warnings.push_back(
-        fmt::format("--turns {} says {}, the counts say {}: used as the counts say", in.turns,
+        fmt::format("the turns given ({}) say {}, the counts say {}: used as the counts say",
+                    in.turns,
                     in.turns < 0.0 ? "clockwise" : "counter-clockwise",
                     cal.spin_clockwise ? "clockwise" : "counter-clockwise"));
   }
@@ -519,35 +522,40 @@ std::optional<CalibrationMethod> calibration_method_from_name(std::string_view n
 void check_calibration_options(CalibrationMethod method, const fs::path& log,
                                const CalibrationOptions& o) {
   const char* name = describe(method);
-  const auto need = [&](bool present, const char* flag) {
-    if (!present) throw Error(fmt::format("--method {} needs {}", name, flag));
+  // Messages name the options as {field}: the CLI renders its flags.
+  const auto need = [&](bool present, const char* what) {
+    if (!present) throw OptionError(fmt::format("{{method}} {} needs {}", name, what));
   };
-  const auto refuse = [&](bool present, const char* flag, const char* why) {
-    if (present) throw Error(fmt::format("{} is not used by --method {}: {}", flag, name, why));
+  const auto refuse = [&](bool present, const char* option, const char* why) {
+    if (present) {
+      throw OptionError(fmt::format("{{{}}} is not used by {{method}} {}: {}", option, name, why));
+    }
   };
   if (method == CalibrationMethod::kGuided) {
-    refuse(!log.empty(), "--log",
-           "guided calibration takes --push-x, --push-y and --spin recordings");
-    need(!o.push_x.empty(), "--push-x DIR (a push of --distance metres along the robot's x axis)");
-    need(!o.spin.empty(), "--spin DIR (--turns whole turns about the robot's centre)");
-    need(o.distance.has_value(), "--distance METRES (the length of each push)");
-    need(o.turns.has_value(), "--turns K (whole turns of the spin)");
+    refuse(!log.empty(), "log",
+           "guided calibration takes {push_x}, {push_y} and {spin} recordings");
+    need(!o.push_x.empty(),
+         "{push_x} DIR (a push of {distance} metres along the robot's x axis)");
+    need(!o.spin.empty(), "{spin} DIR ({turns} whole turns about the robot's centre)");
+    need(o.distance.has_value(), "{distance} METRES (the length of each push)");
+    need(o.turns.has_value(), "{turns} K (whole turns of the spin)");
     if (!(std::isfinite(*o.distance) && *o.distance > 0.0)) {
-      throw Error(fmt::format("--distance {}: must be a positive number of metres", *o.distance));
+      throw OptionError(
+          fmt::format("{{distance}} {}: must be a positive number of metres", *o.distance));
     }
     if (!std::isfinite(*o.turns) || *o.turns == 0.0) {
-      throw Error(fmt::format("--turns {}: must be a non-zero number of turns", *o.turns));
+      throw OptionError(fmt::format("{{turns}} {}: must be a non-zero number of turns", *o.turns));
     }
-    refuse(o.measurements.has_value(), "--measurements", "it has no reference intervals");
-    refuse(o.min_interval.has_value(), "--min-interval", "it has no reference intervals");
+    refuse(o.measurements.has_value(), "measurements", "it has no reference intervals");
+    refuse(o.min_interval.has_value(), "min_interval", "it has no reference intervals");
   } else {
-    need(!log.empty(), "--log DIR (a log with mice.csv and wheels.csv)");
-    const char* why = "it belongs to --method guided";
-    refuse(!o.push_x.empty(), "--push-x", why);
-    refuse(!o.push_y.empty(), "--push-y", why);
-    refuse(!o.spin.empty(), "--spin", why);
-    refuse(o.distance.has_value(), "--distance", why);
-    refuse(o.turns.has_value(), "--turns", why);
+    need(!log.empty(), "{log} DIR (a log with mice.csv and wheels.csv)");
+    const char* why = "it belongs to {method} guided";
+    refuse(!o.push_x.empty(), "push_x", why);
+    refuse(!o.push_y.empty(), "push_y", why);
+    refuse(!o.spin.empty(), "spin", why);
+    refuse(o.distance.has_value(), "distance", why);
+    refuse(o.turns.has_value(), "turns", why);
   }
 }
 
@@ -574,13 +582,12 @@ CalibrationSummary calibrate_log(const RobotConfig& config, const std::string& c
     // sensor a config can hold: refused, --force or not.
     const MountVector p = mount_parameters(s.calibrated);
     if (!p.allFinite() || !(s.calibrated.scale.minCoeff() > 0.0)) {
-      throw Error(fmt::format(
-          "{}: --method {}: refused, sensor '{}' calibrated to position ({:.4g}, {:.4g}) m, yaw "
+        throw OptionError(fmt::format(
+          "{}: {{method}} {}: refused, sensor '{}' calibrated to position ({:.4g}, {:.4g}) m, yaw "
           "{:.4g} rad, scale ({:.4g}, {:.4g}): not a sensor mount (a scale must be positive); the "
-          "data do not fit "
-          "the model. Nothing written",
-          method == CalibrationMethod::kGuided ? config_path : log.string(), describe(method),
-          s.name, p(0), p(1), p(2), p(3), p(4)));
+          "data do not fit the model. Nothing written",
+          OptionError::literal(method == CalibrationMethod::kGuided ? config_path : log.string()),
+          describe(method), OptionError::literal(s.name), p(0), p(1), p(2), p(3), p(4)));
     }
     for (auto& w : plausibility_warnings(s.name, s.nominal, s.calibrated)) {
       r.warnings.push_back(std::move(w));

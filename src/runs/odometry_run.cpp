@@ -13,6 +13,8 @@
 #include "moa/formats/error.hpp"
 #include "moa/formats/log.hpp"
 #include "moa/formats/odometry_csv.hpp"
+#include "moa/runs/option_error.hpp"
+#include "moa/runs/run_loop.hpp"
 
 namespace moa::io {
 namespace fs = std::filesystem;
@@ -22,15 +24,18 @@ OdometryOptions resolve_odometry_options(OdometryOptions o, std::string_view est
                                          const RobotConfig& config,
                                          const std::string& config_path) {
   const auto kind = estimator_from_name(estimator);
-  if (!kind) throw Error(fmt::format("--estimator: unknown estimator '{}'", estimator));
+  if (!kind) {
+    throw OptionError(fmt::format("{{estimator}}: unknown estimator '{}'",
+                                  OptionError::literal(printable(estimator))));
+  }
   o.estimator = *kind;
   o.use_wheels = !no_wheels;
   if (o.estimator == EstimatorKind::kWheels && no_wheels) {
-    throw Error("--estimator wheels and --no-wheels exclude each other");
+    throw OptionError("{estimator} wheels and {no_wheels} exclude each other");
   }
   if (o.self_calibration.enabled && o.self_calibration.gauge == SelfCalibrationGauge::kWheels &&
       no_wheels) {
-    throw Error("--self-calibration-gauge wheels and --no-wheels exclude each other");
+    throw OptionError("{self_calibration.gauge} wheels and {no_wheels} exclude each other");
   }
   if (!sensors.empty()) {
     o.sensors = 0;
@@ -39,11 +44,13 @@ OdometryOptions resolve_odometry_options(OdometryOptions o, std::string_view est
       if (!i) {
         std::string names;
         for (const auto& n : config.names) names += (names.empty() ? "" : ", ") + n;
-        throw Error(
-            fmt::format("--sensors: unknown sensor '{}' ({} has {})", name, config_path, names));
+        throw OptionError(fmt::format(
+            "{{sensors}}: unknown sensor '{}' ({} has {})", OptionError::literal(printable(name)),
+            OptionError::literal(config_path), OptionError::literal(names)));
       }
       if (contains(o.sensors, *i)) {
-        throw Error(fmt::format("--sensors: sensor '{}' named twice", name));
+        throw OptionError(fmt::format("{{sensors}}: sensor '{}' named twice",
+                                      OptionError::literal(printable(name))));
       }
       o.sensors |= SensorMask{1} << *i;
     }
@@ -296,13 +303,90 @@ class StepWriterThread {
   std::thread thread_;  ///< last: starts with the rest built
 };
 
+/// The files of a log as a run's source: mice.csv parsed on a thread of its
+/// own (with faults.csv's twin rows for the oracle); before each mice row,
+/// the camera fixes and then the wheel rows up to its time; after the last,
+/// those up to the last row's time (the stream ends with its mice).
+class LogRunSource final : public RunSource {
+ public:
+  LogRunSource(MiceReader& mice, FaultsReader* faults, WheelsReader* wheels, CameraReader* camera,
+               const LogFiles& log)
+      : mice_(mice),
+        wheels_(wheels),
+        camera_(camera),
+        log_(log),
+        wheel_(wheels ? wheels->next() : std::nullopt),
+        fix_(camera ? camera->next() : std::nullopt),
+        t_last_(mice.start_time()),
+        parsed_(mice, faults) {}
+
+  double start_time() override { return mice_.start_time(); }
+
+  const InputRow* next() override {
+    if (pending_ == nullptr && !ended_) {
+      pending_ = parsed_.next();
+      if (pending_ == nullptr) {
+        ended_ = true;
+        parsed_.join();
+      }
+    }
+    const double limit = ended_ ? t_last_ : pending_->row.t;
+    if (fix_ && fix_->t <= limit) {
+      row_ = CameraFix{fix_->t, fix_->position, fix_->theta, fix_->sigma};
+      from_ = From::kCamera;
+      fix_ = camera_->next();
+      return &row_;
+    }
+    if (wheel_ && wheel_->t <= limit) {
+      row_ = *wheel_;
+      from_ = From::kWheels;
+      wheel_ = wheels_->next();
+      return &row_;
+    }
+    if (ended_) return nullptr;
+    row_ = pending_->row;
+    from_ = From::kMice;
+    line_ = pending_->line;
+    t_last_ = pending_->row.t;
+    pending_ = nullptr;
+    return &row_;
+  }
+
+  std::string where() const override {
+    switch (from_) {
+      case From::kMice:
+        return fmt::format("{}:{}", log_.mice.string(), line_);
+      case From::kWheels:
+        return log_.wheels->string();
+      case From::kCamera:
+        return log_.camera->string();
+    }
+    return {};
+  }
+
+ private:
+  enum class From : std::uint8_t { kMice, kWheels, kCamera };
+  MiceReader& mice_;
+  WheelsReader* wheels_;
+  CameraReader* camera_;
+  const LogFiles& log_;
+  std::optional<WheelRow> wheel_;        ///< next wheel row, not yet handed out
+  std::optional<CameraRow> fix_;         ///< next fix, not yet handed out
+  double t_last_;                        ///< s, the last mice row handed out (start: t0)
+  const MiceRecord* pending_ = nullptr;  ///< next mice row, not yet handed out
+  bool ended_ = false;                   ///< mice.csv read to its end
+  InputRow row_;
+  From from_ = From::kMice;
+  std::size_t line_ = 0;
+  MiceReaderThread parsed_;  ///< last: its thread starts with the rest built
+};
+
 }  // namespace
 
 OdometryRun run_odometry(const RobotConfig& config, const std::string& config_path,
                          const LogFiles& log, const OdometryOptions& options,
                          const StepCallback& on_step, const ProgressCallback& progress) {
   MiceReader mice(log.mice, config);
-  const std::string where = log.mice.string();
   std::unique_ptr<WheelsReader> wheels;
   if (options.use_wheels && log.wheels) wheels = std::make_unique<WheelsReader>(*log.wheels);
   std::unique_ptr<CameraReader> camera;
@@ -321,90 +405,11 @@ OdometryRun run_odometry(const RobotConfig& config, const std::string& config_pa
     }
     faults = std::make_unique<FaultsReader>(*log.faults, config);
   }
-
-  OdometryRun run;
-  run.t0 = mice.start_time();
-  run.t_end = run.t0;
-  const auto odometry = make_odometry(config, config_path, run.t0, options);
-  SensorMask runaway_seen = 0;
-  const auto sink = [&](const OdometryStep& step) {
-    if (step.calibration != nullptr) {
-      for (int i = 0; i < config.array.size(); ++i) {
-        if (step.estimate.excluded[static_cast<std::size_t>(i)] != Exclusion::kCalibration ||
-            contains(runaway_seen, i)) {
-          continue;
-        }
-        runaway_seen |= SensorMask{1} << i;
-        const auto& c = (*step.calibration_filter)[static_cast<std::size_t>(i)];
-        run.warnings.push_back(fmt::format(
-            "sensor '{}': its self-calibration ran away (scale {:.3f}, {:.3f}, yaw offset {:.3f} "
-            "rad at t = {} s; bounds {} and {} rad): excluded as 'calibration' while beyond",
-            config.names[static_cast<std::size_t>(i)], c.scale_x, c.scale_y, c.yaw_offset, step.t(),
-            options.self_calibration.runaway_scale, options.self_calibration.runaway_yaw));
-      }
-    }
-    on_step(step);
-  };
-
-  std::optional<WheelRow> wheel = wheels ? wheels->next() : std::nullopt;
-  std::optional<CameraRow> fix = camera ? camera->next() : std::nullopt;
-  const auto fail = [&](const std::string& file, double t, OdometryError e) {
-    const std::string detail =
-        e == OdometryError::kRow ? describe(odometry->row_error()) : describe(e);
-    throw Error(fmt::format("{}: row at t = {} s: {}", file, t, detail));
-  };
-  // Feeds the camera fixes and wheel rows up to time t, in time order.
-  const auto feed_until = [&](double t) {
-    while (fix && fix->t <= t) {
-      const CameraFix f{fix->t, fix->position, fix->theta, fix->sigma};
-      if (const auto e = odometry->push_fix(f)) fail(log.camera->string(), fix->t, *e);
-      fix = camera->next();
-    }
-    while (wheel && wheel->t <= t) {
-      if (const auto e = odometry->push_wheels(wheel->t, wheel->twist, sink)) {
-        fail(log.wheels->string(), wheel->t, *e);
-      }
-      wheel = wheels->next();
-    }
-  };
-
-  MiceReaderThread parsed(mice, faults.get());
-  while (const MiceRecord* record = parsed.next()) {
-    const SensorRow& row = record->row;
-    feed_until(row.t);
-    if (const auto e = odometry->push(row, sink)) {
-      fail(fmt::format("{}:{}", where, record->line), row.t, *e);
-    }
-    run.t_end = row.t;
-    ++run.rows;
-    if (progress && (run.rows & 0xfff) == 0) progress(run.rows, row.t);
-  }
-  parsed.join();
-  // The stream ends with the last mice row: the last epochs use the wheel
-  // rows and fixes up to its time.
-  feed_until(run.t_end);
-  // Sensors of the config that never reported: a silent sensor reads as
-  // still, which least squares averages in (metres off on a moving robot).
-  const auto& rows = mice.rows_per_sensor();
-  for (std::size_t i = 0; i < rows.size(); ++i) {
-    if (rows[i] != 0 || !contains(options.sensors, static_cast<int>(i))) continue;
-    const std::string& name = config.names[i];
-    if (options.estimator == EstimatorKind::kLs || options.estimator == EstimatorKind::kOracle) {
-      throw Error(fmt::format(
-          "{}: sensor '{}' of {} never reports: {} would take it as still; leave it out "
-          "(--sensors) or use a robust estimator (consensus, sekimori)",
-          where, name, config_path, describe(options.estimator)));
-    }
-    if (options.estimator != EstimatorKind::kWheels) {
-      run.warnings.push_back(fmt::format(
-          "{}: sensor '{}' of {} never reports: the {} estimator saw it as a still sensor", where,
-          name, config_path, describe(options.estimator)));
-    }
-  }
-  odometry->finish(run.t_end, sink);
-  run.steps = odometry->steps();
-  run.fixes = odometry->fixes();
-  return run;
+  LogRunSource source(mice, faults.get(), wheels.get(), camera.get(), log);
+  RunCallbacks callbacks;
+  callbacks.on_step = on_step;
+  callbacks.progress = progress;
+  return run_loop(config, config_path, options, source, log.mice.string(), callbacks);
 }
 
 OdometryRun write_odometry(const RobotConfig& config, const std::string& config_path,

@@ -14,6 +14,7 @@
 
 #include "moa/core/odometry.hpp"
 #include "moa/formats/config.hpp"
+#include "moa/runs/run_loop.hpp"
 
 namespace moa::io {
 
@@ -32,28 +33,22 @@ LogFiles resolve_log(const std::filesystem::path& log);
 /// The pipeline's options as a front end names them: `estimator` by name,
 /// `sensors` by config name (empty: all), wheels off with `no_wheels`;
 /// then validated (OdometryOptions::validate). `moa odometry`, `moa live`
-/// and the Python bindings resolve their options with this. Throws io::Error
-/// in the command line's words ("--sensors: unknown sensor 'x' (robot.yaml
-/// has m1, m2)", "invalid option: rate: must be positive and finite (Hz)").
+/// and the Python bindings resolve their options with this. Throws
+/// io::OptionError (runs/option_error.hpp) naming the options by their
+/// field ("sensors: unknown sensor 'x' (robot.yaml has m1, m2)", "estimator
+/// wheels and no_wheels exclude each other"), which the front end renders
+/// in its own words; io::Error "invalid option: rate: must be positive and
+/// finite (Hz)" for options that fail validate().
 OdometryOptions resolve_odometry_options(OdometryOptions options, std::string_view estimator,
                                          const std::vector<std::string>& sensors, bool no_wheels,
                                          const RobotConfig& config, const std::string& config_path);
-
-struct OdometryRun {
-  std::size_t rows = 0;          ///< mice rows read
-  std::size_t steps = 0;         ///< epochs written
-  double t0 = 0.0, t_end = 0.0;  ///< s, first epoch's start, last row's time
-  FixCounts fixes;
-  /// What the caller should tell the user (a configured sensor that never
-  /// reported, used as still by a robust estimator).
-  std::vector<std::string> warnings;
-};
 
 using StepCallback = std::function<void(const OdometryStep&)>;
 /// Called now and then with the mice rows read so far and their time (s).
 using ProgressCallback = std::function<void(std::size_t rows, double t)>;
 
-/// Runs the pipeline: wheels.csv is fed when options.use_wheels and it
+/// Runs the pipeline (the run loop of runs/run_loop.hpp) over the log's
+/// files: wheels.csv is fed when options.use_wheels and it
 /// exists, camera.csv when options.fuse_camera (required then), faults.csv
 /// (or `faults`) when the estimator is the oracle (required then). Throws
 /// io::Error naming the file, line or option on anything wrong. A selected

@@ -1,4 +1,4 @@
-#include "bench_replay.hpp"
+#include "moa_bench/replay.hpp"
 
 #include <fmt/core.h>
 #include <unistd.h>
@@ -25,7 +25,7 @@
 #include "moa/formats/mice_writer.hpp"
 #include "moa/runs/odometry_run.hpp"
 
-namespace moa::cli {
+namespace moa::bench {
 namespace fs = std::filesystem;
 namespace {
 
@@ -165,15 +165,9 @@ double parse_only(const fs::path& file, const std::vector<std::string>& names) {
   return sum;
 }
 
-struct Timing {
-  double wall = 1e300;    ///< s, best
-  double cpu = 1e300;     ///< s of process CPU time (all threads), best
-  double thread = 1e300;  ///< s of CPU time of the calling thread, best
-};
-
 // s of CPU time of the calling thread: the replay's pipeline runs on it, the
 // parse of mice.csv and the write of odometry.csv on threads of their own
-// (io/odometry_run.cpp), so this is the replay's critical path.
+// (runs/odometry_run.cpp), so this is the replay's critical path.
 double thread_cpu() {
   timespec now{};
   ::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now);
@@ -198,74 +192,43 @@ volatile double g_checksum = 0.0;
 
 }  // namespace
 
-int run_replay_bench(const ReplayBenchArgs& args) {
+double ReplayBenchResult::real_time_factor() const { return duration / replay.wall; }
+
+ReplayBenchResult run_replay_bench(const ReplayBenchOptions& args,
+                                   const std::function<void(const std::string&)>& progress) {
+  const auto say = [&](const std::string& line) {
+    if (progress) progress(line);
+  };
   const auto estimator = estimator_from_name(args.estimator);
   // The log has mice.csv only: no wheels, no faults.
   if (!estimator || *estimator == EstimatorKind::kOracle || *estimator == EstimatorKind::kWheels) {
-    throw std::runtime_error(
-        fmt::format("--estimator: '{}' is not ls, sekimori or consensus", args.estimator));
+    throw std::invalid_argument(
+        fmt::format("estimator '{}' is not ls, sekimori or consensus", args.estimator));
   }
   const ScratchDir scratch(args.dir.empty() ? fs::temp_directory_path() : args.dir, args.keep_log);
   const io::RobotConfig config = four_sensors();
-  if (!args.json) fmt::print(stderr, "moa bench --replay: writing a {} s log ...\n", args.duration);
-  const std::size_t rows = write_log(config, args.duration, args.row_rate, scratch.path());
+  say(fmt::format("writing a {} s log ...", args.duration));
+  ReplayBenchResult result;
+  result.log_dir = scratch.path();
+  result.rows = write_log(config, args.duration, args.row_rate, scratch.path());
   const io::LogFiles log = io::resolve_log(scratch.path());
-  const auto mice_bytes = fs::file_size(log.mice);
+  result.mice_bytes = fs::file_size(log.mice);
   const std::string config_path = (scratch.path() / "robot.yaml").string();
   const fs::path out = scratch.path() / "odometry.csv";
 
   OdometryOptions options;
   options.estimator = *estimator;
   options.rate = args.epoch_rate;
-  Timing parse, replay;
-  std::size_t steps = 0;
   for (int r = 0; r < args.repeats; ++r) {
-    if (!args.json)
-      fmt::print(stderr, "moa bench --replay: run {} of {} ...\n", r + 1, args.repeats);
-    time_once(parse, [&] { g_checksum = parse_only(log.mice, config.names); });
-    time_once(replay,
-              [&] { steps = io::write_odometry(config, config_path, log, options, out).steps; });
+    say(fmt::format("run {} of {} ...", r + 1, args.repeats));
+    time_once(result.parse, [&] { g_checksum = parse_only(log.mice, config.names); });
+    time_once(result.replay, [&] {
+      result.epochs = io::write_odometry(config, config_path, log, options, out).steps;
+    });
   }
-  const auto out_bytes = fs::file_size(out);
-  const double real_time = args.duration / replay.wall;
-  const double ratio = replay.wall / parse.wall;
-  const double cpu_ratio = replay.cpu / parse.cpu;
-  if (args.json) {
-    // Units in the keys: s, bytes, Hz; ratios and counts are plain numbers.
-    io::JsonWriter json;
-    json.begin_object()
-        .member("duration_s", args.duration)
-        .member("mice_rows", static_cast<std::uint64_t>(rows))
-        .member("mice_bytes", static_cast<std::uint64_t>(mice_bytes))
-        .member("epochs", static_cast<std::uint64_t>(steps))
-        .member("odometry_bytes", static_cast<std::uint64_t>(out_bytes))
-        .member("estimator", args.estimator)
-        .member("rate_hz", args.epoch_rate)
-        .member("repeats", args.repeats)
-        .member("parse_only_s", parse.wall)
-        .member("parse_only_cpu_s", parse.cpu)
-        .member("replay_s", replay.wall)
-        .member("replay_cpu_s", replay.cpu)
-        .member("replay_main_thread_cpu_s", replay.thread)
-        .member("real_time_factor", real_time)
-        .member("replay_over_parse", ratio)
-        .member("replay_over_parse_cpu", cpu_ratio)
-        .end_object();
-    fmt::print("{}\n", json.str());
-    return 0;
-  }
-  fmt::print("log: {} s, {} mice rows ({:.1f} MB), 4 sensors at {} Hz\n", args.duration, rows,
-             static_cast<double>(mice_bytes) / 1e6, args.row_rate);
-  fmt::print(
-      "replay: moa odometry --estimator {} --rate {}: {} epochs, {:.1f} MB of odometry.csv\n",
-      args.estimator, args.epoch_rate, steps, static_cast<double>(out_bytes) / 1e6);
-  fmt::print("best of {}        wall s    CPU s   main thread CPU s\n", args.repeats);
-  fmt::print("parse-only      {:8.3f} {:8.3f} {:8.3f}\n", parse.wall, parse.cpu, parse.thread);
-  fmt::print("replay          {:8.3f} {:8.3f} {:8.3f}\n", replay.wall, replay.cpu, replay.thread);
-  fmt::print("real-time factor {:.0f}x; replay / parse-only {:.2f} (wall), {:.2f} (CPU)\n",
-             real_time, ratio, cpu_ratio);
-  if (args.keep_log) fmt::print("log kept in {}\n", scratch.path().string());
-  return 0;
+  result.odometry_bytes = fs::file_size(out);
+  result.duration = args.duration;
+  return result;
 }
 
-}  // namespace moa::cli
+}  // namespace moa::bench

@@ -1,4 +1,4 @@
-#include "baselines.hpp"
+#include "moa_bench/baselines.hpp"
 
 #include <Eigen/Dense>
 #include <vector>

@@ -1,0 +1,117 @@
+// Where live rows come from, for `moa live` and the guided calibration's
+// live session: USB mice (evdev), the serial board, or a recorded log played
+// at its own pace. All three are io::FrameSource, so everything after this
+// is the same. In runs/, not sources/: it resolves a replayed log's files
+// (resolve_log, runs/odometry_run.hpp).
+#pragma once
+
+#include <chrono>
+#include <deque>
+#include <filesystem>
+#include <functional>
+#include <limits>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "moa/formats/config.hpp"
+#include "moa/runs/run_loop.hpp"
+#include "moa/sources/evdev.hpp"
+#include "moa/sources/live.hpp"
+#include "moa/sources/replay_reader.hpp"
+#include "moa/sources/serial_reader.hpp"
+#include "moa/sources/stream_lines.hpp"
+
+namespace moa::io {
+
+/// Exactly one of: `mice` not empty (evdev devices, each bound to a sensor of
+/// the config), `serial` (a port) or `replay` (a log directory or mice.csv).
+struct LiveSourceSpec {
+  std::vector<EvdevDevice> mice;
+  EvdevOptions evdev;
+  std::string serial;
+  SerialOptions serial_options;
+  std::string replay;
+  ReplayOptions replay_options;
+};
+
+struct LiveSource {
+  std::unique_ptr<FrameSource> source;
+  EvdevReader* evdev = nullptr;    ///< set for mice
+  SerialReader* serial = nullptr;  ///< set for a serial port
+  ReplayReader* replay = nullptr;  ///< set for a replay
+  int mice = 0;                    ///< evdev devices
+  std::string where;               ///< for messages: "mice", the port, the log
+  /// "3 mice (evdev)", the port, "a replay of DIR": what a recording came from.
+  std::string origin;
+  /// Status text: how many sensors are alive, frames lost.
+  std::string alive(const RobotConfig& config) const;
+};
+
+/// The files the spec names (the mice's devices, the serial port, the
+/// replayed log's files): what no output of the run may name.
+std::vector<std::filesystem::path> live_source_files(const LiveSourceSpec& spec);
+
+/// Opens the one source the spec names. Throws io::Error when none or more
+/// than one is named, or the source cannot be opened; warns through `hooks`
+/// when fewer mice than sensors are bound (the others read as still).
+LiveSource open_live_source(const LiveSourceSpec& spec, const RobotConfig& config,
+                            const std::string& config_path, const LiveHooks& hooks);
+
+/// A live source as a run's source (runs/run_loop.hpp): first a zero row per
+/// sensor at the start time, then the source's rows as they come. The zero
+/// rows are no-ops for the synchroniser (its sensors all start there); they
+/// start a recording's clock where the live run's did, so that the
+/// recording replays to the same steps.
+///
+/// With the robot's streams (sources/stream_lines.hpp), their wheel rows and
+/// fixes are merged in as a log's are (runs/odometry_run.hpp): each is held
+/// until the first mice row at or after its t and handed out before it,
+/// fixes first, so that the recording replays in the same order. A line
+/// without t is stamped at its arrival on the source's clock, estimated from
+/// the last mice row received: t = t_row + speed (arrival - its arrival), and
+/// kept after the last mice row handed out. Rows after the last mice row are
+/// not handed out (a stream ends with its mice).
+class LiveRunSource final : public RunSource {
+ public:
+  /// `where` names the source in messages; `stop`, polled before each row,
+  /// ends the stream when it returns true (empty: the source decides).
+  LiveRunSource(FrameSource& frames, int sensors, std::string where,
+                std::function<bool()> stop = {});
+  /// Merges the robot's streams in; `speed`: the source's seconds per
+  /// second of wall time (a replay's speed; 1 for devices).
+  void add_streams(StreamLineReader& streams, double speed);
+  double start_time() override;
+  const InputRow* next() override;
+  std::string where() const override;
+  /// Stream rows dropped: a t before its stream's previous row's (a line
+  /// without t stamped after a line whose t was later).
+  std::size_t dropped() const { return dropped_; }
+
+ private:
+  void take_streams();
+  FrameSource& frames_;
+  int sensors_;
+  std::string where_;
+  std::function<bool()> stop_;
+  int started_ = 0;  ///< zero rows handed out
+  InputRow row_;
+  bool from_streams_ = false;  ///< row_ came from the streams
+  // The streams' merge.
+  StreamLineReader* streams_ = nullptr;
+  double speed_ = 1.0;
+  std::optional<SensorRow> pending_;  ///< the next mice row, not yet handed out
+  bool ended_ = false;
+  double t_last_ = 0.0;                                ///< s, the last mice row handed out
+  double t_ref_ = 0.0;                                 ///< s, the last mice row received ...
+  std::chrono::steady_clock::time_point arrival_ref_;  ///< ... and when
+  std::deque<WheelRow> wheels_;
+  std::deque<CameraFix> fixes_;
+  std::vector<StreamRow> arrived_;
+  double last_wheel_t_ = -std::numeric_limits<double>::infinity();  ///< s
+  double last_fix_t_ = -std::numeric_limits<double>::infinity();    ///< s
+  std::size_t dropped_ = 0;
+};
+
+}  // namespace moa::io

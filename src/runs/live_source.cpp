@@ -1,0 +1,164 @@
+#include "moa/runs/live_source.hpp"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "moa/formats/error.hpp"
+#include "moa/runs/odometry_run.hpp"
+
+namespace moa::io {
+
+LiveSource open_live_source(const LiveSourceSpec& spec, const RobotConfig& config,
+                            const std::string& config_path, const LiveHooks& hooks) {
+  const int given = !spec.mice.empty() + !spec.serial.empty() + !spec.replay.empty();
+  if (given != 1) {
+    throw Error(fmt::format(
+        "a live source is one of: mice (evdev), a serial port, a log to replay ({} given)", given));
+  }
+  LiveSource s;
+  if (!spec.mice.empty()) {
+    if (static_cast<int>(spec.mice.size()) < config.array.size()) {
+      hooks.warning(fmt::format("{} of the {} sensors of {} have a mouse; the others read as still",
+                                spec.mice.size(), config.array.size(), config_path));
+    }
+    auto reader = std::make_unique<EvdevReader>(spec.mice, spec.evdev, hooks);
+    s.evdev = reader.get();
+    s.source = std::move(reader);
+    s.where = "mice";
+    s.mice = static_cast<int>(spec.mice.size());
+    s.origin = fmt::format("{} mice (evdev)", spec.mice.size());
+  } else if (!spec.serial.empty()) {
+    auto reader = std::make_unique<SerialReader>(spec.serial, config, spec.serial_options, hooks);
+    s.serial = reader.get();
+    s.source = std::move(reader);
+    s.where = spec.serial;
+    s.origin = spec.serial;
+  } else {
+    auto reader = std::make_unique<ReplayReader>(spec.replay, config, spec.replay_options, hooks);
+    s.replay = reader.get();
+    s.source = std::move(reader);
+    s.where = spec.replay;
+    s.origin = fmt::format("a replay of {}", spec.replay);
+  }
+  return s;
+}
+
+std::vector<std::filesystem::path> live_source_files(const LiveSourceSpec& spec) {
+  std::vector<std::filesystem::path> files;
+  for (const auto& device : spec.mice) files.push_back(device.path);
+  if (!spec.serial.empty()) files.emplace_back(spec.serial);
+  if (!spec.replay.empty()) {
+    const auto log = resolve_log(spec.replay).files();
+    files.insert(files.end(), log.begin(), log.end());
+  }
+  return files;
+}
+
+std::string LiveSource::alive(const RobotConfig& config) const {
+  if (evdev) return fmt::format("mice {}/{} alive", evdev->alive(), mice);
+  if (serial) {
+    const bool fresh = serial->seconds_since_data() < 1.0;
+    return fmt::format("sensors {}/{} alive, {} frames lost",
+                       fresh ? serial->hello().names.size() : 0, config.names.size(),
+                       serial->stats().lost_frames);
+  }
+  return fmt::format("replay, {} rows", replay ? replay->rows() : 0);
+}
+
+LiveRunSource::LiveRunSource(FrameSource& frames, int sensors, std::string where,
+                             std::function<bool()> stop)
+    : frames_(frames), sensors_(sensors), where_(std::move(where)), stop_(std::move(stop)) {}
+
+void LiveRunSource::add_streams(StreamLineReader& streams, double speed) {
+  streams_ = &streams;
+  speed_ = speed;
+}
+
+double LiveRunSource::start_time() { return frames_.start_time(); }
+
+std::string LiveRunSource::where() const {
+  return from_streams_ ? fmt::format("{} (streams)", where_) : where_;
+}
+
+void LiveRunSource::take_streams() {
+  if (streams_ == nullptr) return;
+  arrived_.clear();
+  streams_->take(arrived_);
+  // Later than the last mice row handed out, so that a replay feeds it
+  // where this run did (before the first mice row at or after its t).
+  const double after = std::nextafter(t_last_, std::numeric_limits<double>::infinity());
+  for (StreamRow& s : arrived_) {
+    const double estimate =
+        t_ref_ + speed_ * std::chrono::duration<double>(s.arrival - arrival_ref_).count();
+    // Each stream in time order: a line with t before its stream's last
+    // row is dropped (the pipeline would refuse it and end the run).
+    if (auto* w = std::get_if<WheelRow>(&s.row)) {
+      if (!s.stamped) w->t = std::max({estimate, after, last_wheel_t_});
+      if (w->t < last_wheel_t_) {
+        ++dropped_;
+        continue;
+      }
+      last_wheel_t_ = w->t;
+      wheels_.push_back(*w);
+    } else {
+      auto& f = std::get<CameraFix>(s.row);
+      if (!s.stamped) f.t = std::max({estimate, after, last_fix_t_});
+      if (f.t < last_fix_t_) {
+        ++dropped_;
+        continue;
+      }
+      last_fix_t_ = f.t;
+      fixes_.push_back(f);
+    }
+  }
+}
+
+const InputRow* LiveRunSource::next() {
+  from_streams_ = false;
+  if (started_ == 0) {
+    t_last_ = t_ref_ = frames_.start_time();
+    arrival_ref_ = std::chrono::steady_clock::now();
+  }
+  if (started_ < sensors_) {
+    SensorRow start;
+    start.t = t_last_;
+    start.sensor = started_++;
+    row_ = start;
+    return &row_;
+  }
+  if (!pending_ && !ended_) {
+    if (stop_ && stop_()) {
+      ended_ = true;
+    } else if (auto row = frames_.next()) {
+      pending_ = *row;
+      t_ref_ = row->t;
+      arrival_ref_ = std::chrono::steady_clock::now();
+    } else {
+      ended_ = true;
+    }
+    take_streams();
+  }
+  const double limit = ended_ ? t_last_ : pending_->t;
+  if (!fixes_.empty() && fixes_.front().t <= limit) {
+    row_ = fixes_.front();
+    fixes_.pop_front();
+    from_streams_ = true;
+    return &row_;
+  }
+  if (!wheels_.empty() && wheels_.front().t <= limit) {
+    row_ = wheels_.front();
+    wheels_.pop_front();
+    from_streams_ = true;
+    return &row_;
+  }
+  if (ended_) return nullptr;
+  row_ = *pending_;
+  t_last_ = pending_->t;
+  pending_.reset();
+  return &row_;
+}
+
+}  // namespace moa::io

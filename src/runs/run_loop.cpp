@@ -1,0 +1,95 @@
+#include "moa/runs/run_loop.hpp"
+
+#include <fmt/core.h>
+
+#include "moa/formats/error.hpp"
+#include "moa/runs/odometry_run.hpp"
+
+namespace moa::io {
+
+double row_time(const InputRow& row) {
+  return std::visit([](const auto& r) { return static_cast<double>(r.t); }, row);
+}
+
+OdometryRun run_loop(const RobotConfig& config, const std::string& config_path,
+                     const OdometryOptions& options, RunSource& source,
+                     const std::string& source_name, const RunCallbacks& callbacks) {
+  OdometryRun run;
+  run.t0 = source.start_time();
+  run.t_end = run.t0;
+  const auto odometry = make_odometry(config, config_path, run.t0, options);
+
+  const auto warn = [&](std::string text) {
+    if (callbacks.warn) callbacks.warn(text);
+    run.warnings.push_back(std::move(text));
+  };
+  // A sensor whose self-calibration ran away is excluded as 'calibration'
+  // while beyond the bounds: said once per sensor.
+  SensorMask runaway_seen = 0;
+  const auto sink = [&](const OdometryStep& step) {
+    if (step.calibration != nullptr) {
+      for (int i = 0; i < config.array.size(); ++i) {
+        if (step.estimate.excluded[static_cast<std::size_t>(i)] != Exclusion::kCalibration ||
+            contains(runaway_seen, i)) {
+          continue;
+        }
+        runaway_seen |= SensorMask{1} << i;
+        const auto& c = (*step.calibration_filter)[static_cast<std::size_t>(i)];
+        warn(fmt::format(
+            "sensor '{}': its self-calibration ran away (scale {:.3f}, {:.3f}, yaw offset {:.3f} "
+            "rad at t = {} s; bounds {} and {} rad): excluded as 'calibration' while beyond",
+            config.names[static_cast<std::size_t>(i)], c.scale_x, c.scale_y, c.yaw_offset, step.t(),
+            options.self_calibration.runaway_scale, options.self_calibration.runaway_yaw));
+      }
+    }
+    if (callbacks.on_step) callbacks.on_step(step);
+  };
+  const auto fail = [&](double t, OdometryError e) {
+    const std::string detail =
+        e == OdometryError::kRow ? describe(odometry->row_error()) : describe(e);
+    throw Error(fmt::format("{}: row at t = {} s: {}", source.where(), t, detail));
+  };
+
+  while (const InputRow* input = source.next()) {
+    if (callbacks.on_row) callbacks.on_row(*input);
+    if (const auto* row = std::get_if<SensorRow>(input)) {
+      if (const auto e = odometry->push(*row, sink)) fail(row->t, *e);
+      run.t_end = row->t;
+      ++run.rows;
+      if (row->sensor >= 0 && row->sensor < kMaxSensors) {
+        ++run.rows_per_sensor[static_cast<std::size_t>(row->sensor)];
+      }
+      if (callbacks.progress && (run.rows & 0xfff) == 0) callbacks.progress(run.rows, row->t);
+    } else if (const auto* wheel = std::get_if<WheelRow>(input)) {
+      if (const auto e = odometry->push_wheels(wheel->t, wheel->twist, sink)) fail(wheel->t, *e);
+      ++run.wheel_rows;
+    } else {
+      const auto& fix = std::get<CameraFix>(*input);
+      if (const auto e = odometry->push_fix(fix)) fail(fix.t, *e);
+      ++run.fix_rows;
+    }
+  }
+  // Sensors of the config that never reported: a silent sensor reads as
+  // still, which least squares averages in (metres off on a moving robot).
+  for (std::size_t i = 0; i < config.names.size(); ++i) {
+    if (run.rows_per_sensor[i] != 0 || !contains(options.sensors, static_cast<int>(i))) continue;
+    const std::string& name = config.names[i];
+    if (options.estimator == EstimatorKind::kLs || options.estimator == EstimatorKind::kOracle) {
+      throw Error(fmt::format(
+          "{}: sensor '{}' of {} never reports: {} would take it as still; leave it out of the "
+          "selected sensors or use a robust estimator (consensus, sekimori)",
+          source_name, name, config_path, describe(options.estimator)));
+    }
+    if (options.estimator != EstimatorKind::kWheels) {
+      warn(fmt::format(
+          "{}: sensor '{}' of {} never reports: the {} estimator saw it as a still sensor",
+          source_name, name, config_path, describe(options.estimator)));
+    }
+  }
+  odometry->finish(run.t_end, sink);
+  run.steps = odometry->steps();
+  run.fixes = odometry->fixes();
+  return run;
+}
+
+}  // namespace moa::io

@@ -1,0 +1,206 @@
+// The robot's streams while live (sources/stream_lines.hpp): each line's
+// parse, every bad line's kind, and their merge into a live run
+// (io::LiveRunSource): a recorded run with wheel rows replays to the same
+// steps.
+#include <fmt/core.h>
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <thread>
+#include <variant>
+#include <vector>
+
+#include "moa/formats/config.hpp"
+#include "moa/formats/log.hpp"
+#include "moa/formats/stream_csv.hpp"
+#include "moa/runs/live_source.hpp"
+#include "moa/runs/odometry_run.hpp"
+#include "moa/runs/run_loop.hpp"
+#include "moa/sources/stream_lines.hpp"
+#include "support/synth.hpp"
+
+namespace moa::io {
+namespace {
+
+namespace fs = std::filesystem;
+using E = StreamLineError;
+
+StreamRow good(std::string_view line) {
+  auto parsed = parse_stream_line(line);
+  EXPECT_TRUE(std::holds_alternative<StreamRow>(parsed)) << line;
+  return std::holds_alternative<StreamRow>(parsed) ? std::get<StreamRow>(parsed) : StreamRow{};
+}
+
+std::optional<E> bad(std::string_view line) {
+  const auto parsed = parse_stream_line(line);
+  if (const auto* e = std::get_if<E>(&parsed)) return *e;
+  return std::nullopt;
+}
+
+TEST(StreamLines, AWheelLineIsTheTwistOfWheelsCsvWithOrWithoutItsTime) {
+  StreamRow r = good("wheels,12.5,0.25,-0.125,1.5");
+  EXPECT_TRUE(r.stamped);
+  const auto& w = std::get<WheelRow>(r.row);
+  EXPECT_EQ(w.t, 12.5);
+  EXPECT_EQ(w.twist.v.x(), 0.25);
+  EXPECT_EQ(w.twist.v.y(), -0.125);
+  EXPECT_EQ(w.twist.omega, 1.5);
+  r = good(" wheels , ,1,2,3\r");
+  EXPECT_FALSE(r.stamped);
+  EXPECT_EQ(std::get<WheelRow>(r.row).twist.omega, 3.0);
+}
+
+TEST(StreamLines, ACameraLineHasOptionalHeadingAndStandardDeviations) {
+  CameraFix f = std::get<CameraFix>(good("camera,1,2,3").row);
+  EXPECT_EQ(f.t, 1.0);
+  EXPECT_EQ(f.position.x(), 2.0);
+  EXPECT_EQ(f.position.y(), 3.0);
+  EXPECT_FALSE(f.theta);
+  EXPECT_FALSE(f.sigma);
+  f = std::get<CameraFix>(good("camera,,2,3,0.5").row);
+  EXPECT_EQ(f.theta, 0.5);
+  f = std::get<CameraFix>(good("camera,1,2,3,,0.01,0.02").row);
+  EXPECT_FALSE(f.theta);
+  ASSERT_TRUE(f.sigma);
+  EXPECT_EQ(f.sigma->y(), 0.02);
+}
+
+TEST(StreamLines, BlankAndCommentLinesAreSkipped) {
+  EXPECT_TRUE(std::holds_alternative<std::monostate>(parse_stream_line("")));
+  EXPECT_TRUE(std::holds_alternative<std::monostate>(parse_stream_line("  \r")));
+  EXPECT_TRUE(std::holds_alternative<std::monostate>(parse_stream_line("# wheels,1,2,3,4")));
+}
+
+TEST(StreamLines, EveryBadLineHasItsKind) {
+  EXPECT_EQ(bad("gyro,1,0.5"), E::kUnknownStream);
+  EXPECT_EQ(bad("Wheels,1,2,3,4"), E::kUnknownStream);
+  EXPECT_EQ(bad("wheels"), E::kFieldCount);
+  EXPECT_EQ(bad("wheels,1,2,3"), E::kFieldCount);
+  EXPECT_EQ(bad("wheels,1,2,3,4,5"), E::kFieldCount);
+  EXPECT_EQ(bad("camera,1,2"), E::kFieldCount);
+  EXPECT_EQ(bad("camera,1,2,3,4,5"), E::kFieldCount);  // sx without sy
+  EXPECT_EQ(bad("wheels,x,2,3,4"), E::kNotANumber);
+  EXPECT_EQ(bad("wheels,1,,3,4"), E::kNotANumber);
+  EXPECT_EQ(bad("wheels,1,2,3,nan"), E::kNotANumber);
+  EXPECT_EQ(bad("wheels,1,2,3,inf"), E::kNotANumber);
+  EXPECT_EQ(bad("wheels,1,2,3,4x"), E::kNotANumber);
+  EXPECT_EQ(bad("camera,1,2,3,,0,0.1"), E::kNotANumber);  // sx must be positive
+  EXPECT_EQ(bad("camera,1,2,3,,0.1,"), E::kNotANumber);
+  EXPECT_EQ(bad("wheels,1,2,3," + std::string(kMaxStreamLine, '4')), E::kTooLong);
+}
+
+TEST(StreamLines, TheReaderCountsBadLinesAndSaysEachKindOnceWithItsLine) {
+  const fs::path dir = test::scratch_dir("stream_lines_reader");
+  const fs::path file = dir / "streams.csv";
+  std::ofstream(file) << "wheels,1,0,0,0\nwheels,0.5,0,0,0\ngyro,1\ngyro,2\ncamera,2,1,1\n"
+                         "wheels,,1,1,1\nwheels,2,0,0";  // the last without its newline
+  StreamLineReader reader(file.string());
+  std::vector<StreamRow> rows;
+  for (int k = 0; k < 200 && (rows.size() < 3 || reader.stats().bad_total() < 4); ++k) {
+    reader.take(rows);
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  reader.stop();
+  reader.take(rows);
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_TRUE(std::holds_alternative<WheelRow>(rows[0].row));
+  EXPECT_TRUE(std::holds_alternative<CameraFix>(rows[1].row));
+  EXPECT_FALSE(rows[2].stamped);
+  const auto stats = reader.stats();
+  EXPECT_EQ(stats.wheels, 2u);
+  EXPECT_EQ(stats.fixes, 1u);
+  EXPECT_EQ(stats.bad_total(), 4u);
+  EXPECT_EQ(stats.bad[static_cast<std::size_t>(E::kUnknownStream)], 2u);
+  std::vector<std::pair<E, std::string>> said;
+  while (auto e = reader.take_new_error()) said.push_back(*e);
+  EXPECT_EQ(said,
+            (std::vector<std::pair<E, std::string>>{{E::kUnknownStream, "gyro,1"},
+                                                    {E::kFieldCount, "wheels,2,0,0"},
+                                                    {E::kTimeBackwards, "wheels,0.5,0,0,0"}}));
+}
+
+TEST(StreamLines, AMissingFileIsRefusedByName) {
+  EXPECT_THROW(StreamLineReader("/nonexistent/streams"), IoError);
+}
+
+// A live run over a log's mice with the wheel rows arriving as stream lines
+// (each with its t), recorded with StreamCsvWriter: the recording replays to
+// the live run's steps, and those are the log's own replay's.
+TEST(StreamLines, ALiveRunWithWheelLinesReplaysToTheSameSteps) {
+  const SensorArray array = test::skewed_array();
+  const fs::path dir = test::scratch_dir("stream_lines_live");
+  const std::vector<std::string> names{"a", "b", "c", "d"};
+  test::write_log(test::synthesise(array, test::mixed_motion, 3.0, 0.002), array, names, dir);
+  const RobotConfig config = read_config(dir / "robot.yaml");
+  // Wheels at 50 Hz reading 5 % slow: lines with t, all written before the run.
+  const fs::path lines = dir / "streams.csv";
+  {
+    std::ofstream out(lines);
+    for (int k = 1; k <= 150; ++k) {
+      const double t = 0.02 * k;
+      const Twist2 x = test::mixed_motion(t - 0.01);
+      out << fmt::format("wheels,{},{},{},{}\n", t, 0.95 * x.v.x(), 0.95 * x.v.y(), 0.95 * x.omega);
+    }
+  }
+  OdometryOptions options;
+  options.estimator = EstimatorKind::kConsensus;
+  options.rate = 100.0;
+  struct Step {
+    double t;
+    Pose2 pose;
+  };
+  const auto collect = [](std::vector<Step>& into) {
+    return [&into](const OdometryStep& step) { into.push_back({step.t(), step.pose}); };
+  };
+
+  std::vector<Step> live;
+  const fs::path recorded = dir / "recorded";
+  fs::create_directories(recorded);
+  {
+    MiceReader mice(dir / "mice.csv", config);
+    StreamLineReader streams(lines.string());
+    // All lines read before the run starts.
+    for (int k = 0; k < 200 && streams.stats().wheels < 150; ++k) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    ASSERT_EQ(streams.stats().wheels, 150u);
+    LiveRunSource source(mice, 4, "live");
+    source.add_streams(streams, 1.0);
+    StreamCsvWriter writer(recorded, "test");
+    RunCallbacks callbacks;
+    callbacks.on_step = collect(live);
+    callbacks.on_row = [&](const InputRow& row) {
+      if (const auto* w = std::get_if<WheelRow>(&row)) writer.write(*w);
+    };
+    const OdometryRun run = run_loop(config, "robot.yaml", options, source, "live", callbacks);
+    EXPECT_EQ(run.wheel_rows, 150u);
+    writer.commit();
+  }
+  fs::copy_file(dir / "mice.csv", recorded / "mice.csv");
+  std::vector<Step> replayed;
+  run_odometry(config, "robot.yaml", resolve_log(recorded), options, collect(replayed));
+  ASSERT_EQ(live.size(), replayed.size());
+  ASSERT_GT(live.size(), 250u);
+  for (std::size_t k = 0; k < live.size(); ++k) {
+    ASSERT_EQ(live[k].t, replayed[k].t) << k;
+    ASSERT_EQ(live[k].pose.t, replayed[k].pose.t) << k;
+    ASSERT_EQ(live[k].pose.theta, replayed[k].pose.theta) << k;
+  }
+  // The recording is the lines' rows: 150 of them, the same numbers.
+  WheelsReader wheels(recorded / "wheels.csv");
+  std::size_t n = 0;
+  while (const auto w = wheels.next()) {
+    ++n;
+    const Twist2 x = test::mixed_motion(0.02 * static_cast<double>(n) - 0.01);
+    EXPECT_EQ(w->t, 0.02 * static_cast<double>(n)) << n;
+    EXPECT_EQ(w->twist.omega, 0.95 * x.omega) << n;
+  }
+  EXPECT_EQ(n, 150u);
+}
+
+}  // namespace
+}  // namespace moa::io
