@@ -284,5 +284,67 @@ TEST(Live, BadArgumentsAreRejected) {
   EXPECT_NE(r.err.find("excludes"), std::string::npos) << r.err;
 }
 
+// A replay with the robot's wheel twists on --streams (lines with t, lines
+// stamped at arrival, bad lines): the run goes on past the bad lines, says
+// each kind once, records wheels.csv, and the recording replays with `moa
+// odometry` to byte-identical odometry.
+TEST(Live, StreamsAreFedRecordedAndTheirBadLinesCountedOnce) {
+  Scene scene;
+  const fs::path log = scene.dir / "log";
+  write_log(scene.log, scene.array, kNames, log);
+  const fs::path streams = scene.dir / "streams.csv";
+  {
+    std::ofstream out(streams);
+    out << "# the robot's program\n";
+    for (int k = 1; k <= 59; ++k) {
+      const double t = k / 20.0;
+      const Twist2 x = mixed_motion(t - 0.025);
+      out << "wheels," << t << "," << x.v.x() << "," << x.v.y() << "," << x.omega << "\n";
+      if (k == 10) out << "gyro,0.5,0.1\n";
+      if (k == 20) out << "wheels,1.0,0.1,0\n";
+      if (k == 30) out << "wheels,1.5,0.1,0,zero\n";
+      if (k == 40) out << "gyro,2.0,0.1\n";  // a second of a kind: counted, not shown
+    }
+  }
+  const fs::path record = scene.dir / "rec";
+  const fs::path live = scene.dir / "live.csv";
+  const auto r = run_moa("live --config " + scene.config.string() + " --replay " + log.string() +
+                         " --speed 5 --streams " + streams.string() + " --record " +
+                         record.string() + " --out " + live.string() + " --estimator sekimori");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err,
+            "moa live: warning: --streams: unknown stream (not wheels or camera): 'gyro,0.5,0.1' "
+            "(more such lines are counted, not shown)\n"
+            "moa live: warning: --streams: wrong number of fields (wheels,t,vx,vy,omega or "
+            "camera,t,x,y[,theta[,sx,sy]]): 'wheels,1.0,0.1,0' (more such lines are counted, not "
+            "shown)\n"
+            "moa live: warning: --streams: a field is not a finite number (sx, sy: positive): "
+            "'wheels,1.5,0.1,0,zero' (more such lines are counted, not shown)\n");
+  EXPECT_NE(r.out.find("moa live: streams: 59 wheel rows and 0 camera fixes read, 59 and 0 fed; "
+                       "4 bad lines, 0 out of time order"),
+            std::string::npos)
+      << r.out;
+  ASSERT_TRUE(fs::exists(record / "wheels.csv"));
+  EXPECT_FALSE(fs::exists(record / "camera.csv"));  // no fix came
+  EXPECT_EQ(data_lines(record / "wheels.csv"), 59u);
+  const fs::path replay = scene.dir / "replay.csv";
+  const auto o =
+      run_moa("odometry --config " + (record / "robot.yaml").string() + " --log " +
+              record.string() + " --estimator sekimori --quiet --out " + replay.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_EQ(read_text(replay), read_text(live));
+}
+
+TEST(Live, AStreamsFileThatCannotBeReadIsRefused) {
+  Scene scene;
+  const fs::path log = scene.dir / "log";
+  write_log(scene.log, scene.array, kNames, log);
+  const auto r = run_moa("live --config " + scene.config.string() + " --replay " + log.string() +
+                         " --streams " + (scene.dir / "none").string());
+  EXPECT_EQ(r.exit_code, 3);
+  EXPECT_EQ(r.err, "moa live: error: " + (scene.dir / "none").string() +
+                       ": cannot read (No such file or directory)\n");
+}
+
 }  // namespace
 }  // namespace moa::test

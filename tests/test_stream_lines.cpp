@@ -123,6 +123,23 @@ TEST(StreamLines, TheReaderCountsBadLinesAndSaysEachKindOnceWithItsLine) {
                                                     {E::kTimeBackwards, "wheels,0.5,0,0,0"}}));
 }
 
+TEST(StreamLines, ABadLineIsShownShortAndPrintable) {
+  const fs::path dir = test::scratch_dir("stream_lines_shown");
+  const fs::path file = dir / "streams.csv";
+  std::ofstream(file) << "wheels,1,2,3," << std::string(3000, '4') << "\ngyro\x01,1\n";
+  StreamLineReader reader(file.string());
+  for (int k = 0; k < 200 && reader.stats().bad_total() < 2; ++k) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  reader.stop();
+  std::vector<std::pair<E, std::string>> said;
+  while (auto e = reader.take_new_error()) said.push_back(*e);
+  ASSERT_EQ(said.size(), 2u);
+  EXPECT_EQ(said[0], (std::pair<E, std::string>{E::kUnknownStream, "gyro\\x01,1"}));
+  EXPECT_EQ(said[1].first, E::kTooLong);
+  EXPECT_EQ(said[1].second, "wheels,1,2,3," + std::string(200 - 13, '4'));
+}
+
 TEST(StreamLines, AMissingFileIsRefusedByName) {
   EXPECT_THROW(StreamLineReader("/nonexistent/streams"), IoError);
 }

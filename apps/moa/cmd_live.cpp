@@ -180,6 +180,8 @@ int run_live(LiveArgs args) {
   }
 
   io::LiveSource live = io::open_live_source(spec, config, args.config, hooks);
+  std::unique_ptr<io::StreamLineReader> streams;
+  if (!args.streams.empty()) streams = std::make_unique<io::StreamLineReader>(args.streams);
 
   // Outputs. The odometry file appears whole at the end; the recording is
   // journalled (see MiceWriter::Durability::kJournal).
@@ -250,8 +252,6 @@ int run_live(LiveArgs args) {
     }
   };
   // The robot's streams: bad lines said once per kind, as they come.
-  std::unique_ptr<io::StreamLineReader> streams;
-  if (!args.streams.empty()) streams = std::make_unique<io::StreamLineReader>(args.streams);
   const auto say_bad_lines = [&] {
     if (!streams) return;
     while (const auto bad = streams->take_new_error()) {

@@ -12,6 +12,7 @@
 #include <cstring>
 #include <thread>
 
+#include "moa/formats/csv.hpp"
 #include "moa/formats/error.hpp"
 
 namespace moa::io {
@@ -143,7 +144,8 @@ struct StreamLineReader::Impl {
       }
     }
     const auto e = static_cast<std::size_t>(std::get<StreamLineError>(parsed));
-    if (stats.bad[e]++ == 0) stats.first[e] = std::string(text.substr(0, 200));
+    // Shown to a person: at most 200 bytes, control characters escaped.
+    if (stats.bad[e]++ == 0) stats.first[e] = printable(text.substr(0, 200));
   }
 
   void run() {
@@ -157,7 +159,6 @@ struct StreamLineReader::Impl {
     std::array<std::optional<double>, 2> last_t;
     std::string pending;
     char buffer[4096];
-    bool too_long = false;
     while (!stopping) {
       pollfd p{fd.load(), POLLIN, 0};
       const int ready = ::poll(&p, 1, 100);
@@ -169,17 +170,11 @@ struct StreamLineReader::Impl {
       for (ssize_t k = 0; k < n; ++k) {
         const char c = buffer[k];
         if (c == '\n') {
-          if (too_long) {
-            line(std::string(kMaxStreamLine + 1, '?'), last_t);
-          } else {
-            line(pending, last_t);
-          }
+          line(pending, last_t);
           pending.clear();
-          too_long = false;
         } else if (pending.size() <= kMaxStreamLine) {
+          // One byte past the bound is kept: the line is then too long.
           pending.push_back(c);
-        } else {
-          too_long = true;
         }
       }
     }
