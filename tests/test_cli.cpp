@@ -227,6 +227,14 @@ TEST(Cli, BenchReplayMeasuresBothPassesAndLeavesNoLog) {
     EXPECT_THAT(r.out, HasSubstr(key));
   }
   EXPECT_TRUE(fs::is_empty(dir));
+  // The generated log has mice.csv only: an estimator that needs more is refused by name.
+  const auto wheels =
+      test::run_moa("bench --replay --estimator wheels --duration 2 --dir " + dir.string());
+  EXPECT_EQ(wheels.exit_code, 1);
+  EXPECT_EQ(wheels.err,
+            "moa bench: error: --estimator: 'wheels' is not ls, sekimori or consensus (the log "
+            "has no wheels and no faults)\n");
+  EXPECT_TRUE(fs::is_empty(dir));
 }
 
 TEST(Cli, RankDeficientConfigIsRefused) {

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "moa/formats/config.hpp"
+#include "moa/formats/error.hpp"
 #include "moa/formats/log.hpp"
 #include "moa/formats/stream_csv.hpp"
 #include "moa/runs/live_source.hpp"

@@ -170,6 +170,7 @@ int run_wizard(const WizardArgs& args) {
   };
   hooks.warn = [](const std::string& text) { say("warning: {}\n", text); };
   io::LiveSource live = io::open_live_source(spec, config, args.config, hooks);
+  live.source->start_time();  // waits for the source to start (a serial board's HELLO)
 
   say("moa calibrate --guided --live: {} sensors of {}, from {}\n", config.names.size(),
       args.config, live.origin);

@@ -180,6 +180,8 @@ int run_live(LiveArgs args) {
   }
 
   io::LiveSource live = io::open_live_source(spec, config, args.config, hooks);
+  // Waits for the source to start (a serial board's HELLO): no output exists before.
+  io::LiveRunSource input(*live.source, config.array.size(), live.where);
   std::unique_ptr<io::StreamLineReader> streams;
   if (!args.streams.empty()) streams = std::make_unique<io::StreamLineReader>(args.streams);
 
@@ -275,7 +277,6 @@ int run_live(LiveArgs args) {
     status_shown = true;
   };
 
-  io::LiveRunSource input(*live.source, config.array.size(), live.where);
   if (streams) input.add_streams(*streams, spec.replay.empty() ? 1.0 : spec.replay_options.speed);
   io::OdometryRun run;
   try {

@@ -203,7 +203,8 @@ ReplayBenchResult run_replay_bench(const ReplayBenchOptions& args,
   // The log has mice.csv only: no wheels, no faults.
   if (!estimator || *estimator == EstimatorKind::kOracle || *estimator == EstimatorKind::kWheels) {
     throw std::invalid_argument(
-        fmt::format("estimator '{}' is not ls, sekimori or consensus", args.estimator));
+        fmt::format("'{}' is not ls, sekimori or consensus (the log has no wheels and no faults)",
+                    args.estimator));
   }
   const ScratchDir scratch(args.dir.empty() ? fs::temp_directory_path() : args.dir, args.keep_log);
   const io::RobotConfig config = four_sensors();

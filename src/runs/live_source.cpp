@@ -70,14 +70,18 @@ std::string LiveSource::alive(const RobotConfig& config) const {
 
 LiveRunSource::LiveRunSource(FrameSource& frames, int sensors, std::string where,
                              std::function<bool()> stop)
-    : frames_(frames), sensors_(sensors), where_(std::move(where)), stop_(std::move(stop)) {}
+    : frames_(frames),
+      sensors_(sensors),
+      where_(std::move(where)),
+      stop_(std::move(stop)),
+      t0_(frames.start_time()) {}
 
 void LiveRunSource::add_streams(StreamLineReader& streams, double speed) {
   streams_ = &streams;
   speed_ = speed;
 }
 
-double LiveRunSource::start_time() { return frames_.start_time(); }
+double LiveRunSource::start_time() { return t0_; }
 
 std::string LiveRunSource::where() const {
   return from_streams_ ? fmt::format("{} (streams)", where_) : where_;
@@ -119,7 +123,7 @@ void LiveRunSource::take_streams() {
 const InputRow* LiveRunSource::next() {
   from_streams_ = false;
   if (started_ == 0) {
-    t_last_ = t_ref_ = frames_.start_time();
+    t_last_ = t_ref_ = t0_;
     arrival_ref_ = std::chrono::steady_clock::now();
   }
   if (started_ < sensors_) {

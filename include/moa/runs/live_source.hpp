@@ -77,6 +77,8 @@ class LiveRunSource final : public RunSource {
  public:
   /// `where` names the source in messages; `stop`, polled before each row,
   /// ends the stream when it returns true (empty: the source decides).
+  /// Waits for the source to start (FrameSource::start_time: a serial
+  /// board's HELLO), so that a run's outputs are created after it.
   LiveRunSource(FrameSource& frames, int sensors, std::string where,
                 std::function<bool()> stop = {});
   /// Merges the robot's streams in; `speed`: the source's seconds per
@@ -95,6 +97,7 @@ class LiveRunSource final : public RunSource {
   int sensors_;
   std::string where_;
   std::function<bool()> stop_;
+  double t0_;        ///< s, the source's start time
   int started_ = 0;  ///< zero rows handed out
   InputRow row_;
   bool from_streams_ = false;  ///< row_ came from the streams
