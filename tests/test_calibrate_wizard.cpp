@@ -376,5 +376,20 @@ TEST(GuidedSession, InstructionsSayTheDistanceAndTheDirectionOfTheTurns) {
               HasSubstr("2 whole turns counter-clockwise"));
 }
 
+TEST(GuidedSession, ResultWarningsSayAShiftedCentreAndPushesThatDisagree) {
+  GuidedCalibration cal;
+  cal.centroid_shift = {0.0025, -0.002};  // 3.2 mm: over the 3 mm bound
+  cal.push_misfit = {0.004, 0.006};       // the 0.5 % bound of a 1 m push is 5 mm
+  EXPECT_EQ(guided_result_warnings(cal, 1.0, {"a", "b"}),
+            (std::vector<std::string>{
+                "the sensors' mean position moved by (2.5, -2.0) mm from nominal: if the spin was "
+                "not about the robot's centre, every position is shifted by that offset",
+                "b: the two pushes disagree with one sensor frame by 6.0 mm: were they "
+                "perpendicular and without turning?"}));
+  // Within the bounds (2 m pushes: 10 mm), nothing to say.
+  cal.centroid_shift = {0.002, 0.002};  // 2.8 mm
+  EXPECT_TRUE(guided_result_warnings(cal, 2.0, {"a", "b"}).empty());
+}
+
 }  // namespace
 }  // namespace moa

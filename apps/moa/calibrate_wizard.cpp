@@ -266,17 +266,8 @@ int run_wizard(const WizardArgs& args) {
       "point the robot was spun about. Before -> after +- 1-sigma:\n",
       limits.distance, std::abs(limits.turns));
   print_mounts(config, cal);
-  if (cal.centroid_shift.norm() > 0.003) {
-    say("warning: the sensors' mean position moved by ({:.1f}, {:.1f}) mm from nominal: if the "
-        "spin was not about the robot's centre, every position is shifted by that offset\n",
-        cal.centroid_shift.x() * 1e3, cal.centroid_shift.y() * 1e3);
-  }
-  for (std::size_t i = 0; i < cal.push_misfit.size(); ++i) {
-    if (cal.push_misfit[i] > 0.005 * limits.distance) {
-      say("warning: {}: the two pushes disagree with one sensor frame by {:.1f} mm: were they "
-          "perpendicular and without turning? Redo the calibration if unsure\n",
-          config.names[i], cal.push_misfit[i] * 1e3);
-    }
+  for (const auto& w : guided_result_warnings(cal, limits.distance, config.names)) {
+    say("warning: {}\n", w);
   }
   say("calibrated config written to {}\n", args.out);
   return 0;

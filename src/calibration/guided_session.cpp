@@ -30,6 +30,26 @@ std::string instructions(GuidedStep step, const MotionLimits& l) {
   return {};
 }
 
+std::vector<std::string> guided_result_warnings(const GuidedCalibration& cal, double distance,
+                                                const std::vector<std::string>& names) {
+  std::vector<std::string> out;
+  if (cal.centroid_shift.norm() > 0.003) {
+    out.push_back(fmt::format(
+        "the sensors' mean position moved by ({:.1f}, {:.1f}) mm from nominal: if the spin was not "
+        "about the robot's centre, every position is shifted by that offset",
+        cal.centroid_shift.x() * 1e3, cal.centroid_shift.y() * 1e3));
+  }
+  for (std::size_t i = 0; i < cal.push_misfit.size() && i < names.size(); ++i) {
+    if (cal.push_misfit[i] > 0.005 * distance) {
+      out.push_back(
+          fmt::format("{}: the two pushes disagree with one sensor frame by {:.1f} mm: were they "
+                      "perpendicular and without turning?",
+                      names[i], cal.push_misfit[i] * 1e3));
+    }
+  }
+  return out;
+}
+
 OdometryOptions guided_session_odometry_options() {
   OdometryOptions options;
   options.estimator = EstimatorKind::kConsensus;

@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "moa/calibration/guided_session.hpp"
 #include "moa/calibration/reference.hpp"
 #include "moa/core/odometry.hpp"
 #include "moa/formats/error.hpp"
@@ -307,8 +308,8 @@ void model_check(CalibrationSummary& r, const ExactModelCheck& check, const Robo
   }
   const std::string reason = fmt::format("{}", fmt::join(why, "; "));
   if (force) {
-    r.warnings.push_back(fmt::format(
-        "the calibrated model does not explain the data, kept as forced: {}", reason));
+    r.warnings.push_back(
+        fmt::format("the calibrated model does not explain the data, kept as forced: {}", reason));
     return;
   }
   throw OptionError(fmt::format(
@@ -450,25 +451,13 @@ void run_guided(CalibrationSummary& r, const RobotConfig& config, const std::str
   if ((in.turns < 0.0) != cal.spin_clockwise) {
     r.warnings.push_back(
         fmt::format("the turns given ({}) say {}, the counts say {}: used as the counts say",
-                    in.turns,
-                    in.turns < 0.0 ? "clockwise" : "counter-clockwise",
+                    in.turns, in.turns < 0.0 ? "clockwise" : "counter-clockwise",
                     cal.spin_clockwise ? "clockwise" : "counter-clockwise"));
   }
   if (cal.push_x_reversed) r.warnings.push_back("the push along x went towards -x: used as such");
   if (cal.push_y_reversed) r.warnings.push_back("the push along y went towards -y: used as such");
-  if (cal.centroid_shift.norm() > 0.003) {
-    r.warnings.push_back(fmt::format(
-        "the sensors' mean position moved by ({:.1f}, {:.1f}) mm from nominal: if the spin was not "
-        "about the robot's centre, every position is shifted by that offset",
-        cal.centroid_shift.x() * 1e3, cal.centroid_shift.y() * 1e3));
-  }
-  for (std::size_t i = 0; i < cal.push_misfit.size(); ++i) {
-    if (cal.push_misfit[i] > 0.005 * in.distance) {
-      r.warnings.push_back(
-          fmt::format("{}: the two pushes disagree with one sensor frame by {:.1f} mm: were they "
-                      "perpendicular and without turning?",
-                      config.names[i], cal.push_misfit[i] * 1e3));
-    }
+  for (auto& w : guided_result_warnings(cal, in.distance, config.names)) {
+    r.warnings.push_back(std::move(w));
   }
   r.calibrated.array = cal.calibrated;
   r.result = cal;
@@ -534,8 +523,7 @@ void check_calibration_options(CalibrationMethod method, const fs::path& log,
   if (method == CalibrationMethod::kGuided) {
     refuse(!log.empty(), "log",
            "guided calibration takes {push_x}, {push_y} and {spin} recordings");
-    need(!o.push_x.empty(),
-         "{push_x} DIR (a push of {distance} metres along the robot's x axis)");
+    need(!o.push_x.empty(), "{push_x} DIR (a push of {distance} metres along the robot's x axis)");
     need(!o.spin.empty(), "{spin} DIR ({turns} whole turns about the robot's centre)");
     need(o.distance.has_value(), "{distance} METRES (the length of each push)");
     need(o.turns.has_value(), "{turns} K (whole turns of the spin)");
@@ -582,7 +570,7 @@ CalibrationSummary calibrate_log(const RobotConfig& config, const std::string& c
     // sensor a config can hold: refused, --force or not.
     const MountVector p = mount_parameters(s.calibrated);
     if (!p.allFinite() || !(s.calibrated.scale.minCoeff() > 0.0)) {
-        throw OptionError(fmt::format(
+      throw OptionError(fmt::format(
           "{}: {{method}} {}: refused, sensor '{}' calibrated to position ({:.4g}, {:.4g}) m, yaw "
           "{:.4g} rad, scale ({:.4g}, {:.4g}): not a sensor mount (a scale must be positive); the "
           "data do not fit the model. Nothing written",

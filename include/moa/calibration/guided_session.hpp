@@ -26,6 +26,17 @@ namespace moa {
 /// how many turns, in which direction (from `limits`).
 std::string instructions(GuidedStep step, const MotionLimits& limits);
 
+/// What a guided calibration's result warns of, one sentence each: the
+/// sensors' mean position moved more than 3 mm from nominal (the spin was
+/// perhaps not about the robot's centre, which shifts every position); a
+/// sensor's two pushes disagree with one sensor frame by more than 0.5 % of
+/// `distance` (m; were they perpendicular, without turning?). `names`: the
+/// sensors' names, in the calibration's order. The offline method (`moa
+/// calibrate --method guided`) and the live session say the same.
+std::vector<std::string> guided_result_warnings(const GuidedCalibration& calibration,
+                                                double distance,
+                                                const std::vector<std::string>& names);
+
 /// The odometry options the session's epochs are to come from: consensus
 /// (a sensor the nominal config has badly wrong, mirrored say, is left out
 /// of the estimate the checks judge), no wheels, no limit on silences, and no
