@@ -20,12 +20,11 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
-#include <deque>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -56,8 +55,9 @@ const char* describe(StreamLineError error);
 /// Longest line taken (bytes, without the newline); longer ones are bad.
 inline constexpr std::size_t kMaxStreamLine = 1024;
 
-/// Parses one line (without its newline). nullopt for a blank or comment
-/// line; the error for a bad one. Times are not checked for order here.
+/// Parses one line (without its newline): the row; std::monostate for a
+/// blank or comment line; the error for a bad one. Times are not checked for
+/// order here (StreamLineReader does, per stream).
 std::variant<std::monostate, StreamRow, StreamLineError> parse_stream_line(std::string_view line);
 
 /// Reads lines from a file descriptor (standard input, a FIFO, a file) on a
