@@ -112,6 +112,22 @@ std::optional<ConsensusEstimator::Candidate> ConsensusEstimator::search(SensorMa
   return std::nullopt;
 }
 
+bool ConsensusEstimator::common_mode(const Candidate& best, const References& refs,
+                                     double t) const {
+  if (!options_.common_mode || !options_.motion_prior || refs.size == 0) return false;
+  // A minority was judged against each reference already (consider()).
+  if (2 * count_sensors(best.mask) <= n_) return false;
+  if (t - last_mice_t_ > static_cast<double>(options_.max_bridge)) return false;
+  for (int k = 0; k < refs.size; ++k) {
+    const Reference& ref = refs.r[static_cast<std::size_t>(k)];
+    const Vec3 d = best.fit.twist.vector() - ref.x;
+    if (d.dot((best.fit.covariance + ref.covariance).inverse() * d) <= wheel_threshold_) {
+      return false;
+    }
+  }
+  return true;
+}
+
 std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sample,
                                                            const std::optional<Twist2>& wheels) {
   if (!(std::isfinite(sample.dt) && sample.dt > 0.0) || sample.size != n_) return std::nullopt;
@@ -142,7 +158,9 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
   const SensorMask screened =
       health_.screen(solver_, sample, fallback_.last_twist(), candidates, out.excluded);
   const auto best = search(screened, refs);
-  if (best) {
+  const bool common = best && common_mode(*best, refs, sample.t);
+  if (best && !common) {
+    last_mice_t_ = sample.t;
     out.source = Source::kMice;
     out.estimate.twist = best->fit.twist;
     out.estimate.covariance = best->fit.covariance;
@@ -159,7 +177,10 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
     return out;
   }
   for (int i = 0; i < n_; ++i) {
-    if (contains(screened, i)) out.excluded[static_cast<std::size_t>(i)] = Exclusion::kFallback;
+    if (contains(screened, i)) {
+      out.excluded[static_cast<std::size_t>(i)] =
+          common ? Exclusion::kCommonMode : Exclusion::kFallback;
+    }
   }
   fallback_.apply(out, wheels, options_.wheels, options_.hold, sample.t);
   if (out.source == Source::kWheels) {

@@ -93,6 +93,7 @@ const char* OdometryOptions::validate() const {
   if (const char* e = self_calibration.validate(); *e) return e;
   if (!(std::isfinite(consensus.alpha) && consensus.alpha > 0.0 && consensus.alpha < 0.5))
     return "consensus.alpha: must be in (0, 0.5)";
+  if (!positive_finite(consensus.max_bridge)) return "consensus.max_bridge: must be > 0 (s)";
   const NoiseModelOptions& n = consensus.noise;
   if (!(std::isfinite(n.relative) && n.relative >= 0.0))
     return "consensus.noise.relative: must be finite and not negative";

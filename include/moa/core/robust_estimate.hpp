@@ -33,6 +33,7 @@ enum class Exclusion : std::uint8_t {
   kDrift,         ///< health: its residual against the others drifts (scale or yaw)
   kProbation,     ///< health: was excluded; kept out until it behaves for a while
   kCalibration,   ///< self-calibration: its estimate ran away from 1 (self_calibration.hpp)
+  kCommonMode,    ///< the whole array at once contradicts the motion prior and the wheels
 };
 const char* describe(Exclusion exclusion);
 
