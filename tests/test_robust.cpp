@@ -277,10 +277,11 @@ TEST(Consensus, CommonModeDropoutIsBridgedByTheWheelsAndReleased) {
   auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a));
   const Twist2 wheels{{0.26, -0.1}, 0.82};
   double t = 1.0;
-  for (int k = 0; k < 10; ++k, t += kDt) {
+  for (int k = 0; k < 5; ++k, t += kDt) {
     ArraySample s = clean_sample(a, kTruth);
     s.t = t;
-    ASSERT_EQ(est.estimate(s, wheels)->source, Source::kMice);
+    const auto e = est.estimate(s, wheels);
+    ASSERT_EQ(e->source, Source::kMice) << "epoch " << k << " " << describe(e->excluded[0]);
   }
   for (int k = 0; k < 30; ++k, t += kDt) {
     const auto e = est.estimate(dropout_sample(a, t), wheels);

@@ -91,6 +91,12 @@ const char* OdometryOptions::validate() const {
   if (const char* e = consensus.limits.validate(); *e) return e;
   if (const char* e = consensus.health.validate(); *e) return e;
   if (const char* e = self_calibration.validate(); *e) return e;
+  if (self_calibration.enabled &&
+      (estimator == EstimatorKind::kLs || estimator == EstimatorKind::kSekimori)) {
+    return "self_calibration: needs the consensus estimator (ls and sekimori use every sensor "
+           "as their papers define them, so a sensor whose calibration runs away could not be "
+           "left out)";
+  }
   if (!(std::isfinite(consensus.alpha) && consensus.alpha > 0.0 && consensus.alpha < 0.5))
     return "consensus.alpha: must be in (0, 0.5)";
   if (!positive_finite(consensus.max_bridge)) return "consensus.max_bridge: must be > 0 (s)";
