@@ -95,11 +95,11 @@ Result robust_faults(const Options& options) {
       "Each simulated fault alone on the Table 3 path, four HDNS-2051; mean over {} runs\n"
       "(seeds {}..{}) of the maximum translation (mm) and heading (deg) error.\n\n",
       runs, options.seed, last);
-  text += fmt::format("{:<18}", "fault");
+  text += fmt::format("{:<19}", "fault");
   for (const auto& m : kMethods) text += fmt::format(" | {:>18}", m.column);
   text += "\n";
   for (std::size_t c = 0; c < kCaseCount; ++c) {
-    text += fmt::format("{:<18}", kCases[c].name);
+    text += fmt::format("{:<19}", kCases[c].name);
     for (std::size_t m = 0; m < kMethodCount; ++m) {
       const MeanError e = mean_error(records[c][m]);
       text += fmt::format(" | {:>8.1f} {:>5.2f} deg", 1e3 * e.max_translation.mean,
