@@ -288,6 +288,9 @@ TEST(Consensus, CommonModeDropoutIsBridgedByTheWheelsAndReleased) {
     ASSERT_TRUE(e.has_value());
     EXPECT_EQ(e->source, Source::kWheels) << "epoch " << k;
     EXPECT_EQ(e->estimate.used, 0u);
+    // The status record: both references over their gate.
+    EXPECT_GT(e->tests.wheels, 1.0);
+    EXPECT_GT(e->tests.prior, 1.0);
     for (int i = 0; i < 4; ++i)
       EXPECT_EQ(e->excluded[static_cast<std::size_t>(i)], Exclusion::kCommonMode);
   }
@@ -296,6 +299,30 @@ TEST(Consensus, CommonModeDropoutIsBridgedByTheWheelsAndReleased) {
   const auto e = est.estimate(back, wheels);
   EXPECT_EQ(e->source, Source::kMice);
   EXPECT_EQ(e->estimate.used, 0b1111u);
+}
+
+TEST(Consensus, TestRatiosAreTheWhitenedResidualsOverTheirGates) {
+  // One sensor off by 0.05 m/s (then 0.1 m/s) on its x axis, the others
+  // exact: the others fit the twist exactly, so their ratios are zero, and
+  // the bad one's is e^T S^-1 e / q(1 - 1e-3, 2), above its gate and
+  // quadratic in e (doubling e about quadruples it; S grows a little with
+  // the speed the sensor reports).
+  const SensorArray a = sekimori_array();
+  std::array<double, 2> ratio{};
+  for (int j = 0; j < 2; ++j) {
+    auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a));
+    ArraySample s = clean_sample(a, kTruth);
+    corrupt(a, s, 2, {0.05 * (j + 1), 0.0});
+    const auto e = est.estimate(s, kTruth);
+    ASSERT_EQ(e->excluded[2], Exclusion::kInconsistent);
+    ratio[static_cast<std::size_t>(j)] = e->tests.sensor[2];
+    EXPECT_GT(e->tests.sensor[2], 1.0);
+    for (int i : {0, 1, 3}) EXPECT_LT(e->tests.sensor[static_cast<std::size_t>(i)], 1e-6);
+    EXPECT_LE(e->tests.wheels, 1.0);
+    EXPECT_TRUE(std::isnan(e->tests.prior));  // no prior before the first trusted twist
+  }
+  // Quadratic in the error, but S grows with the reported speed a little.
+  EXPECT_NEAR(ratio[1] / ratio[0], 4.0, 0.5);
 }
 
 TEST(Consensus, CommonModeNeedsEveryReferenceToDisagree) {

@@ -422,6 +422,8 @@ bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& 
   out.estimate.twist = e.estimate.twist;
   out.estimate.covariance = e.estimate.covariance;
   out.source = e.source;
+  out.tests.wheels = e.tests.wheels;
+  out.tests.prior = e.tests.prior;
   for (int i = 0; i < n_; ++i) out.excluded[static_cast<std::size_t>(i)] = Exclusion::kUnselected;
   for (int k = 0; k < m_; ++k) {
     const int i = selected_[static_cast<std::size_t>(k)];
@@ -429,6 +431,7 @@ bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& 
     if (contains(e.estimate.used, k)) out.estimate.used |= SensorMask{1} << i;
     out.excluded[u] = e.excluded[v];
     out.noise_flags[u] = e.noise_flags[v];
+    out.tests.sensor[u] = e.tests.sensor[v];
   }
   return true;
 }

@@ -103,6 +103,7 @@ class ConsensusEstimator {
   struct References {
     std::array<Reference, 2> r;
     int size = 0;
+    int wheels = -1;  ///< index of the wheels' reference, -1 without wheels
     /// The informations are computed: only minority subsets need them.
     bool informed = false;
   };
@@ -111,8 +112,13 @@ class ConsensusEstimator {
   /// ranking among them) is not computed.
   bool consider(SensorMask mask, References& refs, bool alone,
                 std::optional<Candidate>& best) const;
+  /// The candidate's twist against each reference: tests.wheels, tests.prior.
+  void test_references(const Candidate& best, const References& refs, SourceTests& tests) const;
   /// Step 3: every reference rejects the majority candidate's twist.
-  bool common_mode(const Candidate& best, const References& refs, double t) const;
+  bool common_mode(const Candidate& best, const References& refs, const SourceTests& tests,
+                   double t) const;
+  /// Each sensor's residual against the epoch's twist x: tests.sensor.
+  void test_sensors(const Twist2& x, SourceTests& tests) const;
 
   int n_;
   ConsensusOptions options_;
