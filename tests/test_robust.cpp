@@ -262,6 +262,142 @@ TEST(Consensus, PairWithinTheRobotsLimitsPassesThePrior) {
   EXPECT_TRUE(e->estimate.twist.vector().isApprox(faster.vector(), 1e-6));
 }
 
+/// Every sensor reads zero at time t (the array lost the floor together).
+ArraySample dropout_sample(const SensorArray& a, double t) {
+  ArraySample s = clean_sample(a, Twist2{});
+  s.t = t;
+  return s;
+}
+
+TEST(Consensus, CommonModeDropoutIsBridgedByTheWheelsAndReleased) {
+  // All four sensors read zero for 0.3 s while the robot turns and the
+  // wheels go on seeing the motion: four sensors that agree pass every test
+  // among themselves, only the references can reject them.
+  const SensorArray a = sekimori_array();
+  auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a));
+  const Twist2 wheels{{0.26, -0.1}, 0.82};
+  double t = 1.0;
+  for (int k = 0; k < 5; ++k, t += kDt) {
+    ArraySample s = clean_sample(a, kTruth);
+    s.t = t;
+    const auto e = est.estimate(s, wheels);
+    ASSERT_EQ(e->source, Source::kMice) << "epoch " << k << " " << describe(e->excluded[0]);
+  }
+  for (int k = 0; k < 30; ++k, t += kDt) {
+    const auto e = est.estimate(dropout_sample(a, t), wheels);
+    ASSERT_TRUE(e.has_value());
+    EXPECT_EQ(e->source, Source::kWheels) << "epoch " << k;
+    EXPECT_EQ(e->estimate.used, 0u);
+    // The status record: both references over their gate.
+    EXPECT_GT(e->tests.wheels, 1.0);
+    EXPECT_GT(e->tests.prior, 1.0);
+    for (int i = 0; i < 4; ++i)
+      EXPECT_EQ(e->excluded[static_cast<std::size_t>(i)], Exclusion::kCommonMode);
+  }
+  ArraySample back = clean_sample(a, kTruth);
+  back.t = t;
+  const auto e = est.estimate(back, wheels);
+  EXPECT_EQ(e->source, Source::kMice);
+  EXPECT_EQ(e->estimate.used, 0b1111u);
+}
+
+TEST(Consensus, TestRatiosAreTheWhitenedResidualsOverTheirGates) {
+  // One sensor off by 0.05 m/s (then 0.1 m/s) on its x axis, the others
+  // exact: the others fit the twist exactly, so their ratios are zero, and
+  // the bad one's is e^T S^-1 e / q(1 - 1e-3, 2), above its gate and
+  // quadratic in e (doubling e about quadruples it; S grows a little with
+  // the speed the sensor reports).
+  const SensorArray a = sekimori_array();
+  std::array<double, 2> ratio{};
+  for (int j = 0; j < 2; ++j) {
+    auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a));
+    ArraySample s = clean_sample(a, kTruth);
+    corrupt(a, s, 2, {0.05 * (j + 1), 0.0});
+    const auto e = est.estimate(s, kTruth);
+    ASSERT_EQ(e->excluded[2], Exclusion::kInconsistent);
+    ratio[static_cast<std::size_t>(j)] = e->tests.sensor[2];
+    EXPECT_GT(e->tests.sensor[2], 1.0);
+    for (int i : {0, 1, 3}) EXPECT_LT(e->tests.sensor[static_cast<std::size_t>(i)], 1e-6);
+    EXPECT_LE(e->tests.wheels, 1.0);
+    EXPECT_TRUE(std::isnan(e->tests.prior));  // no prior before the first trusted twist
+  }
+  // Quadratic in the error, but S grows with the reported speed a little.
+  EXPECT_NEAR(ratio[1] / ratio[0], 4.0, 0.5);
+}
+
+TEST(Consensus, CommonModeNeedsEveryReferenceToDisagree) {
+  // A hard stop the wheels confirm is the robot's, not the array's: the
+  // prior alone rejects it (0.27 m/s and 0.8 rad/s in 10 ms), the wheels
+  // accept it, so the array is used. And with the test off the standstill
+  // is taken whatever the wheels say.
+  const SensorArray a = sekimori_array();
+  {
+    auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a));
+    ASSERT_EQ(est.estimate(clean_sample(a, kTruth), kTruth)->source, Source::kMice);
+    const auto e = est.estimate(dropout_sample(a, 1.0 + kDt), Twist2{});
+    EXPECT_EQ(e->source, Source::kMice);
+    EXPECT_EQ(e->estimate.used, 0b1111u);
+  }
+  {
+    ConsensusOptions o;
+    o.common_mode = false;
+    auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a, o));
+    ASSERT_EQ(est.estimate(clean_sample(a, kTruth), kTruth)->source, Source::kMice);
+    EXPECT_EQ(est.estimate(dropout_sample(a, 1.0 + kDt), kTruth)->source, Source::kMice);
+  }
+}
+
+TEST(Consensus, CommonModeWithoutWheelsHoldsOnlyWhileThePriorIsTight) {
+  // Without wheels the prior is the only reference, and it widens by the
+  // acceleration limits while the estimator holds: the standstill is
+  // rejected while |0 - x|^2 over the prior's growth (a e, a e, alpha e),
+  // the trusted twist's covariance neglected, exceeds q(1 - 1e-3, 3); it
+  // is accepted once that falls below the quantile.
+  const SensorArray a = sekimori_array();
+  auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a));
+  const RobotLimits lim;
+  const double q = chi2_quantile(1.0 - 1e-3, 3);
+  ArraySample first = clean_sample(a, kTruth);
+  ASSERT_EQ(est.estimate(first)->source, Source::kMice);
+  int held = 0;
+  int expected = 0;
+  for (int k = 1; k <= 20; ++k) {
+    const double e = k * kDt;
+    const double m = kTruth.v.squaredNorm() / std::pow(lim.accel * e, 2) +
+                     std::pow(kTruth.omega / (lim.angular_accel * e), 2);
+    if (m > q) ++expected;
+    const auto r = est.estimate(dropout_sample(a, first.t + e));
+    if (r->source == Source::kHold) {
+      ++held;
+      EXPECT_EQ(r->excluded[0], Exclusion::kCommonMode);
+    } else {
+      break;
+    }
+  }
+  EXPECT_GE(held, 1);
+  EXPECT_NEAR(held, expected, 1);
+}
+
+TEST(Consensus, CommonModeBridgeEndsAfterMaxBridge) {
+  // Wheels spinning against a wall look like an array over a bump: the
+  // bridge is not latched beyond max_bridge.
+  const SensorArray a = sekimori_array();
+  ConsensusOptions o;
+  o.max_bridge = 0.2;
+  auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a, o));
+  ArraySample first = clean_sample(a, kTruth);
+  ASSERT_EQ(est.estimate(first, kTruth)->source, Source::kMice);
+  int bridged = 0;
+  for (int k = 1; k <= 40; ++k) {
+    if (est.estimate(dropout_sample(a, first.t + k * kDt), kTruth)->source == Source::kWheels) {
+      ++bridged;
+    }
+  }
+  // Epochs up to 0.2 s after the last trusted one (rounding of t aside).
+  EXPECT_GE(bridged, 19);
+  EXPECT_LE(bridged, 20);
+}
+
 TEST(Consensus, MinorityIsJudgedWithTheWheelCovarianceAlone) {
   // Wheels 0.04 m/s off the truth (inside their sd of 0.047 m/s, 0.13
   // rad/s), the faulty pair reads 0.5 x: (-0.165, 0.05, -0.4) from the

@@ -208,6 +208,25 @@ TEST(SelfCalibrationCli, WarnsWhereItCannotLearn) {
   EXPECT_THAT(live.err, HasSubstr("moa live: warning: --self-calibrate with 2 sensor(s)"));
 }
 
+// ls and sekimori use every sensor as their papers define them: a sensor
+// whose calibration runs away could not be left out, so self-calibration
+// with them is refused (a sensor built at 1020 cpi and configured at 800 cost
+// 204 mm there against 2.9 mm with the consensus), and nothing is written.
+TEST(SelfCalibrationCli, RefusedWithEstimatorsThatUseEverySensor) {
+  const fs::path dir = test::scratch_dir("self-calibration-refused");
+  const std::string log = (dir / "log").string();
+  ASSERT_EQ(test::run_moa("simulate --scenario sekimori-a --seed 101 --out " + log).exit_code, 0);
+  for (const std::string estimator : {"ls", "sekimori"}) {
+    const fs::path out = dir / (estimator + ".csv");
+    const auto r =
+        test::run_moa("odometry --config " + log + "/robot.yaml --log " + log + " --out " +
+                      out.string() + " --self-calibrate --estimator " + estimator);
+    EXPECT_EQ(r.exit_code, 1) << estimator;
+    EXPECT_THAT(r.err, HasSubstr("self_calibration: needs the consensus estimator")) << r.err;
+    EXPECT_FALSE(fs::exists(out)) << estimator;
+  }
+}
+
 // Without --self-calibrate nothing is ever excluded as `calibration`.
 TEST(SelfCalibrationCli, NoCalibrationReasonWithoutSelfCalibrate) {
   const RunawayRun r = run_misconfigured(built_at_cpi(1020), 101, false);

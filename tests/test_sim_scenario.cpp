@@ -334,7 +334,8 @@ TEST(SimScenario, UnknownNameListsTheBuiltins) {
     EXPECT_EQ(
         std::string(e.what()),
         "scenario 'sekimori-c': not a built-in scenario (calibration, cruise, differential, "
-        "faults-cruise, faults-dirty, faults-drift, faults-floor, faults-liftoff, faults-spikes, "
+        "faults-bump, faults-cruise, faults-dirty, faults-drift, faults-floor, faults-liftoff, "
+        "faults-spikes, "
         "faults-stuck, faults-zero, guided, kimlee, sekimori-a, sekimori-b, selfcal-ramp, "
         "selfcal-step) and no such file");
   }

@@ -112,6 +112,36 @@ std::optional<ConsensusEstimator::Candidate> ConsensusEstimator::search(SensorMa
   return std::nullopt;
 }
 
+void ConsensusEstimator::test_references(const Candidate& best, const References& refs,
+                                         SourceTests& tests) const {
+  for (int k = 0; k < refs.size; ++k) {
+    const Reference& ref = refs.r[static_cast<std::size_t>(k)];
+    const Vec3 d = best.fit.twist.vector() - ref.x;
+    const real ratio =
+        d.dot((best.fit.covariance + ref.covariance).inverse() * d) / wheel_threshold_;
+    (k == refs.wheels ? tests.wheels : tests.prior) = ratio;
+  }
+}
+
+bool ConsensusEstimator::common_mode(const Candidate& best, const References& refs,
+                                     const SourceTests& tests, double t) const {
+  if (!options_.common_mode || !options_.motion_prior || refs.size == 0) return false;
+  // A minority was judged against each reference already (consider()).
+  if (2 * count_sensors(best.mask) <= n_) return false;
+  if (t - last_mice_t_ > static_cast<double>(options_.max_bridge)) return false;
+  // Every reference there is rejects (a NaN ratio is a reference not there).
+  return !(tests.wheels <= 1.0) && !(tests.prior <= 1.0);
+}
+
+void ConsensusEstimator::test_sensors(const Twist2& x, SourceTests& tests) const {
+  const real gate = threshold_[2];
+  for (int i = 0; i < n_; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    const Vec2 r = measurements_.u[k] - solver_.jacobian(i) * x.vector();
+    tests.sensor[k] = r.dot(measurements_.info[k] * r) / gate;
+  }
+}
+
 std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sample,
                                                            const std::optional<Twist2>& wheels) {
   if (!(std::isfinite(sample.dt) && sample.dt > 0.0) || sample.size != n_) return std::nullopt;
@@ -135,14 +165,20 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
     r.x = x.vector();
     r.covariance = covariance;
   };
-  if (wheels) add(*wheels, options_.wheels.covariance(*wheels));
+  if (wheels) {
+    refs.wheels = refs.size;
+    add(*wheels, options_.wheels.covariance(*wheels));
+  }
   if (options_.motion_prior && prior_.valid()) {
     add(prior_.twist(), prior_.covariance(sample.t, sample.dt));
   }
   const SensorMask screened =
       health_.screen(solver_, sample, fallback_.last_twist(), candidates, out.excluded);
   const auto best = search(screened, refs);
-  if (best) {
+  if (best) test_references(*best, refs, out.tests);
+  const bool common = best && common_mode(*best, refs, out.tests, sample.t);
+  if (best && !common) {
+    last_mice_t_ = sample.t;
     out.source = Source::kMice;
     out.estimate.twist = best->fit.twist;
     out.estimate.covariance = best->fit.covariance;
@@ -156,15 +192,20 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
     prior_.trust(out.estimate.twist, out.estimate.covariance, sample.t);
     health_.observe(solver_, sample, measurements_, out.estimate.twist, best->mask, candidates,
                     out.noise_flags);
+    test_sensors(out.estimate.twist, out.tests);
     return out;
   }
   for (int i = 0; i < n_; ++i) {
-    if (contains(screened, i)) out.excluded[static_cast<std::size_t>(i)] = Exclusion::kFallback;
+    if (contains(screened, i)) {
+      out.excluded[static_cast<std::size_t>(i)] =
+          common ? Exclusion::kCommonMode : Exclusion::kFallback;
+    }
   }
   fallback_.apply(out, wheels, options_.wheels, options_.hold, sample.t);
   if (out.source == Source::kWheels) {
     prior_.trust(out.estimate.twist, out.estimate.covariance, sample.t);
   }
+  test_sensors(out.estimate.twist, out.tests);
   return out;
 }
 

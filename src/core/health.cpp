@@ -80,6 +80,16 @@ SensorMask HealthMonitor::screen(const SubsetSolver& solver, const ArraySample& 
       largest_step = std::max(largest_step, step(s));
     }
   }
+  // Zero is a fault of one sensor among others that move: when every
+  // candidate reads zero together the array either stands still or lost the
+  // floor as a whole, which is the consensus's common-mode test to judge
+  // against the references; the zero runs then neither grow nor restart.
+  bool all_zero = true;
+  for (int i = 0; i < n_; ++i) {
+    if (contains(candidates, i) && !sample.counts[static_cast<std::size_t>(i)].isZero()) {
+      all_zero = false;
+    }
+  }
   for (int i = 0; i < n_; ++i) {
     const auto k = static_cast<std::size_t>(i);
     SensorState& s = state_[k];
@@ -104,11 +114,7 @@ SensorMask HealthMonitor::screen(const SubsetSolver& solver, const ArraySample& 
                          (was_frozen || (p - s.run_start).norm() >= options_.frozen_change));
     // Zero while the point should move.
     const real speed = p.norm();
-    if (c.isZero() && speed >= options_.zero_speed) {
-      ++s.zeros;
-    } else {
-      s.zeros = 0;
-    }
+    if (!all_zero) s.zeros = c.isZero() && speed >= options_.zero_speed ? s.zeros + 1 : 0;
     if (!contains(candidates, i)) continue;  // lifted: nothing to judge
     const real d = drift(s), f = step(s);
     Exclusion bad = Exclusion::kNone;

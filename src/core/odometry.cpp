@@ -91,8 +91,15 @@ const char* OdometryOptions::validate() const {
   if (const char* e = consensus.limits.validate(); *e) return e;
   if (const char* e = consensus.health.validate(); *e) return e;
   if (const char* e = self_calibration.validate(); *e) return e;
+  if (self_calibration.enabled &&
+      (estimator == EstimatorKind::kLs || estimator == EstimatorKind::kSekimori)) {
+    return "self_calibration: needs the consensus estimator (ls and sekimori use every sensor "
+           "as their papers define them, so a sensor whose calibration runs away could not be "
+           "left out)";
+  }
   if (!(std::isfinite(consensus.alpha) && consensus.alpha > 0.0 && consensus.alpha < 0.5))
     return "consensus.alpha: must be in (0, 0.5)";
+  if (!positive_finite(consensus.max_bridge)) return "consensus.max_bridge: must be > 0 (s)";
   const NoiseModelOptions& n = consensus.noise;
   if (!(std::isfinite(n.relative) && n.relative >= 0.0))
     return "consensus.noise.relative: must be finite and not negative";
@@ -415,6 +422,8 @@ bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& 
   out.estimate.twist = e.estimate.twist;
   out.estimate.covariance = e.estimate.covariance;
   out.source = e.source;
+  out.tests.wheels = e.tests.wheels;
+  out.tests.prior = e.tests.prior;
   for (int i = 0; i < n_; ++i) out.excluded[static_cast<std::size_t>(i)] = Exclusion::kUnselected;
   for (int k = 0; k < m_; ++k) {
     const int i = selected_[static_cast<std::size_t>(k)];
@@ -422,6 +431,7 @@ bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& 
     if (contains(e.estimate.used, k)) out.estimate.used |= SensorMask{1} << i;
     out.excluded[u] = e.excluded[v];
     out.noise_flags[u] = e.noise_flags[v];
+    out.tests.sensor[u] = e.tests.sensor[v];
   }
   return true;
 }

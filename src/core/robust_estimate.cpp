@@ -40,6 +40,8 @@ const char* describe(Exclusion exclusion) {
       return "probation";
     case Exclusion::kCalibration:
       return "calibration";
+    case Exclusion::kCommonMode:
+      return "common-mode";
   }
   return "?";
 }

@@ -2,7 +2,8 @@
 // at a time (built-in scenarios faults-*: a 2 s window on each sensor in
 // turn along the Table 3 path at speed (a); tracking loss is speed (b)'s own
 // over-speed fault; drift, linear or a step at a change of floor, on one
-// sensor for the rest of the run), against plain least squares, Sekimori &
+// sensor for the rest of the run; every sensor at once over a bump,
+// faults-bump), against plain least squares, Sekimori &
 // Miyazaki's voting, the consensus, the consensus with online
 // self-calibration (`--self-calibrate`) and oracle selection.
 #include <fmt/core.h>
@@ -34,6 +35,8 @@ const FaultCase kCases[] = {
     {"zero reading", "faults-zero", "zero counts, SQUAL 80, no lift flag"},
     {"drift", "faults-drift", "m2's scale 1 -> 0.9 over 6 s from t = 1 s, then held"},
     {"drift, step", "faults-floor", "m2's scale steps 1 -> 0.9 at t = 5 s (change of floor)"},
+    {"common-mode dropout", "faults-bump",
+     "every sensor reads zero for 0.3 s in three turns, 36 m run, slipping wheels"},
 };
 
 struct MethodRow {
@@ -92,11 +95,11 @@ Result robust_faults(const Options& options) {
       "Each simulated fault alone on the Table 3 path, four HDNS-2051; mean over {} runs\n"
       "(seeds {}..{}) of the maximum translation (mm) and heading (deg) error.\n\n",
       runs, options.seed, last);
-  text += fmt::format("{:<18}", "fault");
+  text += fmt::format("{:<19}", "fault");
   for (const auto& m : kMethods) text += fmt::format(" | {:>18}", m.column);
   text += "\n";
   for (std::size_t c = 0; c < kCaseCount; ++c) {
-    text += fmt::format("{:<18}", kCases[c].name);
+    text += fmt::format("{:<19}", kCases[c].name);
     for (std::size_t m = 0; m < kMethodCount; ++m) {
       const MeanError e = mean_error(records[c][m]);
       text += fmt::format(" | {:>8.1f} {:>5.2f} deg", 1e3 * e.max_translation.mean,

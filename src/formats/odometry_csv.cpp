@@ -294,7 +294,8 @@ struct OdometryCsvReader::Impl {
       for (const auto x :
            {Exclusion::kLift, Exclusion::kInconsistent, Exclusion::kUnreliable,
             Exclusion::kFallback, Exclusion::kUnselected, Exclusion::kFaulty, Exclusion::kFrozen,
-            Exclusion::kZero, Exclusion::kDrift, Exclusion::kProbation, Exclusion::kCalibration}) {
+            Exclusion::kZero, Exclusion::kDrift, Exclusion::kProbation, Exclusion::kCalibration,
+            Exclusion::kCommonMode}) {
         if (reason == describe(x)) {
           r.excluded[u] = x;
           known = true;

@@ -22,7 +22,20 @@
 //  Before step 2 the health monitor (health.hpp) takes out the sensors it
 //  has excluded over time (frozen, zero, drift, probation); after it, the
 //  estimate feeds its drift test.
-//  3. Nothing passes: the wheel twist (source wheels) or, without wheels,
+//  3. The common-mode hypothesis: the whole array wrong at once (every
+//     sensor loses the floor over a bump and reads zero; four sensors that
+//     agree pass every test among themselves). A majority subset's twist x
+//     with covariance Cov is rejected when every reference contradicts it,
+//       (x - x_r)^T (Cov + R)^-1 (x - x_r) > q(1 - alpha, 3)  for r in
+//       {prior, wheels present},
+//     so at the false-alarm rate of one test while the references are
+//     honest. Then the epoch is bridged as in step 4 (wheels, or hold),
+//     every candidate reported `common-mode`. The hypothesis is tested anew
+//     each epoch, never latched: the array is taken back as soon as one
+//     reference accepts its twist, and in any case once it has been bridged
+//     for `max_bridge` s (the references could be the ones that
+//     are wrong: spinning wheels against a wall).
+//  4. Nothing passes: the wheel twist (source wheels) or, without wheels,
 //     the last good twist with its covariance grown (source hold).
 // The prior is the twist of step 2, or of the wheels in step 3; a hold does
 // not renew it (its covariance keeps growing). With motion_prior off the
@@ -56,6 +69,9 @@ struct ConsensusOptions {
   /// Faults over time (health.hpp): frozen, zero and drifting sensors are
   /// kept out of the search.
   HealthOptions health;
+  /// The common-mode test of step 3 (needs motion_prior).
+  bool common_mode = true;
+  real max_bridge = 1.0;  ///< s, longest bridge over a common-mode rejection
 };
 
 class ConsensusEstimator {
@@ -87,6 +103,7 @@ class ConsensusEstimator {
   struct References {
     std::array<Reference, 2> r;
     int size = 0;
+    int wheels = -1;  ///< index of the wheels' reference, -1 without wheels
     /// The informations are computed: only minority subsets need them.
     bool informed = false;
   };
@@ -95,6 +112,13 @@ class ConsensusEstimator {
   /// ranking among them) is not computed.
   bool consider(SensorMask mask, References& refs, bool alone,
                 std::optional<Candidate>& best) const;
+  /// The candidate's twist against each reference: tests.wheels, tests.prior.
+  void test_references(const Candidate& best, const References& refs, SourceTests& tests) const;
+  /// Step 3: every reference rejects the majority candidate's twist.
+  bool common_mode(const Candidate& best, const References& refs, const SourceTests& tests,
+                   double t) const;
+  /// Each sensor's residual against the epoch's twist x: tests.sensor.
+  void test_sensors(const Twist2& x, SourceTests& tests) const;
 
   int n_;
   ConsensusOptions options_;
@@ -107,6 +131,7 @@ class ConsensusEstimator {
   Fallback fallback_;
   MotionPrior prior_;
   HealthMonitor health_;
+  double last_mice_t_ = -1e300;  ///< s, the last epoch whose twist came from the mice
 };
 
 }  // namespace moa

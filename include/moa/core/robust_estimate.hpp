@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 
 #include "moa/core/array.hpp"
 #include "moa/core/estimate.hpp"
@@ -33,6 +34,7 @@ enum class Exclusion : std::uint8_t {
   kDrift,         ///< health: its residual against the others drifts (scale or yaw)
   kProbation,     ///< health: was excluded; kept out until it behaves for a while
   kCalibration,   ///< self-calibration: its estimate ran away from 1 (self_calibration.hpp)
+  kCommonMode,    ///< the whole array at once contradicts the motion prior and the wheels
 };
 const char* describe(Exclusion exclusion);
 
@@ -42,11 +44,28 @@ enum NoiseFlag : std::uint8_t {
   kNoiseLowSqual = 1u << 1,   ///< SQUAL below the threshold
   kNoiseOverflow = 1u << 2,   ///< counter overflow reported
 };
+/// An epoch's test ratios, in the manner of PX4 EKF2's aid-source status:
+/// each source's test statistic divided by its gate, so 1 is the gate and a
+/// source above it is inconsistent with the epoch's twist x. NaN where a
+/// source was not tested (no such stream, an estimator without the tests).
+struct SourceTests {
+  /// Sensor i: r_i^T S_i^-1 r_i / q(1 - alpha, 2), r_i = u_i - A_i x its
+  /// point velocity's residual (m/s), S_i its covariance (noise_model.hpp).
+  std::array<real, kMaxSensors> sensor;
+  /// The array's twist x_a (the subset the search chose, if any) against
+  /// the wheels' and the motion prior's: d^T (Cov + R)^-1 d / q(1 - alpha, 3),
+  /// d = x_a - x_r: the common-mode test (consensus.hpp, step 3).
+  real wheels = std::numeric_limits<real>::quiet_NaN();
+  real prior = std::numeric_limits<real>::quiet_NaN();
+  SourceTests() { sensor.fill(std::numeric_limits<real>::quiet_NaN()); }
+};
+
 struct RobustEstimate {
   TwistEstimate estimate;  ///< twist, covariance, used sensors
   Source source = Source::kMice;
   std::array<Exclusion, kMaxSensors> excluded{};
   std::array<std::uint8_t, kMaxSensors> noise_flags{};
+  SourceTests tests;  ///< the consensus's test ratios (NaN for the other estimators)
 };
 
 }  // namespace moa
