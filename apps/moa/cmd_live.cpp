@@ -36,6 +36,7 @@
 #include "commands.hpp"
 #include "live_source.hpp"
 #include "moa/formats/config.hpp"
+#include "moa/formats/diagnostics_csv.hpp"
 #include "moa/formats/error.hpp"
 #include "moa/formats/log.hpp"
 #include "moa/formats/mice_writer.hpp"
@@ -178,6 +179,18 @@ int run_live(LiveArgs args) {
       io::refuse_output_onto_inputs(cal, "--self-calibration", {args.out}, "the --out of this run");
     }
   }
+  if (const std::string& diag = args.odometry.diagnostics_out; !diag.empty()) {
+    io::refuse_output_onto_inputs(diag, "--diagnostics", inputs);
+    if (!args.record.empty()) {
+      const fs::path dir(args.record);
+      io::refuse_output_onto_inputs(diag, "--diagnostics", {dir / "mice.csv", dir / "robot.yaml"},
+                                    "written by --record too");
+    }
+    io::refuse_output_onto_inputs(
+        diag, "--diagnostics",
+        {to_stdout ? fs::path{} : fs::path(args.out), args.odometry.self_calibration_out},
+        "another output of this run");
+  }
 
   io::LiveSource live = io::open_live_source(spec, config, args.config, hooks);
   // Waits for the source to start (a serial board's HELLO): no output exists before.
@@ -223,6 +236,12 @@ int run_live(LiveArgs args) {
     if (!args.quiet) fmt::print(stderr, "moa live: dashboard at {}\n", dashboard->url());
   }
 
+  std::unique_ptr<io::DiagnosticsCsvWriter> diagnostics_out;
+  if (!args.odometry.diagnostics_out.empty()) {
+    diagnostics_out = std::make_unique<io::DiagnosticsCsvWriter>(
+        args.odometry.diagnostics_out, config.names,
+        odometry_options.sensors & all_sensors(config.array.size()));
+  }
   std::unique_ptr<io::SelfCalibrationCsvWriter> calibration_out;
   if (!args.odometry.self_calibration_out.empty()) {
     calibration_out = std::make_unique<io::SelfCalibrationCsvWriter>(
@@ -235,6 +254,7 @@ int run_live(LiveArgs args) {
     pose = step.pose;
     if (odometry_out) odometry_out->write(step);
     if (calibration_out) calibration_out->write(step);
+    if (diagnostics_out) diagnostics_out->write(step);
     if (dashboard) dashboard->publish(step);
   };
 
@@ -296,6 +316,7 @@ int run_live(LiveArgs args) {
   if (stream_recording) stream_recording->commit();
   if (odometry_out) odometry_out->commit();
   if (calibration_out) calibration_out->commit();
+  if (diagnostics_out) diagnostics_out->commit();
   if (status_shown) fmt::print(stderr, "\r\033[K");
 
   if (!args.quiet) {

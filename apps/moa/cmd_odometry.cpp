@@ -51,6 +51,15 @@ int run_odometry(const OdometryArgs& args) {
     io::refuse_output_onto_inputs(args.flags.self_calibration_out, "--self-calibration", {args.out},
                                   "the --out of this run");
   }
+  if (!args.flags.diagnostics_out.empty()) {
+    io::refuse_output_onto_inputs(
+        args.flags.diagnostics_out, "--diagnostics",
+        {args.config, log.mice, log.wheels.value_or(""), log.camera.value_or(""),
+         log.truth.value_or(""), log.faults.value_or("")});
+    io::refuse_output_onto_inputs(args.flags.diagnostics_out, "--diagnostics",
+                                  {args.out, args.flags.self_calibration_out},
+                                  "another output of this run");
+  }
 
   const bool progress = !args.quiet && isatty(STDERR_FILENO);
   auto last_report = std::chrono::steady_clock::now();
@@ -64,8 +73,9 @@ int run_odometry(const OdometryArgs& args) {
       }
     };
   }
-  const io::OdometryRun run = io::write_odometry(config, args.config, log, options, args.out,
-                                                 on_progress, args.flags.self_calibration_out);
+  const io::OdometryRun run =
+      io::write_odometry(config, args.config, log, options, args.out, on_progress,
+                         args.flags.self_calibration_out, args.flags.diagnostics_out);
   if (progress) fmt::print(stderr, "\r\033[K");
   for (const auto& w : run.warnings) fmt::print(stderr, "moa odometry: warning: {}\n", w);
   if (!args.quiet) {

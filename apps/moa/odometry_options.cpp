@@ -41,6 +41,20 @@ CLI::Validator finite_within(double lo, double hi, bool open_low) {
 const CLI::Validator kPositive = finite_within(0.0, std::numeric_limits<double>::infinity(), true);
 const CLI::Validator kNonNegative = finite_within(0.0, std::numeric_limits<double>::infinity());
 
+namespace {
+// An output file name: not "" (nothing would be written) nor an option
+// taken for a file name (--self-calibration --quiet).
+CLI::Validator output_file_name() {
+  return CLI::Validator(
+      [](std::string& v) -> std::string {
+        if (v.empty()) return "an empty file name";
+        if (v[0] == '-') return "'" + v + "' is not a file name (write ./" + v + " for one)";
+        return {};
+      },
+      "");
+}
+}  // namespace
+
 void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
   OdometryOptions& o = f.options;
   cmd->add_option("--estimator", f.estimator,
@@ -81,15 +95,14 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
                   "about once a second per sensor (t,sensor,scale_x,scale_y,yaw_offset as "
                   "applied, then the filter's filter_scale_x,filter_scale_y,filter_yaw_offset)")
       ->type_name("FILE")
-      ->check(CLI::Validator(
-          [](std::string& v) -> std::string {
-            // Not "" (nothing would be written) nor an option taken for a
-            // file name (--self-calibration --quiet).
-            if (v.empty()) return "an empty file name";
-            if (v[0] == '-') return "'" + v + "' is not a file name (write ./" + v + " for one)";
-            return {};
-          },
-          ""));
+      ->check(output_file_name());
+  cmd->add_option("--diagnostics", f.diagnostics_out,
+                  "Write every source's status per epoch to this CSV (t,source,test_ratio,fused,"
+                  "reason: each sensor's, the wheels' and the motion prior's test statistic over "
+                  "its gate, whether the epoch's twist used it, and why not; "
+                  "docs/formats/log.md)")
+      ->type_name("FILE")
+      ->check(output_file_name());
   cmd->add_option("--self-calibration-gauge", f.self_calibration_gauge,
                   live ? "With --self-calibrate (implied): what fixes the common scale and yaw "
                          "of all sensors, which the redundancy cannot see: sensors (their "
@@ -179,6 +192,5 @@ OdometryOptions resolve_odometry_flags(const OdometryFlags& f, const io::RobotCo
     throw io::Error(with_flags(e));
   }
 }
-
 
 }  // namespace moa::cli

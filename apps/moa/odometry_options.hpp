@@ -32,6 +32,7 @@ struct OdometryFlags {
   bool no_motion_prior = false;
   bool self_calibrate = false;
   std::string self_calibration_out;  ///< --self-calibration FILE.csv
+  std::string diagnostics_out;       ///< --diagnostics FILE.csv
   /// --self-calibration-gauge sensors|wheels; empty: not given (sensors)
   std::string self_calibration_gauge;
   OdometryOptions options;

@@ -1,5 +1,6 @@
 #include "moa/runs/odometry_run.hpp"
 
+#include "moa/formats/diagnostics_csv.hpp"
 #include "moa/formats/self_calibration_csv.hpp"
 
 #include <fmt/core.h>
@@ -414,7 +415,13 @@ OdometryRun run_odometry(const RobotConfig& config, const std::string& config_pa
 
 OdometryRun write_odometry(const RobotConfig& config, const std::string& config_path,
                            const LogFiles& log, const OdometryOptions& options, const fs::path& out,
-                           const ProgressCallback& progress, const fs::path& calibration_out) {
+                           const ProgressCallback& progress, const fs::path& calibration_out,
+                           const fs::path& diagnostics_out) {
+  std::unique_ptr<DiagnosticsCsvWriter> diagnostics;
+  if (!diagnostics_out.empty()) {
+    diagnostics = std::make_unique<DiagnosticsCsvWriter>(
+        diagnostics_out, config.names, options.sensors & all_sensors(config.array.size()));
+  }
   std::unique_ptr<SelfCalibrationCsvWriter> calibration;
   if (!calibration_out.empty() && options.self_calibration.enabled) {
     calibration = std::make_unique<SelfCalibrationCsvWriter>(
@@ -429,11 +436,13 @@ OdometryRun write_odometry(const RobotConfig& config, const std::string& config_
         steps.write(step);
         // About once a second: on this thread.
         if (calibration) calibration->write(step);
+        if (diagnostics) diagnostics->write(step);
       },
       progress);
   steps.finish();
   writer.commit();
   if (calibration) calibration->commit();
+  if (diagnostics) diagnostics->commit();
   return run;
 }
 

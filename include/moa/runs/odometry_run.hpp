@@ -60,11 +60,14 @@ OdometryRun run_odometry(const RobotConfig& config, const std::string& config_pa
 
 /// run_odometry writing odometry.csv (written whole on success, else not at all)
 /// and, when `calibration_out` is not empty and options.self_calibration is
-/// enabled, the self-calibration's estimates (io/self_calibration_csv.hpp).
+/// enabled, the self-calibration's estimates (formats/self_calibration_csv.hpp),
+/// and, when `diagnostics_out` is not empty, every source's status per epoch
+/// (formats/diagnostics_csv.hpp).
 OdometryRun write_odometry(const RobotConfig& config, const std::string& config_path,
                            const LogFiles& log, const OdometryOptions& options,
                            const std::filesystem::path& out, const ProgressCallback& progress = {},
-                           const std::filesystem::path& calibration_out = {});
+                           const std::filesystem::path& calibration_out = {},
+                           const std::filesystem::path& diagnostics_out = {});
 
 /// Builds the pipeline in place on the heap (it is large), or throws
 /// io::Error naming `config_path` for a geometry the estimator refuses and
