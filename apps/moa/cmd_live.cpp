@@ -24,6 +24,7 @@
 #include <deque>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <memory>
 #include <numbers>
 #include <optional>
@@ -33,14 +34,14 @@
 #include "commands.hpp"
 #include "live_source.hpp"
 #include "moa/formats/config.hpp"
-#include "moa/web/dashboard.hpp"
 #include "moa/formats/error.hpp"
 #include "moa/formats/log.hpp"
 #include "moa/formats/mice_writer.hpp"
 #include "moa/formats/odometry_csv.hpp"
+#include "moa/formats/self_calibration_csv.hpp"
 #include "moa/runs/odometry_run.hpp"
 #include "moa/runs/output_path.hpp"
-#include "moa/formats/self_calibration_csv.hpp"
+#include "moa/web/dashboard.hpp"
 #include "odometry_options.hpp"
 #include "sensor_binding.hpp"
 
@@ -89,6 +90,7 @@ struct LiveArgs {
   OdometryFlags odometry;
   double duration = 0.0;
   bool quiet = false;
+  bool force = false;
 };
 
 // Rows per second over the last few seconds, for the status line.
@@ -145,6 +147,16 @@ int run_live(LiveArgs args) {
     const fs::path dir(args.record);
     io::refuse_output_onto_inputs(dir / "mice.csv", "--record", inputs);
     io::refuse_output_onto_inputs(dir / "robot.yaml", "--record", inputs);
+    // A recording is data that cannot be made again: replaced only when asked.
+    for (const char* name : {"mice.csv", "mice.csv.part", "robot.yaml"}) {
+      std::error_code ec;
+      if (!args.force && fs::exists(dir / name, ec)) {
+        throw io::Error(
+            fmt::format("--record {}: holds a recording ({}); pass --force to replace "
+                        "it",
+                        args.record, name));
+      }
+    }
   }
   if (!args.out.empty() && !to_stdout) {
     io::refuse_output_onto_inputs(args.out, "--out", inputs);
@@ -185,9 +197,9 @@ int run_live(LiveArgs args) {
     std::vector<std::string> comments{
         fmt::format("recorded by moa live from {}; replay: moa odometry --config {} --log {}",
                     live.origin, (dir / "robot.yaml").string(), dir.string())};
-    recording =
-        std::make_unique<io::MiceWriter>(dir / "mice.csv", config.names, live.serial != nullptr,
-                                         io::MiceWriter::Durability::kJournal, comments);
+    recording = std::make_unique<io::MiceWriter>(dir / "mice.csv", config.names,
+                                                 live.serial != nullptr || live.replay != nullptr,
+                                                 io::MiceWriter::Durability::kJournal, comments);
   }
   std::unique_ptr<io::OdometryCsvWriter> odometry_out;
   if (to_stdout) {
@@ -237,13 +249,31 @@ int run_live(LiveArgs args) {
   };
 
   double t_last = t0;
+  // A live input's bad row (a saturated record, a time out of order) is
+  // skipped and not recorded, so that the recording replays; each kind is
+  // reported once, with the count at the end.
+  std::map<std::string, std::size_t> skipped;
   const auto feed = [&](const SensorRow& row) {
-    if (recording) recording->write(row);
-    if (const auto e = odometry->push(row, on_step)) {
-      throw io::Error(
-          fmt::format("{}: row at t = {} s: {}", where, row.t,
-                      e == OdometryError::kRow ? describe(odometry->row_error()) : describe(*e)));
+    const auto e = odometry->push(row, on_step);
+    const bool refused = e == OdometryError::kRow || e == OdometryError::kImpossibleCounts;
+    if (e && !refused) {
+      throw io::Error(fmt::format("{}: row at t = {} s: {}", where, row.t, describe(*e)));
     }
+    if (refused) {
+      const std::string why =
+          e == OdometryError::kRow ? describe(odometry->row_error()) : describe(*e);
+      if (skipped[why]++ == 0) {
+        const bool known = row.sensor >= 0 && row.sensor < config.array.size();
+        hooks.warn(fmt::format(
+            "{}: row at t = {} s of sensor {} skipped: {} (further such rows are skipped and "
+            "counted)",
+            where, row.t,
+            known ? fmt::format("'{}'", config.names[static_cast<std::size_t>(row.sensor)]) : "?",
+            why));
+      }
+      return;
+    }
+    if (recording) recording->write(row);
     t_last = row.t;
     ++rows;
     meter.add(1);
@@ -265,6 +295,9 @@ int run_live(LiveArgs args) {
     throw;
   }
   odometry->finish(t_last, on_step);
+  for (const auto& [why, count] : skipped) {
+    hooks.warn(fmt::format("{}: {} rows skipped: {}", where, count, why));
+  }
   if (recording) recording->commit();
   if (odometry_out) odometry_out->commit();
   if (calibration_out) calibration_out->commit();
@@ -334,6 +367,7 @@ void add_live(CLI::App& app, Action& action) {
   cmd->add_option("--duration", args->duration, "Stop after this many seconds (0: at Ctrl-C)")
       ->check(kNonNegative);
   cmd->add_flag("--quiet", args->quiet, "No status line and no summary");
+  cmd->add_flag("--force", args->force, "Replace the recording in --record DIR if there is one");
   cmd->callback([&action, args] { action = [args] { return run_live(*args); }; });
 }
 

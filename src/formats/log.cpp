@@ -231,7 +231,7 @@ struct MiceReader::Impl {
     row.t = csv.time(t);
     name = csv.field(sensor);
     const auto it = std::find(names.begin(), names.end(), name);
-    if (it == names.end()) csv.fail(fmt::format("unknown sensor '{}'", name));
+    if (it == names.end()) csv.fail(fmt::format("unknown sensor '{}'", excerpt(name)));
     row.sensor = static_cast<int>(it - names.begin());
     row.counts = {static_cast<double>(csv.integer(dx, -kMaxExactCount, kMaxExactCount)),
                   static_cast<double>(csv.integer(dy, -kMaxExactCount, kMaxExactCount))};
