@@ -83,7 +83,11 @@ void AtomicFile::commit() {
   out_.flush();
   const bool written = static_cast<bool>(out_);
   out_.close();
-  if (!written || !out_) throw IoError(fmt::format("{}: cannot write", target_.string()));
+  if (!written || !out_) {
+    // errno of the failed write: "No space left on device" on a full disk.
+    throw IoError(fmt::format("{}: cannot write ({})", target_.string(),
+                              std::strerror(errno != 0 ? errno : EIO)));
+  }
   if (!sync_to_disk(temp_)) {
     throw IoError(fmt::format("{}: cannot write ({})", target_.string(), std::strerror(errno)));
   }

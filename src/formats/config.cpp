@@ -238,7 +238,9 @@ std::string format_config(const RobotConfig& config) {
   }
   check_count(context, n);
 
-  // "{}" is fmt's shortest representation that reads back as the same double.
+  // "{}" is fmt's shortest representation that reads back as the same double;
+  // -0 is written as 0 (equal as numbers, and no one writes "-0" by hand).
+  const auto num = [](double v) { return v == 0.0 ? 0.0 : v; };
   std::string out = fmt::format("version: {}\nsensors:\n", kConfigVersion);
   for (std::size_t i = 0; i < n; ++i) {
     const std::string& name = config.names[i];
@@ -253,8 +255,8 @@ std::string format_config(const RobotConfig& config) {
     }
     check_mount(sensor, m);
     out += fmt::format("  - name: {}\n", yaml_name(name));
-    out += fmt::format("    position: [{}, {}]\n", m.position.x(), m.position.y());
-    out += fmt::format("    yaw: {}\n", m.yaw);
+    out += fmt::format("    position: [{}, {}]\n", num(m.position.x()), num(m.position.y()));
+    out += fmt::format("    yaw: {}\n", num(m.yaw));
     out += fmt::format("    cpi: {}\n", m.cpi);
     out += fmt::format("    scale: [{}, {}]\n", m.scale.x(), m.scale.y());
     out += fmt::format("    mirrored: {}\n", m.mirrored);

@@ -32,7 +32,7 @@
 namespace moa::io {
 
 struct SerialOptions {
-  int baud = 115200;
+  int baud = 500000;  ///< the firmware's rate (docs/firmware.md)
   /// Open read-write and set the port up with termios. Off: the path is
   /// opened read-only and used as it is (pipes, files of captured bytes);
   /// no HELLO_REQUEST can be sent then.
