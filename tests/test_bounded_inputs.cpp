@@ -223,7 +223,7 @@ TEST(BoundedInputs, ASaturatedLiveRecordIsSkippedAndTheRecordingReplays) {
 TEST(BoundedInputs, BaudDefaultsToTheFirmwares) {
   const auto r = test::run_moa_bounded("live --help");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_THAT(r.out, ::testing::ContainsRegex("--baud INT \\[500000\\]"));
+  EXPECT_THAT(r.out, ::testing::HasSubstr("--baud INT=500000"));
 }
 
 }  // namespace

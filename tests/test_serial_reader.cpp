@@ -345,12 +345,12 @@ TEST_P(SerialDeviceCase, RowsKeepRisingAndCarryTheFramesKept) {
   EXPECT_EQ(reader.stats().stale, c.stale);
   EXPECT_EQ(reader.stats().restarts, c.restarts);
   EXPECT_EQ(reader.stats().clock_steps, c.clock_steps);
-  if (c.duplicates) EXPECT_TRUE(contains_text(warnings, "duplicated DATA frames dropped"));
-  if (c.restarts) EXPECT_TRUE(contains_text(warnings, "the device restarted"));
+  EXPECT_EQ(contains_text(warnings, "duplicated DATA frames dropped"), c.duplicates > 0);
+  EXPECT_EQ(contains_text(warnings, "the device restarted"), c.restarts > 0);
 }
 
 INSTANTIATE_TEST_SUITE_P(Cases, SerialDeviceCase, ::testing::ValuesIn(device_cases()),
-                         [](const auto& info) { return std::string(info.param.name); });
+                         [](const auto& param_info) { return std::string(param_info.param.name); });
 
 TEST(SerialReader, DataWithAnotherSensorCountIsDropped) {
   test::PseudoTerminal pty;

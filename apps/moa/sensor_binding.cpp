@@ -25,7 +25,7 @@ std::vector<SensorBinding> parse_bindings(const std::vector<std::string>& args,
     // The name becomes a mice.csv field and an odometry.csv column.
     if (!io::is_valid_sensor_name(binding.name)) {
       throw io::Error(fmt::format("{} {}: invalid sensor name '{}': a name is {}", flag,
-                                  io::excerpt(arg), io::excerpt(binding.name),
+                                  io::printable(arg), io::excerpt(binding.name),
                                   io::kSensorNameRule));
     }
     const bool duplicate = std::any_of(bindings.begin(), bindings.end(),

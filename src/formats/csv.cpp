@@ -398,14 +398,12 @@ bool CsvReader::next_line(std::string_view& line) {
     const std::size_t size = end_ - begin_;
     if (const void* nl = std::memchr(start, '\n', size)) {
       const auto length = static_cast<std::size_t>(static_cast<const char*>(nl) - start);
+      if (length > kMaxLineBytes) fail_long_line();
       line = {start, length};
       begin_ += length + 1;
       return true;
     }
-    if (size > kMaxLineBytes) {
-      fail_at(line_ + 1, fmt::format("line longer than {} bytes: not a CSV file of moa's",
-                                     kMaxLineBytes));
-    }
+    if (size > kMaxLineBytes) fail_long_line();
     if (eof_) {
       if (size == 0) return false;
       line = {start, size};
@@ -523,10 +521,10 @@ double CsvReader::time(std::size_t column) {
                                    excerpt(fields_[column])));
   }
   if (first_time_ && t - *first_time_ > kMaxSpan) {
-    fail_field(column, fmt::format("{} s is {:g} s after the file's first time ({} s): more than "
-                                   "{:g} s (one day) in one log",
-                                   excerpt(fields_[column]), t - *first_time_, *first_time_,
-                                   kMaxSpan));
+    fail_field(column,
+               fmt::format("{} s is {:g} s after the file's first time ({} s): more than "
+                           "{:g} s (one day) in one log",
+                           excerpt(fields_[column]), t - *first_time_, *first_time_, kMaxSpan));
   }
   if (last_time_ && t < *last_time_) {
     fail(fmt::format("time goes backwards ({} after {})", t, *last_time_));
@@ -537,6 +535,11 @@ double CsvReader::time(std::size_t column) {
 }
 
 void CsvReader::fail(std::string_view what) const { fail_at(line_, what); }
+
+void CsvReader::fail_long_line() const {
+  fail_at(line_ + 1,
+          fmt::format("line longer than {} bytes: not a CSV file of moa's", kMaxLineBytes));
+}
 
 void CsvReader::fail_at(std::size_t line, std::string_view what) const {
   throw Error(printable(fmt::format("{}:{}: {}", file_, line, what)));

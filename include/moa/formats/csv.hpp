@@ -190,6 +190,7 @@ class CsvReader {
   bool next_line(std::string_view& line);
   void refill();
   [[noreturn]] void fail_at(std::size_t line, std::string_view what) const;
+  [[noreturn]] void fail_long_line() const;
 
   struct Close {
     void operator()(std::FILE* f) const { std::fclose(f); }
