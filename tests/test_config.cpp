@@ -115,8 +115,8 @@ double random_double(std::mt19937_64& rng, double lo, double hi) {
 RobotConfig random_config(std::mt19937_64& rng) {
   // Valid names (docs/formats/config.md) that YAML would read as something
   // else unquoted: null, a boolean, a number, a list item.
-  static const char* const kNames[] = {"m1", "left", "null", "true", "-x", "1e5",  "s.2",
-                                       "_",  "0",    "No",   ".5", "A-B", "y.a_b", "-"};
+  static const char* const kNames[] = {"m1", "left", "null", "true", "-x",  "1e5",   "s.2",
+                                       "_",  "0",    "No",   ".5",   "A-B", "y.a_b", "-"};
   RobotConfig config;
   std::vector<SensorMount> mounts;
   const int n = 1 + static_cast<int>(rng() % kMaxSensors);
@@ -497,16 +497,18 @@ TEST(ConfigFormat, NegativeZeroIsWrittenAsZero) {
 }
 
 TEST(ConfigErrors, NamesAreLimitedToWhatEveryOutputCarries) {
-  for (const std::string bad : {"m+4", "a/b", "x\"y", "caf\xc3\xa9", std::string(33, 'a')}) {
+  for (const std::string& bad :
+       std::vector<std::string>{"m+4", "a/b", "x\"y", "caf\xc3\xa9", std::string(33, 'a')}) {
     SCOPED_TRACE(bad);
-    const std::string message = parse_error(
-        "version: 1\nsensors:\n  - {name: \"" + bad + "\", position: [0, 0], yaw: 0, cpi: 1}\n");
+    const std::string message = parse_error("version: 1\nsensors:\n  - {name: '" + bad +
+                                            "', position: [0, 0], yaw: 0, cpi: 1}\n");
     EXPECT_NE(message.find("key 'name': invalid name"), std::string::npos) << message;
     EXPECT_NE(message.find("a name is 1 to 32 characters among A-Z a-z 0-9 _ . -"),
               std::string::npos)
         << message;
   }
-  for (const std::string good : {"m1", "front-left", "s_2.b", std::string(32, 'z')}) {
+  for (const std::string& good :
+       std::vector<std::string>{"m1", "front-left", "s_2.b", std::string(32, 'z')}) {
     EXPECT_NO_THROW(parse_config(
         "version: 1\nsensors:\n  - {name: " + good + ", position: [0, 0], yaw: 0, cpi: 1}\n",
         "robot.yaml"))

@@ -2,9 +2,7 @@
 
 #include <fmt/format.h>
 
-#include <cerrno>
 #include <cstdio>
-#include <cstring>
 #include <memory>
 
 #include "moa/formats/error.hpp"
@@ -22,7 +20,7 @@ std::string read_bounded(const std::filesystem::path& path, std::size_t max_byte
     void operator()(std::FILE* f) const { std::fclose(f); }
   };
   const std::unique_ptr<std::FILE, Close> in(std::fopen(path.c_str(), "rb"));
-  if (!in) throw IoError(fmt::format("{}: cannot open ({})", name, std::strerror(errno)));
+  if (!in) throw IoError(fmt::format("{}: cannot open", name));
   std::string text;
   char block[1 << 16];
   while (true) {

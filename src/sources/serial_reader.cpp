@@ -233,7 +233,8 @@ struct SerialReader::Impl {
       return;
     }
     const double window = frame_window();
-    if (!base) base = t_device - window;
+    // The first row covers one window before it; none when the HELLO gives no rate.
+    if (!base) base = t_device - (hello.frame_rate > 0 ? window : 0.0);
     double t = t_device - *base + offset;
     // Frames since the last one (1 + those lost): the device clock should
     // have moved by that many windows. Times stay strictly increasing (two

@@ -13,7 +13,7 @@ namespace moa::io {
 /// The bytes of `path`, read until its end; throws io::Error "FILE: larger
 /// than N bytes: not WHAT" as soon as more than `max_bytes` were read (never
 /// from stat(), which says nothing of FIFOs and devices), io::IoError "FILE:
-/// cannot open (...)" when it cannot be opened or is a directory.
+/// cannot open" when it cannot be opened or is a directory.
 std::string read_bounded(const std::filesystem::path& path, std::size_t max_bytes,
                          std::string_view what);
 
