@@ -515,8 +515,8 @@ std::int64_t CsvReader::integer(std::size_t column, std::int64_t min, std::int64
 double CsvReader::time(std::size_t column) {
   const double t = number(column);
   if (!(std::abs(t) <= kMaxTime)) {
-    static_assert(kMaxTime == 1e9, "the message below says 1e9");
-    fail_field(column, fmt::format("{} s is outside -1e9..1e9 s (beyond, a double no longer "
+    static_assert(kMaxTime == 4e9, "the message below says 4e9");
+    fail_field(column, fmt::format("{} s is outside -4e9..4e9 s (beyond, a double no longer "
                                    "resolves the epoch step exactly)",
                                    excerpt(fields_[column])));
   }

@@ -40,11 +40,12 @@ struct SensorRow {
   std::uint8_t faults = 0;  ///< simulated fault bits (faults.csv), for the oracle
 };
 
-/// s, the largest |t| any row may carry. A double resolves 1e9 s to 1.2e-7 s
-/// (2^-23 s), 0.0012 % of a 10 ms epoch, so epoch boundaries t0 + k period stay
-/// exact to that; beyond ~1e15 s it no longer resolves a millisecond at all
-/// and epochs would be counted wrong (or, past 2^53 periods, never end).
-inline constexpr double kMaxTime = 1e9;
+/// s, the largest |t| any row may carry: unix times (1.7e9 s in 2024) up to
+/// the year 2096. A double resolves 4e9 s to 4.8e-7 s (2^-21 s), 0.005 % of
+/// a 10 ms epoch and 0.5 % of the shortest (0.1 ms, 10 kHz), so epoch
+/// boundaries t0 + k period stay exact to that; beyond ~1e15 s it no longer
+/// resolves a millisecond and epochs were counted wrong (or never ended).
+inline constexpr double kMaxTime = 4e9;
 /// s, the longest span from a log file's first time to its last that its
 /// reader accepts (one day: at 100 Hz, 8.64e6 epochs). Live runs have none:
 /// their rows come at the pace of real time.
@@ -52,7 +53,7 @@ inline constexpr double kMaxSpan = 86400.0;
 
 enum class RowError {
   kTimeNotFinite,
-  kTimeOutOfRange,  ///< |t| > kMaxTime
+  kTimeOutOfRange,   ///< |t| > kMaxTime
   kTimeBeforeStart,  ///< t < t0
   kTimeBackwards,    ///< t earlier than the previous row's
   kUnknownSensor,    ///< index outside the array
