@@ -49,8 +49,8 @@ class Context {
 bool is_valid_sensor_name(std::string_view name) {
   if (name.empty() || name.size() > kMaxSensorName) return false;
   return std::all_of(name.begin(), name.end(), [](char c) {
-    return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') ||
-           c == '_' || c == '.' || c == '-';
+    return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' ||
+           c == '.' || c == '-';
   });
 }
 
@@ -247,8 +247,8 @@ std::string format_config(const RobotConfig& config) {
     const SensorMount& m = config.array.mounts()[i];
     const Context sensor(context.source(), sensor_label(i, is_valid_sensor_name(name) ? name : ""));
     if (!is_valid_sensor_name(name)) {
-      sensor.fail_key("name", fmt::format("invalid name '{}': a name is {}", excerpt(name),
-                                          kSensorNameRule));
+      sensor.fail_key(
+          "name", fmt::format("invalid name '{}': a name is {}", excerpt(name), kSensorNameRule));
     }
     if (config.index_of(name) != static_cast<int>(i)) {
       context.fail(fmt::format("duplicate sensor name '{}'", name));

@@ -83,10 +83,10 @@ LogFiles resolve_log(const fs::path& log) {
     const fs::file_status status = fs::status(files.mice, ec);
     if (fs::is_fifo(status) || fs::is_character_file(status) || fs::is_block_file(status) ||
         fs::is_socket(status)) {
-      throw Error(fmt::format("{}: not a regular file (a {}): a log is read from files; copy it "
-                              "to one first",
-                              files.mice.string(),
-                              fs::is_fifo(status) ? "named pipe" : "device or socket"));
+      throw Error(fmt::format(
+          "{}: not a regular file (a {}): a log is read from files; copy it "
+          "to one first",
+          files.mice.string(), fs::is_fifo(status) ? "named pipe" : "device or socket"));
     }
     throw Error(
         fmt::format("{}: no such file (a log directory holds mice.csv)", files.mice.string()));

@@ -244,7 +244,8 @@ struct SerialReader::Impl {
     // recording replays.
     const double frames = static_cast<double>(tracker.lost_frames() - lost_then + 1);
     const bool after_first = stats.data_frames > 0;
-    const bool stepped = after_first && (t < last_t || t - last_t > frames * window + kMaxClockSlack);
+    const bool stepped =
+        after_first && (t < last_t || t - last_t > frames * window + kMaxClockSlack);
     if (rebase_next || stepped || (after_first && t <= last_t)) {
       if (stepped && !rebase_next) ++stats.clock_steps;
       const double wanted = after_first ? last_t + window : t;
@@ -349,13 +350,14 @@ struct SerialReader::Impl {
           name, stats.clock_steps, kMaxClockSlack));
     }
     if (stats.restarts > reported.restarts) {
-      hooks.warning(fmt::format("{}: the device restarted ({} so far); times continue from the "
-                                "last row",
-                                name, stats.restarts));
+      hooks.warning(
+          fmt::format("{}: the device restarted ({} so far); times continue from the "
+                      "last row",
+                      name, stats.restarts));
     }
     if (stats.duplicates > reported.duplicates) {
-      hooks.warning(fmt::format("{}: {} duplicated DATA frames dropped so far", name,
-                                stats.duplicates));
+      hooks.warning(
+          fmt::format("{}: {} duplicated DATA frames dropped so far", name, stats.duplicates));
     }
     if (stats.stale > reported.stale) {
       hooks.warning(fmt::format("{}: {} late DATA frames (sequence behind) dropped so far", name,

@@ -30,7 +30,6 @@ constexpr long kRequestReadTimeoutUs = 500000;
 
 }  // namespace
 
-
 const char* DashboardOptions::validate() const {
   if (host.empty()) return "host: must not be empty";
   if (port < 0 || port > 65535) return "port: must be 0..65535";

@@ -25,8 +25,8 @@
 #include <vector>
 
 #include "moa/formats/config.hpp"
-#include "moa/sources/live.hpp"
 #include "moa/formats/log.hpp"
+#include "moa/sources/live.hpp"
 #include "moa/sources/serial_protocol.hpp"
 
 namespace moa::io {
