@@ -1,5 +1,6 @@
 // The bad-input suite: every case of tests/data/bad/cases.txt through the
-// built `moa`, its exit code and its whole stderr exact, nothing written.
+// built `moa`, its exit code and its whole stderr exact, nothing written,
+// each within 15 s, 1 GB of memory and 50 MB a file (issue #28).
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -72,7 +73,9 @@ TEST_P(BadInputs, RefusedWithTheExactMessageAndNothingWritten) {
     text = substitute(std::move(text), "{examples}", std::string(MOA_SOURCE_DIR) + "/examples");
     return substitute(std::move(text), "{out}", out.string());
   };
-  const auto r = test::run_moa(fill(k.args));
+  // Every case within the limits of issue #28: 15 s, 1 GB, 50 MB a file.
+  const auto r = test::run_moa_bounded(fill(k.args));
+  EXPECT_EQ(test::limits_exceeded(r), "");
   EXPECT_EQ(r.exit_code, k.exit_code);
   EXPECT_EQ(r.err, substitute(fill(k.err), "|", "\n") + "\n");
   EXPECT_TRUE(fs::is_empty(out)) << "an output was written";

@@ -78,6 +78,8 @@ std::string without_key(const std::string& missing) {
 }
 
 bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+// The same number, -0 and 0 taken as one (the config is written without "-0").
+bool same_value(double a, double b) { return same_bits(a + 0.0, b + 0.0); }
 
 void expect_identical(const RobotConfig& a, const RobotConfig& b) {
   ASSERT_EQ(a.names, b.names);
@@ -86,9 +88,9 @@ void expect_identical(const RobotConfig& a, const RobotConfig& b) {
     const SensorMount& x = a.array[i];
     const SensorMount& y = b.array[i];
     SCOPED_TRACE("sensor " + a.names[static_cast<std::size_t>(i)]);
-    EXPECT_TRUE(same_bits(x.position.x(), y.position.x()));
-    EXPECT_TRUE(same_bits(x.position.y(), y.position.y()));
-    EXPECT_TRUE(same_bits(x.yaw, y.yaw));
+    EXPECT_TRUE(same_value(x.position.x(), y.position.x()));
+    EXPECT_TRUE(same_value(x.position.y(), y.position.y()));
+    EXPECT_TRUE(same_value(x.yaw, y.yaw));
     EXPECT_TRUE(same_bits(x.cpi, y.cpi));
     EXPECT_TRUE(same_bits(x.scale.x(), y.scale.x()));
     EXPECT_TRUE(same_bits(x.scale.y(), y.scale.y()));
@@ -111,8 +113,10 @@ double random_double(std::mt19937_64& rng, double lo, double hi) {
 }
 
 RobotConfig random_config(std::mt19937_64& rng) {
-  static const char* const kNames[] = {"m1",   "left", "null", "true", "-x",   "a:b", "#1",
-                                       "x\"y", "é",    "1e5",  "~",    "a\\b", "[0]", "s.2"};
+  // Valid names (docs/formats/config.md) that YAML would read as something
+  // else unquoted: null, a boolean, a number, a list item.
+  static const char* const kNames[] = {"m1", "left", "null", "true", "-x",  "1e5",   "s.2",
+                                       "_",  "0",    "No",   ".5",   "A-B", "y.a_b", "-"};
   RobotConfig config;
   std::vector<SensorMount> mounts;
   const int n = 1 + static_cast<int>(rng() % kMaxSensors);
@@ -479,6 +483,37 @@ TEST(ConfigFormat, WritesOptionalKeysOnlyWhenSet) {
             "    cpi: 800\n"
             "    scale: [1, 1]\n"
             "    mirrored: false\n");
+}
+
+TEST(ConfigFormat, NegativeZeroIsWrittenAsZero) {
+  RobotConfig c = parse_config(two_sensors(), "robot.yaml");
+  c.array[0].position.y() = -0.0;
+  c.array[0].yaw = -0.0;
+  const std::string text = format_config(c);
+  EXPECT_EQ(text.find("-0,"), std::string::npos) << text;
+  EXPECT_EQ(text.find("-0]"), std::string::npos) << text;
+  EXPECT_EQ(text.find("-0\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("    position: [0.1, 0]\n    yaw: 0\n"), std::string::npos) << text;
+}
+
+TEST(ConfigErrors, NamesAreLimitedToWhatEveryOutputCarries) {
+  for (const std::string& bad :
+       std::vector<std::string>{"m+4", "a/b", "x*y", "caf\xc3\xa9", std::string(33, 'a')}) {
+    SCOPED_TRACE(bad);
+    const std::string message = parse_error("version: 1\nsensors:\n  - {name: '" + bad +
+                                            "', position: [0, 0], yaw: 0, cpi: 1}\n");
+    EXPECT_NE(message.find("key 'name': invalid name"), std::string::npos) << message;
+    EXPECT_NE(message.find("a name is 1 to 32 characters among A-Z a-z 0-9 _ . -"),
+              std::string::npos)
+        << message;
+  }
+  for (const std::string& good :
+       std::vector<std::string>{"m1", "front-left", "s_2.b", std::string(32, 'z')}) {
+    EXPECT_NO_THROW(parse_config(
+        "version: 1\nsensors:\n  - {name: " + good + ", position: [0, 0], yaw: 0, cpi: 1}\n",
+        "robot.yaml"))
+        << good;
+  }
 }
 
 TEST(ConfigFormat, InvalidConfigIsNotWritten) {

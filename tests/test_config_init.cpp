@@ -88,6 +88,21 @@ TEST(ConfigInit, SensorsOneByOneInDegreesWithMirroring) {
   EXPECT_FALSE(read.array[1].max_speed.has_value());
 }
 
+// The config reads as a person would write it: the rated speed as the
+// datasheet's decimal, no "-0" where cos and sin of the layout give -0.
+TEST(ConfigInit, NumbersAreWrittenAsAPersonWouldWriteThem) {
+  const auto dir = test::scratch_dir("config_init_numbers");
+  const fs::path config = dir / "robot.yaml";
+  const auto r = test::run_moa(
+      "config init --layout polygon --sensors 4 --radius 0.1 --preset HDNS-2051 --out " +
+      config.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string text = contents(config);
+  EXPECT_THAT(text, HasSubstr("    max_speed: 0.3556\n"));                       // 14 in/s
+  EXPECT_THAT(text, ::testing::Not(::testing::ContainsRegex("-0([^.0-9]|$)")));  // -0, not -0.1
+  EXPECT_NEAR(io::read_config(config).array[0].max_speed.value(), 14 * 0.0254, 1e-15);
+}
+
 TEST(ConfigInit, RefusesToOverwriteWithoutForce) {
   const auto dir = test::scratch_dir("config_init_force");
   const fs::path config = dir / "robot.yaml";

@@ -527,7 +527,8 @@ TEST(ImportEvemu, BadSensorArgumentsAreRejected) {
   r = test::run_moa("import-evemu --sensor 'a,b=" + events + "'" + out);
   EXPECT_EQ(r.err,
             "moa import-evemu: error: --sensor a,b=" + events +
-                ": sensor name 'a,b' must not contain spaces or commas nor start with '#'\n");
+                ": invalid sensor name 'a,b': a name is 1 to 32 characters among A-Z a-z 0-9 _ . - "
+                "(what mice.csv, odometry.csv and JSON all carry)\n");
   EXPECT_TRUE(fs::is_empty(dir));
   fs::remove_all(dir);
 }

@@ -3,6 +3,7 @@
 // page in headless Chromium while a replay runs, and the server's bounds
 // (clients, a client that reads nothing).
 #include <arpa/inet.h>
+#include <fmt/format.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
@@ -18,10 +19,10 @@
 #include <thread>
 
 #include "moa/formats/config.hpp"
-#include "moa/web/dashboard.hpp"
 #include "moa/formats/error.hpp"
 #include "moa/formats/log.hpp"
 #include "moa/sources/replay_reader.hpp"
+#include "moa/web/dashboard.hpp"
 #include "support/browser.hpp"
 #include "support/http.hpp"
 #include "support/run.hpp"
@@ -231,6 +232,44 @@ TEST(LiveDashboard, BoundsClientsAndASlowClientNeverSlowsThePublisher) {
   EXPECT_GT(stats.dropped, 0u) << stats.events << " events, clients " << stats.clients;
   EXPECT_LT(worst, 0.05) << "publish() waited for a client";
   for (const int fd : sockets) close(fd);
+}
+
+// Ten loopback connections that send one header line a second (slow-loris)
+// never keep the page from being served: each is dropped at its first pause
+// longer than the request read timeout, and workers remain for the page.
+TEST(LiveDashboard, SlowLorisConnectionsDoNotBlockThePage) {
+  const io::RobotConfig config = io::read_config(simulated_log() / "robot.yaml");
+  io::DashboardOptions options;
+  options.port = 0;
+  io::Dashboard dashboard(config, options);
+  const int port = dashboard.port();
+  ASSERT_GT(port, 0);
+  std::vector<int> sockets;
+  for (int k = 0; k < 10; ++k) {
+    const int fd = socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(static_cast<std::uint16_t>(port));
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ASSERT_EQ(connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+    const std::string start = "GET / HTTP/1.1\r\n";
+    ASSERT_EQ(write(fd, start.data(), start.size()), static_cast<ssize_t>(start.size()));
+    sockets.push_back(fd);
+  }
+  // Four seconds of one header line a second on every connection; the page
+  // is asked for in between and must come each time.
+  int served = 0;
+  for (int second = 0; second < 4; ++second) {
+    const auto next = Clock::now() + std::chrono::seconds(1);
+    for (const int fd : sockets) {
+      const std::string line = fmt::format("X-Slow-{}: a\r\n", second);
+      (void)send(fd, line.data(), line.size(), MSG_NOSIGNAL);
+    }
+    if (test::http_get(port, "/", 0.9).status == 200) ++served;
+    std::this_thread::sleep_until(next);
+  }
+  for (const int fd : sockets) close(fd);
+  EXPECT_EQ(served, 4);
 }
 
 TEST(LiveDashboard, ListenAddressIsHostColonPortOrAPort) {

@@ -6,6 +6,7 @@
 #include <termios.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -232,13 +233,124 @@ TEST(SerialReader, DeviceClockSteppingBackIsRebasedAndWrapsAreUnwrapped) {
   device.join();
   ASSERT_EQ(rows.size(), 12u);
   // 5 ms window, then 5 ms steps across the 2^32 wrap; then the clock
-  // restarts (7704 -> 100): that frame is put at the previous time, and
-  // the next follows 5 ms later.
-  const std::vector<double> expected{0.005, 0.010, 0.015, 0.020, 0.020, 0.025};
+  // restarts (7704 -> 100): that frame is put one window after the previous
+  // one (at the same time, its rows would read as duplicates), and the next
+  // follows 5 ms later.
+  const std::vector<double> expected{0.005, 0.010, 0.015, 0.020, 0.025, 0.030};
   for (std::size_t i = 0; i < rows.size(); ++i) EXPECT_NEAR(rows[i].t, expected[i / 2], 1e-9) << i;
   EXPECT_EQ(reader.stats().clock_steps, 1u);
-  EXPECT_TRUE(contains_text(warnings, "the device clock went back"));
+  EXPECT_TRUE(contains_text(warnings, "1 device clock steps so far"));
 }
+
+// What a device can send besides an orderly stream, one case each: the
+// frames as sent (HELLO frames between them where `hello_before` says), and
+// the frames whose rows must arrive, in order. Every case must give rows
+// whose times rise strictly (a recording of them replays: no two rows of a
+// sensor at one time) and whose counts are those of the frames kept.
+struct DeviceCase {
+  const char* name;
+  std::vector<Data> frames;
+  std::vector<std::size_t> hello_before;  // indices of frames preceded by a new HELLO
+  std::vector<std::size_t> kept;          // indices of frames whose rows must arrive
+  std::uint64_t duplicates = 0, stale = 0, restarts = 0, clock_steps = 0;
+};
+
+std::vector<DeviceCase> device_cases() {
+  // 5 ms windows (k = 1 at 200 Hz) at 1 MHz ticks: 5000 ticks a frame.
+  const auto at = [](int sequence, std::uint32_t ticks, std::int16_t dx) {
+    return data(static_cast<std::uint16_t>(sequence), ticks, dx, 1);
+  };
+  return {
+      {"DuplicatedFrame",
+       {at(0, 0, 1), at(1, 5000, 2), at(1, 5000, 2), at(2, 10000, 3)},
+       {},
+       {0, 1, 3},
+       1,
+       0,
+       0,
+       0},
+      {"StaleFrame",
+       {at(0, 0, 1), at(1, 5000, 2), at(2, 10000, 3), at(1, 5000, 2), at(3, 15000, 4)},
+       {},
+       {0, 1, 2, 4},
+       0,
+       1,
+       0,
+       0},
+      {"RestartWithHello",
+       {at(100, 900000, 1), at(101, 905000, 2), at(0, 0, 3), at(1, 5000, 4)},
+       {2},
+       {0, 1, 2, 3},
+       0,
+       0,
+       1,
+       0},
+      {"RestartWithoutHello",
+       {at(100, 900000, 1), at(101, 905000, 2), at(0, 0, 3), at(1, 5000, 4), at(2, 10000, 5)},
+       {},
+       {0, 1, 3, 4},
+       0,
+       1,
+       1,
+       0},
+      {"ClockStepsForward4000s",
+       {at(0, 0, 1), at(1, 5000, 2), at(2, 4000005000u, 3), at(3, 4000010000u, 4)},
+       {},
+       {0, 1, 2, 3},
+       0,
+       0,
+       0,
+       1},
+  };
+}
+
+class SerialDeviceCase : public ::testing::TestWithParam<DeviceCase> {};
+
+TEST_P(SerialDeviceCase, RowsKeepRisingAndCarryTheFramesKept) {
+  const DeviceCase& c = GetParam();
+  test::PseudoTerminal pty;
+  std::vector<std::string> warnings;
+  std::atomic<int> seen{0};
+  SerialReader reader(pty.device(), two_sensors(), fast_options(), collecting(warnings));
+  std::thread device([&] {
+    ASSERT_TRUE(pty.wait_for_hello_request(5.0));
+    pty.write(serial::encode(hello_ba(1, 200)));
+    for (std::size_t k = 0; k < c.frames.size(); ++k) {
+      if (std::find(c.hello_before.begin(), c.hello_before.end(), k) != c.hello_before.end()) {
+        pty.write(serial::encode(hello_ba(1, 200)));
+      }
+      pty.write(serial::encode(c.frames[k]));
+    }
+    wait_for(seen, static_cast<int>(2 * c.kept.size()));
+    pty.close_master();
+  });
+  reader.start_time();
+  const auto rows = read_rows(reader, seen);
+  device.join();
+  ASSERT_EQ(rows.size(), 2 * c.kept.size());
+  for (std::size_t j = 0; j < c.kept.size(); ++j) {
+    const Data& sent = c.frames[c.kept[j]];
+    // Device record 0 is sensor 'b' (config index 1), record 1 is 'a'.
+    EXPECT_EQ(rows[2 * j].sensor, 1);
+    EXPECT_EQ(rows[2 * j].counts.x(), sent.sensors[0].dx) << j;
+    EXPECT_EQ(rows[2 * j + 1].counts.y(), sent.sensors[1].dy) << j;
+    EXPECT_EQ(rows[2 * j].t, rows[2 * j + 1].t);
+    if (j > 0) {
+      // Strictly later, by at most one window plus the slack allowed.
+      EXPECT_GT(rows[2 * j].t, rows[2 * j - 2].t) << j;
+      EXPECT_LE(rows[2 * j].t - rows[2 * j - 2].t, 0.005 + 0.5 + 1e-9) << j;
+    }
+  }
+  EXPECT_EQ(reader.stats().duplicates, c.duplicates);
+  EXPECT_EQ(reader.stats().stale, c.stale);
+  EXPECT_EQ(reader.stats().restarts, c.restarts);
+  EXPECT_EQ(reader.stats().clock_steps, c.clock_steps);
+  EXPECT_EQ(contains_text(warnings, "duplicated DATA frames dropped"), c.duplicates > 0);
+  EXPECT_EQ(contains_text(warnings, "the device restarted"), c.restarts > 0);
+}
+
+INSTANTIATE_TEST_SUITE_P(Cases, SerialDeviceCase, ::testing::ValuesIn(device_cases()),
+                         [](const auto& param_info) { return std::string(param_info.param.name); });
 
 TEST(SerialReader, DataWithAnotherSensorCountIsDropped) {
   test::PseudoTerminal pty;

@@ -25,6 +25,7 @@
 #include <deque>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <memory>
 #include <numbers>
 #include <optional>
@@ -96,6 +97,7 @@ struct LiveArgs {
   OdometryFlags odometry;
   double duration = 0.0;
   bool quiet = false;
+  bool force = false;
 };
 
 // Rows per second over the last few seconds, for the status line.
@@ -158,6 +160,16 @@ int run_live(LiveArgs args) {
       io::refuse_output_onto_inputs(dir / "wheels.csv", "--record", inputs);
       io::refuse_output_onto_inputs(dir / "camera.csv", "--record", inputs);
     }
+    // A recording is data that cannot be made again: replaced only when asked.
+    for (const char* name : {"mice.csv", "mice.csv.part", "robot.yaml"}) {
+      std::error_code ec;
+      if (!args.force && fs::exists(dir / name, ec)) {
+        throw io::Error(
+            fmt::format("--record {}: holds a recording ({}); pass --force to replace "
+                        "it",
+                        args.record, name));
+      }
+    }
   }
   if (!args.out.empty() && !to_stdout) {
     io::refuse_output_onto_inputs(args.out, "--out", inputs);
@@ -211,9 +223,9 @@ int run_live(LiveArgs args) {
     std::vector<std::string> comments{
         fmt::format("recorded by moa live from {}; replay: moa odometry --config {} --log {}",
                     live.origin, (dir / "robot.yaml").string(), dir.string())};
-    recording =
-        std::make_unique<io::MiceWriter>(dir / "mice.csv", config.names, live.serial != nullptr,
-                                         io::MiceWriter::Durability::kJournal, comments);
+    recording = std::make_unique<io::MiceWriter>(dir / "mice.csv", config.names,
+                                                 live.serial != nullptr || live.replay != nullptr,
+                                                 io::MiceWriter::Durability::kJournal, comments);
   }
   std::unique_ptr<io::StreamCsvWriter> stream_recording;
   if (recording && !args.streams.empty()) {
@@ -298,6 +310,20 @@ int run_live(LiveArgs args) {
   };
 
   if (streams) input.add_streams(*streams, spec.replay.empty() ? 1.0 : spec.replay_options.speed);
+  // A live input's bad row (a saturated record, a time out of order) is
+  // skipped and not recorded, so that the recording replays; each kind is
+  // reported once, with the count at the end.
+  std::map<std::string, std::size_t> skipped;
+  callbacks.on_refused = [&](const SensorRow& row, const std::string& why) {
+    if (skipped[why]++ != 0) return;
+    const bool known = row.sensor >= 0 && row.sensor < config.array.size();
+    hooks.warn(fmt::format(
+        "{}: row at t = {} s of sensor {} skipped: {} (further such rows are skipped and "
+        "counted)",
+        live.where, row.t,
+        known ? fmt::format("'{}'", config.names[static_cast<std::size_t>(row.sensor)]) : "?",
+        why));
+  };
   io::OdometryRun run;
   try {
     run = io::run_loop(config, args.config, odometry_options, input, live.where, callbacks);
@@ -311,6 +337,9 @@ int run_live(LiveArgs args) {
   if (streams) {
     streams->stop();
     say_bad_lines();
+  }
+  for (const auto& [why, count] : skipped) {
+    hooks.warn(fmt::format("{}: {} rows skipped: {}", live.where, count, why));
   }
   if (recording) recording->commit();
   if (stream_recording) stream_recording->commit();
@@ -396,6 +425,7 @@ void add_live(CLI::App& app, Action& action) {
   cmd->add_option("--duration", args->duration, "Stop after this many seconds (0: at Ctrl-C)")
       ->check(kNonNegative);
   cmd->add_flag("--quiet", args->quiet, "No status line and no summary");
+  cmd->add_flag("--force", args->force, "Replace the recording in --record DIR if there is one");
   cmd->callback([&action, args] { action = [args] { return run_live(*args); }; });
 }
 

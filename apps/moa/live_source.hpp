@@ -16,7 +16,7 @@ namespace moa::cli {
 struct SourceFlags {
   std::vector<std::string> mice;
   std::string serial;
-  int baud = 115200;
+  int baud = 500000;  ///< the firmware's (docs/firmware.md)
   std::string replay;
   double speed = 1.0;
   double start_timeout = 5.0;

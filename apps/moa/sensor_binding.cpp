@@ -4,6 +4,8 @@
 
 #include <algorithm>
 
+#include "moa/formats/config.hpp"
+#include "moa/formats/csv.hpp"
 #include "moa/formats/error.hpp"
 
 namespace moa::cli {
@@ -20,11 +22,11 @@ std::vector<SensorBinding> parse_bindings(const std::vector<std::string>& args,
     if (binding.name.empty() || binding.target.empty()) {
       throw io::Error(fmt::format("{} {}: expected NAME=PATH, both non-empty", flag, arg));
     }
-    // The name becomes a mice.csv field: it must read back as itself.
-    if (binding.name.find_first_of(", \t\r\n") != std::string::npos || binding.name[0] == '#') {
-      throw io::Error(fmt::format(
-          "{} {}: sensor name '{}' must not contain spaces or commas nor start with '#'", flag, arg,
-          binding.name));
+    // The name becomes a mice.csv field and an odometry.csv column.
+    if (!io::is_valid_sensor_name(binding.name)) {
+      throw io::Error(fmt::format("{} {}: invalid sensor name '{}': a name is {}", flag,
+                                  io::printable(arg), io::excerpt(binding.name),
+                                  io::kSensorNameRule));
     }
     const bool duplicate = std::any_of(bindings.begin(), bindings.end(),
                                        [&](const auto& b) { return b.name == binding.name; });

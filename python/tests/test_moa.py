@@ -172,6 +172,24 @@ def test_odometry_object_reports_a_bad_row():
         o.push(0.005, 0, 1.0, 2.0)
 
 
+def test_huge_times_are_refused_as_by_the_command_line(tmp_path):
+    # Issue #28: a time a double cannot resolve the epoch step at (1e300,
+    # 1e20, 1e16) is refused at once, by the same reader as `moa odometry`.
+    cfg = pathlib.Path(__file__).resolve().parents[2] / "examples/logs/mixed-motion/robot.yaml"
+    for t in ["1e300", "1e20", "1e16"]:
+        d = tmp_path / t
+        d.mkdir()
+        (d / "mice.csv").write_text(f"t,sensor,dx,dy\n{t},front,0,0\n")
+        message = cli_error("odometry", "--config", cfg, "--log", d, "--out", tmp_path / "o.csv")
+        assert "mice.csv:2: column 't': " + t + " s is outside -4e9..4e9 s" in message
+        with pytest.raises(moa.Error) as e:
+            moa.odometry(cfg, d)
+        assert str(e.value) == message
+    o = moa.Odometry(cfg, t0=0.0)
+    with pytest.raises(moa.Error, match="time is outside -4e9..4e9 s"):
+        o.push(1e300, 0, 1.0, 2.0)
+
+
 def test_calibrate_equals_the_written_config(logs, tmp_path):
     d = logs["calibration"]
     for method in ["exact", "kimlee"]:

@@ -9,6 +9,9 @@ const char* describe(RowError error) {
   switch (error) {
     case RowError::kTimeNotFinite:
       return "time is not a finite number";
+    case RowError::kTimeOutOfRange:
+      return "time is outside -4e9..4e9 s (kMaxTime: beyond, a double does not resolve the epoch "
+             "step)";
     case RowError::kTimeBeforeStart:
       return "time is before the start of the log";
     case RowError::kTimeBackwards:

@@ -43,9 +43,28 @@ bool sync_to_disk(const std::filesystem::path& file) {
 
 }  // namespace
 
-AtomicFile::AtomicFile(std::filesystem::path target)
-    : target_(std::move(target)), temp_(temporary_beside(target_)), registered_(temp_) {
-  out_.open(temp_, std::ios::binary | std::ios::trunc);
+AtomicFile::AtomicFile(std::filesystem::path target) : target_(std::move(target)) {
+#if defined(__linux__) && defined(O_TMPFILE)
+  // A file without a name in the target's directory (Linux, O_TMPFILE): a
+  // run killed by SIGKILL leaves nothing behind. Written through
+  // /proc/self/fd, which reopens it.
+  const std::filesystem::path dir =
+      target_.parent_path().empty() ? std::filesystem::path(".") : target_.parent_path();
+  anonymous_fd_ = ::open(dir.c_str(), O_TMPFILE | O_WRONLY | O_CLOEXEC, 0666);
+  if (anonymous_fd_ >= 0) {
+    out_.open(fmt::format("/proc/self/fd/{}", anonymous_fd_), std::ios::binary | std::ios::trunc);
+    if (!out_) {
+      ::close(anonymous_fd_);
+      anonymous_fd_ = -1;
+    }
+  }
+#endif
+  if (anonymous_fd_ < 0) {
+    // Elsewhere, a hidden named temporary, removed on SIGINT and SIGTERM.
+    temp_ = temporary_beside(target_);
+    registered_ = TemporaryPath(temp_);
+    out_.open(temp_, std::ios::binary | std::ios::trunc);
+  }
   if (!out_) {
     const int error = errno;
     throw IoError(fmt::format("{}: cannot open for writing ({})", target_.string(),
@@ -57,6 +76,10 @@ AtomicFile::~AtomicFile() {
   close_writeback();
   if (committed_) return;
   out_.close();
+#if defined(__unix__) || defined(__APPLE__)
+  if (anonymous_fd_ >= 0) ::close(anonymous_fd_);
+#endif
+  if (temp_.empty()) return;
   std::error_code ignored;
   std::filesystem::remove(temp_, ignored);
   registered_.release();
@@ -65,6 +88,10 @@ AtomicFile::~AtomicFile() {
 void AtomicFile::start_writeback() {
 #if defined(__linux__)
   out_.flush();
+  if (anonymous_fd_ >= 0) {
+    (void)::sync_file_range(anonymous_fd_, 0, 0, SYNC_FILE_RANGE_WRITE);
+    return;
+  }
   if (writeback_fd_ < 0) writeback_fd_ = ::open(temp_.c_str(), O_RDONLY | O_CLOEXEC);
   if (writeback_fd_ >= 0) (void)::sync_file_range(writeback_fd_, 0, 0, SYNC_FILE_RANGE_WRITE);
 #endif
@@ -83,10 +110,38 @@ void AtomicFile::commit() {
   out_.flush();
   const bool written = static_cast<bool>(out_);
   out_.close();
-  if (!written || !out_) throw IoError(fmt::format("{}: cannot write", target_.string()));
+  if (!written || !out_) {
+    // errno of the failed write: "No space left on device" on a full disk.
+    throw IoError(fmt::format("{}: cannot write ({})", target_.string(),
+                              std::strerror(errno != 0 ? errno : EIO)));
+  }
+#if defined(__linux__) && defined(O_TMPFILE)
+  if (anonymous_fd_ >= 0) {
+    // Data first, then a name: linked under a hidden name (registered for
+    // SIGINT and SIGTERM for the moment it exists) and renamed onto the
+    // target, which it replaces atomically.
+    if (::fsync(anonymous_fd_) != 0) {
+      throw IoError(fmt::format("{}: cannot write ({})", target_.string(), std::strerror(errno)));
+    }
+    temp_ = temporary_beside(target_);
+    registered_ = TemporaryPath(temp_);
+    const std::string self = fmt::format("/proc/self/fd/{}", anonymous_fd_);
+    if (::linkat(AT_FDCWD, self.c_str(), AT_FDCWD, temp_.c_str(), AT_SYMLINK_FOLLOW) != 0) {
+      const int error = errno;
+      registered_.release();
+      temp_.clear();
+      throw IoError(fmt::format("{}: cannot write ({})", target_.string(), std::strerror(error)));
+    }
+    ::close(anonymous_fd_);
+    anonymous_fd_ = -1;
+  } else if (!sync_to_disk(temp_)) {
+    throw IoError(fmt::format("{}: cannot write ({})", target_.string(), std::strerror(errno)));
+  }
+#else
   if (!sync_to_disk(temp_)) {
     throw IoError(fmt::format("{}: cannot write ({})", target_.string(), std::strerror(errno)));
   }
+#endif
   std::error_code ec;
   std::filesystem::rename(temp_, target_, ec);
   if (ec) throw IoError(fmt::format("{}: cannot write ({})", target_.string(), ec.message()));

@@ -17,6 +17,7 @@
 #include "moa/formats/atomic_file.hpp"
 #include "moa/formats/csv.hpp"
 #include "moa/formats/error.hpp"
+#include "moa/formats/read_file.hpp"
 #include "moa/formats/yaml.hpp"
 
 namespace moa::io {
@@ -43,16 +44,17 @@ class Context {
   std::string where_;
 };
 
-// Names are matched against the sensor column of mice.csv, which has no
-// quoting and trims spaces: a name with a comma, a space or a control
-// character could never match a row.
-bool is_valid_name(std::string_view name) {
-  if (name.empty()) return false;
-  return std::none_of(name.begin(), name.end(), [](char c) {
-    const auto u = static_cast<unsigned char>(c);
-    return c == ',' || c == ' ' || u < 0x20 || u == 0x7f;
+}  // namespace
+
+bool is_valid_sensor_name(std::string_view name) {
+  if (name.empty() || name.size() > kMaxSensorName) return false;
+  return std::all_of(name.begin(), name.end(), [](char c) {
+    return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' ||
+           c == '.' || c == '-';
   });
 }
+
+namespace {
 
 // Range checks on values, shared by parsing (bad input) and formatting (a
 // config built in code must not produce a file that cannot be read back).
@@ -101,10 +103,9 @@ std::string sensor_name(const YamlSource& source, const YAML::Node& node, std::s
       source.fail(value, fmt::format("{}: key 'name': expected a name, found {}", unnamed,
                                      describe_kind(value)));
     }
-    if (!is_valid_name(value.Scalar())) {
-      source.fail(value, fmt::format("{}: key 'name': invalid name '{}' (empty, or a comma, space "
-                                     "or control character: it could not appear in mice.csv)",
-                                     unnamed, value.Scalar()));
+    if (!is_valid_sensor_name(value.Scalar())) {
+      source.fail(value, fmt::format("{}: key 'name': invalid name '{}': a name is {}", unnamed,
+                                     excerpt(value.Scalar()), kSensorNameRule));
     }
     return value.Scalar();
   }
@@ -226,17 +227,7 @@ RobotConfig parse_config(std::string_view yaml, std::string_view source_name) {
 }
 
 RobotConfig read_config(const std::filesystem::path& path) {
-  const std::string source = path.string();
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) {
-    throw Error(fmt::format("{}: cannot open (is a directory)", source));
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(fmt::format("{}: cannot open", source));
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw Error(fmt::format("{}: read error", source));
-  return parse_config(text.str(), source);
+  return parse_config(read_bounded(path, kMaxYamlBytes, "a moa robot config"), path.string());
 }
 
 std::string format_config(const RobotConfig& config) {
@@ -247,20 +238,25 @@ std::string format_config(const RobotConfig& config) {
   }
   check_count(context, n);
 
-  // "{}" is fmt's shortest representation that reads back as the same double.
+  // "{}" is fmt's shortest representation that reads back as the same double;
+  // -0 is written as 0 (equal as numbers, and no one writes "-0" by hand).
+  const auto num = [](double v) { return v == 0.0 ? 0.0 : v; };
   std::string out = fmt::format("version: {}\nsensors:\n", kConfigVersion);
   for (std::size_t i = 0; i < n; ++i) {
     const std::string& name = config.names[i];
     const SensorMount& m = config.array.mounts()[i];
-    const Context sensor(context.source(), sensor_label(i, is_valid_name(name) ? name : ""));
-    if (!is_valid_name(name)) sensor.fail_key("name", fmt::format("invalid name '{}'", name));
+    const Context sensor(context.source(), sensor_label(i, is_valid_sensor_name(name) ? name : ""));
+    if (!is_valid_sensor_name(name)) {
+      sensor.fail_key(
+          "name", fmt::format("invalid name '{}': a name is {}", excerpt(name), kSensorNameRule));
+    }
     if (config.index_of(name) != static_cast<int>(i)) {
       context.fail(fmt::format("duplicate sensor name '{}'", name));
     }
     check_mount(sensor, m);
     out += fmt::format("  - name: {}\n", yaml_name(name));
-    out += fmt::format("    position: [{}, {}]\n", m.position.x(), m.position.y());
-    out += fmt::format("    yaw: {}\n", m.yaw);
+    out += fmt::format("    position: [{}, {}]\n", num(m.position.x()), num(m.position.y()));
+    out += fmt::format("    yaw: {}\n", num(m.yaw));
     out += fmt::format("    cpi: {}\n", m.cpi);
     out += fmt::format("    scale: [{}, {}]\n", m.scale.x(), m.scale.y());
     out += fmt::format("    mirrored: {}\n", m.mirrored);

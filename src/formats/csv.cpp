@@ -80,6 +80,11 @@ std::string printable(std::string_view text) {
   return out;
 }
 
+std::string excerpt(std::string_view text) {
+  if (text.size() <= kMaxExcerpt) return printable(text);
+  return fmt::format("{}... ({} bytes)", printable(text.substr(0, kMaxExcerpt)), text.size());
+}
+
 namespace {
 
 constexpr std::array<std::uint64_t, 20> kPow10 = [] {
@@ -353,7 +358,7 @@ CsvReader::CsvReader(const std::filesystem::path& file) : file_(file.string()) {
   header_.reserve(fields_.size());
   for (std::size_t i = 0; i < fields_.size(); ++i) {
     if (fields_[i].empty()) fail(fmt::format("column {} of the header has no name", i + 1));
-    if (column(fields_[i])) fail(fmt::format("duplicate column '{}'", fields_[i]));
+    if (column(fields_[i])) fail(fmt::format("duplicate column '{}'", excerpt(fields_[i])));
     header_.emplace_back(fields_[i]);
   }
 }
@@ -376,7 +381,8 @@ void CsvReader::refill() {
     end_ -= begin_;
     begin_ = 0;
   }
-  if (end_ == block_.size()) block_.resize(2 * block_.size());
+  // A line may fill the block only while it is not yet known to be too long.
+  if (end_ == block_.size()) block_.resize(std::max(2 * block_.size(), kMaxLineBytes + 2));
   const std::size_t n = std::fread(block_.data() + end_, 1, block_.size() - end_, in_.get());
   end_ += n;
   if (n == 0) {
@@ -392,10 +398,12 @@ bool CsvReader::next_line(std::string_view& line) {
     const std::size_t size = end_ - begin_;
     if (const void* nl = std::memchr(start, '\n', size)) {
       const auto length = static_cast<std::size_t>(static_cast<const char*>(nl) - start);
+      if (length > kMaxLineBytes) fail_long_line();
       line = {start, length};
       begin_ += length + 1;
       return true;
     }
+    if (size > kMaxLineBytes) fail_long_line();
     if (eof_) {
       if (size == 0) return false;
       line = {start, size};
@@ -460,12 +468,12 @@ std::variant<double, std::string> parse_number(std::string_view text) {
   const bool spelled_non_finite = bare == "nan" || bare == "inf" || bare == "infinity";
   if ((ec == std::errc{} && whole && !std::isfinite(value)) ||
       (ec != std::errc{} && spelled_non_finite)) {
-    return fmt::format("'{}' is not a finite number", text);
+    return fmt::format("'{}' is not a finite number", excerpt(text));
   }
   if (ec == std::errc::result_out_of_range && whole) {
-    return fmt::format("'{}' is out of range", text);
+    return fmt::format("'{}' is out of range", excerpt(text));
   }
-  if (ec != std::errc{} || !whole) return fmt::format("'{}' is not a number", text);
+  if (ec != std::errc{} || !whole) return fmt::format("'{}' is not a number", excerpt(text));
   return value;
 }
 
@@ -494,33 +502,51 @@ std::int64_t CsvReader::integer(std::size_t column, std::int64_t min, std::int64
   std::int64_t value = 0;
   const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), value);
   if (ec == std::errc::result_out_of_range && end == digits.data() + digits.size()) {
-    fail_field(column, fmt::format("{} is outside {}..{}", text, min, max));
+    fail_field(column, fmt::format("{} is outside {}..{}", excerpt(text), min, max));
   }
   if (ec != std::errc{} || end != digits.data() + digits.size()) {
-    fail_field(column, fmt::format("'{}' is not an integer", text));
+    fail_field(column, fmt::format("'{}' is not an integer", excerpt(text)));
   }
   if (value < min || value > max)
-    fail_field(column, fmt::format("{} is outside {}..{}", text, min, max));
+    fail_field(column, fmt::format("{} is outside {}..{}", excerpt(text), min, max));
   return value;
 }
 
 double CsvReader::time(std::size_t column) {
   const double t = number(column);
+  if (!(std::abs(t) <= kMaxTime)) {
+    static_assert(kMaxTime == 4e9, "the message below says 4e9");
+    fail_field(column, fmt::format("{} s is outside -4e9..4e9 s (beyond, a double no longer "
+                                   "resolves the epoch step exactly)",
+                                   excerpt(fields_[column])));
+  }
+  if (first_time_ && t - *first_time_ > kMaxSpan) {
+    fail_field(column,
+               fmt::format("{} s is {:g} s after the file's first time ({} s): more than "
+                           "{:g} s (one day) in one log",
+                           excerpt(fields_[column]), t - *first_time_, *first_time_, kMaxSpan));
+  }
   if (last_time_ && t < *last_time_) {
     fail(fmt::format("time goes backwards ({} after {})", t, *last_time_));
   }
+  if (!first_time_) first_time_ = t;
   last_time_ = t;
   return t;
 }
 
 void CsvReader::fail(std::string_view what) const { fail_at(line_, what); }
 
+void CsvReader::fail_long_line() const {
+  fail_at(line_ + 1,
+          fmt::format("line longer than {} bytes: not a CSV file of moa's", kMaxLineBytes));
+}
+
 void CsvReader::fail_at(std::size_t line, std::string_view what) const {
   throw Error(printable(fmt::format("{}:{}: {}", file_, line, what)));
 }
 
 void CsvReader::fail_field(std::size_t column, std::string_view what) const {
-  fail(fmt::format("column '{}': {}", header_[column], what));
+  fail(fmt::format("column '{}': {}", excerpt(header_[column]), what));
 }
 
 }  // namespace moa::io

@@ -231,7 +231,11 @@ struct MiceReader::Impl {
     row.t = csv.time(t);
     name = csv.field(sensor);
     const auto it = std::find(names.begin(), names.end(), name);
-    if (it == names.end()) csv.fail(fmt::format("unknown sensor '{}'", name));
+    if (it == names.end()) {
+      // A log of another robot, or the wrong config: say which names it has.
+      csv.fail(fmt::format("unknown sensor '{}' (the config's sensors: {})", excerpt(name),
+                           fmt::join(names, ", ")));
+    }
     row.sensor = static_cast<int>(it - names.begin());
     row.counts = {static_cast<double>(csv.integer(dx, -kMaxExactCount, kMaxExactCount)),
                   static_cast<double>(csv.integer(dy, -kMaxExactCount, kMaxExactCount))};

@@ -134,7 +134,8 @@ void MiceWriter::write(const SensorRow& row) {
 
 void MiceWriter::flush() {
   impl_->out->flush();
-  if (!*impl_->out) impl_->fail("cannot write");
+  if (!*impl_->out)
+    impl_->fail(fmt::format("cannot write ({})", std::strerror(errno ? errno : EIO)));
 }
 
 void MiceWriter::commit() {
@@ -146,7 +147,9 @@ void MiceWriter::commit() {
     impl.journal.flush();
     const bool written = static_cast<bool>(impl.journal);
     impl.journal.close();
-    if (!written || !impl.journal) impl.fail("cannot write");
+    if (!written || !impl.journal) {
+      impl.fail(fmt::format("cannot write ({})", std::strerror(errno ? errno : EIO)));
+    }
     sync_to_disk(impl.partial);
     std::error_code ec;
     std::filesystem::rename(impl.partial, impl.target, ec);

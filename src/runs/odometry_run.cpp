@@ -79,6 +79,23 @@ LogFiles resolve_log(const fs::path& log) {
     files.mice = log;
   }
   if (!fs::is_regular_file(files.mice, ec)) {
+    const fs::path part = fs::path(files.mice) += ".part";
+    if (!fs::exists(files.mice, ec) && fs::is_regular_file(part, ec)) {
+      // MiceWriter's journal (moa live --record) of a run that was killed.
+      throw Error(fmt::format(
+          "{}: no such file, but {} is there: the recording was interrupted (killed before it "
+          "ended); its rows up to the last flush are in that file. To recover them: mv {} {} (if "
+          "its last line was cut, delete that line)",
+          files.mice.string(), part.string(), part.string(), files.mice.string()));
+    }
+    const fs::file_status status = fs::status(files.mice, ec);
+    if (fs::is_fifo(status) || fs::is_character_file(status) || fs::is_block_file(status) ||
+        fs::is_socket(status)) {
+      throw Error(fmt::format(
+          "{}: not a regular file (a {}): a log is read from files; copy it "
+          "to one first",
+          files.mice.string(), fs::is_fifo(status) ? "named pipe" : "device or socket"));
+    }
     throw Error(
         fmt::format("{}: no such file (a log directory holds mice.csv)", files.mice.string()));
   }

@@ -51,9 +51,15 @@ OdometryRun run_loop(const RobotConfig& config, const std::string& config_path,
   };
 
   while (const InputRow* input = source.next()) {
-    if (callbacks.on_row) callbacks.on_row(*input);
     if (const auto* row = std::get_if<SensorRow>(input)) {
-      if (const auto e = odometry->push(*row, sink)) fail(row->t, *e);
+      if (const auto e = odometry->push(*row, sink)) {
+        const bool refused = e == OdometryError::kRow || e == OdometryError::kImpossibleCounts;
+        if (!refused || !callbacks.on_refused) fail(row->t, *e);
+        callbacks.on_refused(
+            *row, e == OdometryError::kRow ? describe(odometry->row_error()) : describe(*e));
+        continue;
+      }
+      if (callbacks.on_row) callbacks.on_row(*input);
       run.t_end = row->t;
       ++run.rows;
       if (row->sensor >= 0 && row->sensor < kMaxSensors) {
@@ -61,10 +67,12 @@ OdometryRun run_loop(const RobotConfig& config, const std::string& config_path,
       }
       if (callbacks.progress && (run.rows & 0xfff) == 0) callbacks.progress(run.rows, row->t);
     } else if (const auto* wheel = std::get_if<WheelRow>(input)) {
+      if (callbacks.on_row) callbacks.on_row(*input);
       if (const auto e = odometry->push_wheels(wheel->t, wheel->twist, sink)) fail(wheel->t, *e);
       ++run.wheel_rows;
     } else {
       const auto& fix = std::get<CameraFix>(*input);
+      if (callbacks.on_row) callbacks.on_row(*input);
       if (const auto e = odometry->push_fix(fix)) fail(fix.t, *e);
       ++run.fix_rows;
     }

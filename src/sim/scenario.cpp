@@ -16,8 +16,10 @@
 #include <system_error>
 
 #include "builtin_scenarios.hpp"
+#include "moa/formats/config.hpp"
 #include "moa/formats/csv.hpp"
 #include "moa/formats/error.hpp"
+#include "moa/formats/read_file.hpp"
 #include "moa/formats/yaml.hpp"
 
 namespace moa::sim {
@@ -151,10 +153,10 @@ io::RobotConfig parse_sensors(const Source& source, const YAML::Node& node,
   }
   for (std::size_t i = 0; i < config.names.size(); ++i) {
     const std::string& name = config.names[i];
-    const bool bad = name.empty() || std::any_of(name.begin(), name.end(), [](char c) {
-                       return c == ',' || c == ' ' || static_cast<unsigned char>(c) < 0x20;
-                     });
-    if (bad) source.fail(node, fmt::format("key 'sensors': invalid sensor name '{}'", name));
+    if (!io::is_valid_sensor_name(name)) {
+      source.fail(node, fmt::format("key 'sensors': invalid sensor name '{}': a name is {}",
+                                    io::excerpt(name), io::kSensorNameRule));
+    }
     if (std::find(config.names.begin(), config.names.begin() + static_cast<long>(i), name) !=
         config.names.begin() + static_cast<long>(i)) {
       source.fail(node, fmt::format("key 'sensors': duplicate sensor name '{}'", name));
@@ -664,14 +666,7 @@ Scenario load_scenario(std::string_view name_or_path) {
     throw io::Error(fmt::format("scenario '{}': not a built-in scenario ({}) and no such file",
                                 name_or_path, names));
   }
-  if (std::filesystem::is_directory(path, ec)) {
-    throw io::Error(fmt::format("{}: cannot open (is a directory)", path.string()));
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw io::Error(fmt::format("{}: cannot open", path.string()));
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_scenario(text.str(), path.string());
+  return parse_scenario(io::read_bounded(path, io::kMaxYamlBytes, "a moa scenario"), path.string());
 }
 
 }  // namespace moa::sim

@@ -46,11 +46,7 @@ std::string_view trim(std::string_view text) {
 }
 
 // Quoted input in an error stays short and on one line.
-std::string quote(std::string_view text) {
-  constexpr std::size_t kMax = 40;
-  if (text.size() > kMax) return printable(text.substr(0, kMax)) + "...";
-  return printable(text);
-}
+std::string quote(std::string_view text) { return excerpt(text); }
 
 // Whitespace separated fields up to a '#' comment.
 std::vector<std::string_view> fields_of(std::string_view text) {
@@ -147,10 +143,21 @@ class LineFile {
   }
   /// The next line without its end ('\r' of CRLF files dropped).
   std::optional<std::string_view> next() {
-    if (!std::getline(in_, buffer_)) {
-      if (in_.bad()) throw Error(fmt::format("{}: read error", name_));
-      return std::nullopt;
+    // std::getline() with the CSV reader's bound: a file without line
+    // ends (/dev/zero) is refused after kMaxLineBytes, not read whole.
+    buffer_.clear();
+    std::streambuf& in = *in_.rdbuf();
+    bool any = false;
+    for (int c = in.sbumpc(); c != std::char_traits<char>::eof(); c = in.sbumpc()) {
+      any = true;
+      if (c == '\n') break;
+      if (buffer_.size() == kMaxLineBytes) {
+        throw Error(fmt::format("{}:{}: line longer than {} bytes: not an evemu recording", name_,
+                                line_ + 1, kMaxLineBytes));
+      }
+      buffer_.push_back(static_cast<char>(c));
     }
+    if (!any) return std::nullopt;
     ++line_;
     if (!buffer_.empty() && buffer_.back() == '\r') buffer_.pop_back();
     return std::string_view(buffer_);

@@ -319,8 +319,19 @@ std::optional<std::variant<Message, FrameError>> Decoder::push(std::uint8_t byte
 
 // ------------------------------------------------------------- DataTracker
 
+FrameOrder DataTracker::classify(const Data& data) {
+  if (!started_) return FrameOrder::kNext;
+  const auto step = static_cast<std::uint16_t>(data.sequence - last_sequence_);
+  if (step == 0) return FrameOrder::kRepeat;
+  if (step < 0x8000u) return FrameOrder::kNext;
+  const bool follows = behind_ && static_cast<std::uint16_t>(*behind_ + 1u) == data.sequence;
+  behind_ = data.sequence;
+  return follows ? FrameOrder::kRestart : FrameOrder::kStale;
+}
+
 double DataTracker::accept(const Data& data, std::uint32_t tick_hz) {
   assert(tick_hz > 0);
+  behind_.reset();
   if (!started_) {
     started_ = true;
   } else {

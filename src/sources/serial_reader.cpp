@@ -71,6 +71,9 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 constexpr double kHelloRequestPeriod = 1.0;  // s
+// s, how far the device clock may run ahead of its frame count before it is
+// taken for a clock step (USB latency does not enter: times are the device's).
+constexpr double kMaxClockSlack = 0.5;
 
 Clock::duration seconds(double s) {
   return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
@@ -169,12 +172,9 @@ struct SerialReader::Impl {
       }
       mapped.push_back(static_cast<int>(it - config_names.begin()));
     }
-    if (have_hello && h.tick_hz != hello.tick_hz) {
-      // A new clock: its times continue from the last row.
-      lost_before += tracker.lost_frames();
-      tracker = serial::DataTracker{};
-      rebase_next = true;
-    }
+    // A HELLO after the first: the device restarted (its sequence and clock
+    // start again) or changed its tick rate; times continue from the last row.
+    if (have_hello) restart();
     const bool first = !have_hello;
     hello = h;
     have_hello = true;
@@ -187,11 +187,44 @@ struct SerialReader::Impl {
 
   bool rebase_next = false;
 
+  void restart() {
+    lost_before += tracker.lost_frames();
+    tracker = serial::DataTracker{};
+    rebase_next = true;
+    ++stats.restarts;
+  }
+
+  // s, the time one DATA frame covers (k samples at frame_rate); one tick
+  // when the HELLO does not say.
+  double frame_window() const {
+    if (hello.frame_rate > 0 && hello.k > 0) {
+      return static_cast<double>(hello.k) / hello.frame_rate;
+    }
+    return 1.0 / static_cast<double>(hello.tick_hz);
+  }
+
   void on_data(const serial::Data& data) {
     if (!have_hello) {
       ++stats.before_hello;
       return;
     }
+    // A duplicated or late frame would add its counts a second time or out
+    // of order: dropped. A sequence behind twice in a row is a restart.
+    switch (tracker.classify(data)) {
+      case serial::FrameOrder::kRepeat:
+        ++stats.duplicates;
+        return;
+      case serial::FrameOrder::kStale:
+        ++stats.stale;
+        return;
+      case serial::FrameOrder::kRestart:
+        restart();
+        ++lost_before;  // its first frame, taken for a stale one
+        break;
+      case serial::FrameOrder::kNext:
+        break;
+    }
+    const std::uint64_t lost_then = tracker.lost_frames();
     const double t_device = tracker.accept(data, hello.tick_hz);
     stats.lost_frames = lost_before + tracker.lost_frames();
     // It arrived (no sequence gap), but its records cannot be assigned.
@@ -199,20 +232,26 @@ struct SerialReader::Impl {
       ++stats.mismatched;
       return;
     }
-    if (!base) {
-      const double window =
-          hello.frame_rate > 0 ? static_cast<double>(hello.k) / hello.frame_rate : 0.0;
-      base = t_device - window;
-    }
+    const double window = frame_window();
+    // The first row covers one window before it; none when the HELLO gives no rate.
+    if (!base) base = t_device - (hello.frame_rate > 0 ? window : 0.0);
     double t = t_device - *base + offset;
-    if (rebase_next) {
-      offset += last_t - t;
-      t = last_t;
+    // Frames since the last one (1 + those lost): the device clock should
+    // have moved by that many windows. Times stay strictly increasing (two
+    // rows of a sensor at one time read as a duplicated line) and never jump
+    // by more than kMaxClockSlack beyond that: a restart, a clock stepped
+    // back or forwards, continues one window after the last row, so that the
+    // recording replays.
+    const double frames = static_cast<double>(tracker.lost_frames() - lost_then + 1);
+    const bool after_first = stats.data_frames > 0;
+    const bool stepped =
+        after_first && (t < last_t || t - last_t > frames * window + kMaxClockSlack);
+    if (rebase_next || stepped || (after_first && t <= last_t)) {
+      if (stepped && !rebase_next) ++stats.clock_steps;
+      const double wanted = after_first ? last_t + window : t;
+      offset += wanted - t;
+      t = wanted;
       rebase_next = false;
-    } else if (t < last_t) {
-      ++stats.clock_steps;
-      offset += last_t - t;
-      t = last_t;
     }
     last_t = t;
     last_data = Clock::now();
@@ -305,7 +344,24 @@ struct SerialReader::Impl {
                                 stats.overflow_rows));
     }
     if (stats.clock_steps > reported.clock_steps) {
-      hooks.warning(fmt::format("{}: the device clock went back (restart?); times re-based", name));
+      hooks.warning(fmt::format(
+          "{}: {} device clock steps so far (back, or ahead of its frames by more than {} s); "
+          "times continue from the last row",
+          name, stats.clock_steps, kMaxClockSlack));
+    }
+    if (stats.restarts > reported.restarts) {
+      hooks.warning(
+          fmt::format("{}: the device restarted ({} so far); times continue from the "
+                      "last row",
+                      name, stats.restarts));
+    }
+    if (stats.duplicates > reported.duplicates) {
+      hooks.warning(
+          fmt::format("{}: {} duplicated DATA frames dropped so far", name, stats.duplicates));
+    }
+    if (stats.stale > reported.stale) {
+      hooks.warning(fmt::format("{}: {} late DATA frames (sequence behind) dropped so far", name,
+                                stats.stale));
     }
     reported = stats;
   }

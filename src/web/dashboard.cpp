@@ -21,6 +21,14 @@
 #include "report_assets.hpp"
 
 namespace moa::io {
+namespace {
+
+// Workers beyond max_clients (see Dashboard::Dashboard).
+constexpr int kSpareWorkers = 32;
+// us, the longest pause within a request's bytes.
+constexpr long kRequestReadTimeoutUs = 500000;
+
+}  // namespace
 
 const char* DashboardOptions::validate() const {
   if (host.empty()) return "host: must not be empty";
@@ -293,7 +301,11 @@ Dashboard::Dashboard(const RobotConfig& config, const DashboardOptions& options)
   s.page = dashboard_page(config, options.title);
   s.pending.reset(config.array.size());
 
-  const int threads = options.max_clients + 2;  // the streams, and / or a 503 besides
+  // The streams, and room besides for the page, a 503 and connections that
+  // dribble their request (slow-loris): each holds a worker until it sends
+  // nothing for kRequestReadTimeout, so kSpareWorkers of them at once still
+  // leave one for the page.
+  const int threads = options.max_clients + kSpareWorkers;
   s.server.new_task_queue = [threads] {
     return new httplib::ThreadPool(static_cast<std::size_t>(threads));
   };
@@ -303,8 +315,11 @@ Dashboard::Dashboard(const RobotConfig& config, const DashboardOptions& options)
     setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
     setsockopt(sock, SOL_SOCKET, SO_SNDBUF, &buffer, sizeof buffer);
   });
-  s.server.set_keep_alive_timeout(1);
-  s.server.set_read_timeout(2, 0);
+  s.server.set_keep_alive_timeout(1);  // idle timeout between requests, s
+  s.server.set_keep_alive_max_count(16);
+  // A browser sends its request at once: a connection that leaves a gap this
+  // long within its headers is dropped.
+  s.server.set_read_timeout(std::chrono::microseconds(kRequestReadTimeoutUs));
   s.server.set_write_timeout(2, 0);  // a client that reads nothing for 2 s is dropped
   s.server.Get("/", [this](const httplib::Request&, httplib::Response& res) {
     res.set_header("Cache-Control", "no-store");

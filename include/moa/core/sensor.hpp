@@ -61,8 +61,9 @@ struct SensorPreset {
   real frame_rate;  ///< frames (packets) per second
 };
 
-/// Agilent HDNS-2051 (Sekimori & Miyazaki): 800 cpi, 14 in/s, 2300 Hz.
-inline constexpr SensorPreset kHdns2051{"HDNS-2051", 800.0, 14.0 * kMetresPerInch, 2300.0};
+/// Agilent HDNS-2051 (Sekimori & Miyazaki): 800 cpi, 14 in/s = 0.3556 m/s
+/// (the decimal: 14 * 0.0254 rounds to 0.35559999999999997), 2300 Hz.
+inline constexpr SensorPreset kHdns2051{"HDNS-2051", 800.0, 0.3556, 2300.0};
 /// Avago ADNS-3080 (Kim & Lee Table I) at their setting: 1600 cpi (400 also
 /// selectable), 40 in/s at 6400 fps (the sensor allows up to 6469 fps).
 inline constexpr SensorPreset kAdns3080{"ADNS-3080", 1600.0, 40.0 * kMetresPerInch, 6400.0};

@@ -40,8 +40,20 @@ struct SensorRow {
   std::uint8_t faults = 0;  ///< simulated fault bits (faults.csv), for the oracle
 };
 
+/// s, the largest |t| any row may carry: unix times (1.7e9 s in 2024) up to
+/// the year 2096. A double resolves 4e9 s to 4.8e-7 s (2^-21 s), 0.005 % of
+/// a 10 ms epoch and 0.5 % of the shortest (0.1 ms, 10 kHz), so epoch
+/// boundaries t0 + k period stay exact to that; beyond ~1e15 s it no longer
+/// resolves a millisecond and epochs were counted wrong (or never ended).
+inline constexpr double kMaxTime = 4e9;
+/// s, the longest span from a log file's first time to its last that its
+/// reader accepts (one day: at 100 Hz, 8.64e6 epochs). Live runs have none:
+/// their rows come at the pace of real time.
+inline constexpr double kMaxSpan = 86400.0;
+
 enum class RowError {
   kTimeNotFinite,
+  kTimeOutOfRange,   ///< |t| > kMaxTime
   kTimeBeforeStart,  ///< t < t0
   kTimeBackwards,    ///< t earlier than the previous row's
   kUnknownSensor,    ///< index outside the array
@@ -52,11 +64,12 @@ const char* describe(RowError error);
 
 /// The checks every consumer of rows makes: a finite time not before t0 nor
 /// before the previous row's (`last_row_t`) nor more than `max_gap` (s)
-/// after it, a sensor index below n_sensors, finite counts.
+/// after it, |t| <= kMaxTime, a sensor index below n_sensors, finite counts.
 inline std::optional<RowError> check_row(const SensorRow& row, int n_sensors, double t0,
                                          double last_row_t,
                                          double max_gap = std::numeric_limits<double>::infinity()) {
   if (!std::isfinite(row.t)) return RowError::kTimeNotFinite;
+  if (std::abs(row.t) > kMaxTime) return RowError::kTimeOutOfRange;
   if (row.t < t0) return RowError::kTimeBeforeStart;
   if (row.t < last_row_t) return RowError::kTimeBackwards;
   if (row.t - last_row_t > max_gap) return RowError::kTimeJump;

@@ -1,7 +1,9 @@
 // An output file that appears whole or not at all: written to a temporary
-// file beside the target and renamed over it by commit(). Destroyed
-// without commit() (an error, an exception), the temporary is removed; so
-// it is on SIGINT or SIGTERM in `moa` (io/cleanup.hpp).
+// file beside the target and renamed over it by commit(). On Linux the
+// temporary has no name until commit() (O_TMPFILE), so even SIGKILL leaves
+// nothing behind; elsewhere it is a hidden file. Destroyed without commit()
+// (an error, an exception), the temporary is removed; so it is on SIGINT or
+// SIGTERM in `moa` (io/cleanup.hpp).
 #pragma once
 
 #include <filesystem>
@@ -35,6 +37,7 @@ class AtomicFile {
   TemporaryPath registered_;
   std::ofstream out_;
   int writeback_fd_ = -1;  ///< the temporary, opened by start_writeback()
+  int anonymous_fd_ = -1;  ///< the unnamed temporary (O_TMPFILE), until commit()
   bool committed_ = false;
 };
 

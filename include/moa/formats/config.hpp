@@ -45,6 +45,14 @@ struct RobotConfig {
 
 /// Parses YAML text; `source` names it in errors (usually the file path).
 RobotConfig parse_config(std::string_view yaml, std::string_view source);
+
+/// Sensor names are fields of mice.csv, parts of odometry.csv's `used`
+/// column (joined by '+'), JSON keys and column names: only what all of them
+/// carry unquoted, [A-Za-z0-9_.-]{1,32} (kSensorNameRule).
+inline constexpr std::size_t kMaxSensorName = 32;
+inline constexpr const char* kSensorNameRule =
+    "1 to 32 characters among A-Z a-z 0-9 _ . - (what mice.csv, odometry.csv and JSON all carry)";
+bool is_valid_sensor_name(std::string_view name);
 /// Reads and parses a file; throws io::Error ("FILE: ...") on any problem.
 RobotConfig read_config(const std::filesystem::path& path);
 

@@ -7,8 +7,14 @@
 // spaces and tabs around a field are dropped, every record has as many
 // fields as the header, and blank lines are allowed only at the end of the
 // file (a blank line followed by more content is reported at its own line).
+//
+// Bounds (docs/reliability.md): a line holds at most kMaxLineBytes bytes and
+// is refused as soon as that many have been read without a '\n'; a time is
+// within [-kMaxTime, kMaxTime] and at most kMaxSpan after the file's first
+// (core/synchronise.hpp); an error quotes at most kMaxExcerpt bytes of input.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
@@ -20,11 +26,21 @@
 #include <variant>
 #include <vector>
 
+#include "moa/core/synchronise.hpp"
+
 namespace moa::io {
+
+/// Bytes in one line of a CSV file, its '\n' excluded.
+inline constexpr std::size_t kMaxLineBytes = std::size_t{1} << 16;
+/// Bytes of input an error message quotes at most.
+inline constexpr std::size_t kMaxExcerpt = 40;
 
 /// `text` with control characters written as \xNN, so that an error message
 /// quoting input stays on one line.
 std::string printable(std::string_view text);
+/// printable() of at most the first kMaxExcerpt bytes of `text`, followed by
+/// "... (N bytes)" when it was cut: how a reader quotes input in an error.
+std::string excerpt(std::string_view text);
 
 /// The finite number `text` spells (std::from_chars general format, a
 /// leading '+' allowed), or why it is not one: "'x' is not a number",
@@ -147,6 +163,8 @@ class CsvReader {
   /// earlier than the previous record's; false otherwise (nothing changes).
   bool accept_time(double t) {
     if (last_time_ && t < *last_time_) return false;
+    if (!(std::abs(t) <= kMaxTime) || (first_time_ && t - *first_time_ > kMaxSpan)) return false;
+    if (!first_time_) first_time_ = t;
     last_time_ = t;
     return true;
   }
@@ -158,7 +176,8 @@ class CsvReader {
   double number(std::size_t column) const;
   /// An integer within [min, max] (decimal digits, optional sign, nothing else).
   std::int64_t integer(std::size_t column, std::int64_t min, std::int64_t max) const;
-  /// A finite number no earlier than the previous record's time.
+  /// A finite number no earlier than the previous record's time, within
+  /// [-kMaxTime, kMaxTime] s and at most kMaxSpan s after the file's first.
   double time(std::size_t column);
 
   /// Throws io::Error "FILE:LINE: what" for the current line.
@@ -171,6 +190,7 @@ class CsvReader {
   bool next_line(std::string_view& line);
   void refill();
   [[noreturn]] void fail_at(std::size_t line, std::string_view what) const;
+  [[noreturn]] void fail_long_line() const;
 
   struct Close {
     void operator()(std::FILE* f) const { std::fclose(f); }
@@ -190,6 +210,7 @@ class CsvReader {
   std::vector<std::string_view> fields_;
   std::size_t line_ = 0;
   std::size_t blank_line_ = 0;  // first blank line not yet followed by content, 0 if none
+  std::optional<double> first_time_;
   std::optional<double> last_time_;
 };
 

@@ -50,8 +50,13 @@ struct RunCallbacks {
   /// Every step of the pipeline. The step's pointers are valid during the
   /// call only.
   std::function<void(const OdometryStep&)> on_step;
-  /// Every row, before the pipeline sees it (a recording).
+  /// Every row the pipeline takes (a recording): wheel rows and fixes before
+  /// the pipeline sees them, mice rows once it has accepted them.
   std::function<void(const InputRow&)> on_row;
+  /// Set for a live input: a mice row the pipeline refuses (a saturated
+  /// record, a time out of order, impossible counts) is handed here with the
+  /// reason and skipped, not recorded, instead of ending the run.
+  std::function<void(const SensorRow&, const std::string& why)> on_refused;
   /// Every 4096 mice rows: the mice rows so far and the last one's time (s).
   std::function<void(std::size_t rows, double t)> progress;
   /// A condition the run survives, one line without a newline, as it happens

@@ -103,8 +103,20 @@ class Decoder {
 };
 
 /// Host-side bookkeeping of DATA frames: sequence gaps, timestamp unwrap.
+/// How a DATA frame follows the last one accepted (by sequence number, mod 2^16).
+enum class FrameOrder {
+  kNext,     ///< the first frame, or 1..2^15-1 ahead (a step d > 1: d - 1 lost)
+  kRepeat,   ///< the same sequence number: a duplicated frame
+  kStale,    ///< behind: an old frame delivered late
+  kRestart,  ///< behind, and the frame before it was behind too, one step earlier: the
+             ///< device counts again from a new start (a reset without a HELLO)
+};
+
 class DataTracker {
  public:
+  /// Where `data` falls (see FrameOrder); remembers a frame found behind, so
+  /// that the next one can show a restart. Does not accept it.
+  FrameOrder classify(const Data& data);
   /// Returns the unwrapped time in seconds for this frame, given the tick rate
   /// (> 0). Lost frames: a sequence step of d > 1 (mod 2^16) adds d - 1.
   double accept(const Data& data, std::uint32_t tick_hz);
@@ -116,6 +128,7 @@ class DataTracker {
   std::uint32_t last_timestamp_ = 0;
   std::int64_t wraps_ = 0;  // signed: a small step back across a wrap undoes one
   std::uint64_t lost_ = 0;
+  std::optional<std::uint16_t> behind_;  // the last frame classified kStale
 };
 
 }  // namespace moa::io::serial

@@ -25,14 +25,14 @@
 #include <vector>
 
 #include "moa/formats/config.hpp"
-#include "moa/sources/live.hpp"
 #include "moa/formats/log.hpp"
+#include "moa/sources/live.hpp"
 #include "moa/sources/serial_protocol.hpp"
 
 namespace moa::io {
 
 struct SerialOptions {
-  int baud = 115200;
+  int baud = 500000;  ///< the firmware's rate (docs/firmware.md)
   /// Open read-write and set the port up with termios. Off: the path is
   /// opened read-only and used as it is (pipes, files of captured bytes);
   /// no HELLO_REQUEST can be sent then.
@@ -50,7 +50,10 @@ class SerialReader : public FrameSource {
     std::uint64_t mismatched = 0;     ///< DATA whose N differs from the HELLO's
     std::uint64_t before_hello = 0;   ///< DATA skipped before the first HELLO
     std::uint64_t overflow_rows = 0;  ///< rows with the overflow flag
-    std::uint64_t clock_steps = 0;    ///< device clock went back (re-based)
+    std::uint64_t clock_steps = 0;    ///< device clock stepped back or ahead (re-based)
+    std::uint64_t restarts = 0;       ///< a new HELLO, or the sequence restarted
+    std::uint64_t duplicates = 0;     ///< DATA frames repeating the last sequence number
+    std::uint64_t stale = 0;          ///< DATA frames behind the sequence, dropped
   };
 
   /// Opens and sets up `device`; throws io::Error "DEV: why". Does not wait
