@@ -30,7 +30,6 @@ struct EvaluateArgs {
   bool json = false;
 };
 
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 int run_evaluate(const EvaluateArgs& args) {
   if (args.reference_mm && !(std::isfinite(*args.reference_mm) && *args.reference_mm > 0.0)) {
@@ -85,8 +84,8 @@ int run_evaluate(const EvaluateArgs& args) {
   fmt::print("samples compared        {}\n", e.samples);
   if (e.outside > 0) fmt::print("outside the truth's span {} (not compared)\n", e.outside);
   fmt::print("translation error       {}\n", describe_translation(e));
-  fmt::print("heading error           max {:.3g} deg, rms {:.3g} deg\n", e.max_heading * kDegPerRad,
-             e.rms_heading * kDegPerRad);
+  fmt::print("heading error           max {:.3g} deg, rms {:.3g} deg\n", to_degrees(e.max_heading),
+             to_degrees(e.rms_heading));
   for (const ErrorReference& r : references)
     fmt::print("verdict                 {}\n", verdict(e, r));
   return 0;

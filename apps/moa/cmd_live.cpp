@@ -232,7 +232,7 @@ int run_live(LiveArgs args) {
         stderr,
         "\r\033[Kmoa live: {:.1f} s, {:.0f} rows/s, {}, x {:+.3f} m y {:+.3f} m theta {:+.1f} deg",
         std::chrono::duration<double>(now - started).count(), meter.rate(now), alive, pose.t.x(),
-        pose.t.y(), pose.theta * 180.0 / std::numbers::pi);
+        pose.t.y(), to_degrees(pose.theta));
     status_shown = true;
   };
 

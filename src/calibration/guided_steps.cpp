@@ -9,7 +9,6 @@
 namespace moa {
 namespace {
 
-constexpr double kDeg = 180.0 / std::numbers::pi;
 constexpr double kTurn = 2.0 * std::numbers::pi;
 
 bool positive(double x) { return std::isfinite(x) && x > 0.0; }
@@ -203,7 +202,7 @@ std::string summarise(const MotionSummary& m) {
       "{:.3f} m along {}{}, {:.1f} deg off the axis, {:.1f} mm off a straight line, turned {:.1f} "
       "deg, in {:.1f} s, fastest sensor {:.2f} m/s",
       std::abs(along), x ? 'x' : 'y', along < 0 ? " (backwards)" : "",
-      std::atan2(std::abs(across), std::abs(along)) * kDeg, m.deviation * 1e3, m.rotation * kDeg,
+      to_degrees(std::atan2(std::abs(across), std::abs(along))), m.deviation * 1e3, to_degrees(m.rotation),
       m.duration, m.top_speed);
 }
 
@@ -221,8 +220,8 @@ std::string explain(const MotionSummary& m, MotionProblem problem, const MotionL
       return fmt::format(
           "not along {}: {:.1f} deg off the robot's {} axis (at most {:.1f}); keep "
           "its side against the straight edge",
-          axis, std::atan2(std::abs(x ? m.displacement.y() : m.displacement.x()), along) * kDeg,
-          axis, l.max_off_axis * kDeg);
+          axis, to_degrees(std::atan2(std::abs(x ? m.displacement.y() : m.displacement.x()), along)),
+          axis, to_degrees(l.max_off_axis));
     case MotionProblem::kNotStraight:
       return fmt::format(
           "not straight: the path strayed {:.1f} mm from a straight line (at most "
@@ -232,7 +231,7 @@ std::string explain(const MotionSummary& m, MotionProblem problem, const MotionL
       return fmt::format(
           "turned while pushing: {:.1f} deg (at most {:.1f}); keep it against the "
           "edge without turning",
-          m.rotation * kDeg, l.max_heading_change * kDeg);
+          to_degrees(m.rotation), to_degrees(l.max_heading_change));
     case MotionProblem::kTooFewTurns:
     case MotionProblem::kTooManyTurns:
       return fmt::format(

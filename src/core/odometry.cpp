@@ -6,27 +6,12 @@
 namespace moa {
 
 const char* describe(EstimatorKind kind) {
-  switch (kind) {
-    case EstimatorKind::kLs:
-      return "ls";
-    case EstimatorKind::kSekimori:
-      return "sekimori";
-    case EstimatorKind::kConsensus:
-      return "consensus";
-    case EstimatorKind::kWheels:
-      return "wheels";
-    case EstimatorKind::kOracle:
-      return "oracle";
-  }
-  return "?";
+  const char* name = to_name(kEstimatorNames, kind);
+  return name ? name : "?";
 }
 
 std::optional<EstimatorKind> estimator_from_name(std::string_view name) {
-  for (const auto kind : {EstimatorKind::kLs, EstimatorKind::kSekimori, EstimatorKind::kConsensus,
-                          EstimatorKind::kWheels, EstimatorKind::kOracle}) {
-    if (name == describe(kind)) return kind;
-  }
-  return std::nullopt;
+  return from_name(kEstimatorNames, name);
 }
 
 const char* describe(OdometryError error) {
@@ -48,7 +33,6 @@ const char* describe(OdometryError error) {
 }
 
 namespace {
-bool positive_finite(double x) { return std::isfinite(x) && x > 0.0; }
 
 // v.norm() > limit (limit > 0), without the square root when |v|^2 is clear
 // of limit^2 by far more than the rounding of either: the same answer.
@@ -67,53 +51,30 @@ bool beyond(const Vec2& v, real limit) {
 }
 }  // namespace
 
-const char* OdometryOptions::validate() const {
-  if (!positive_finite(rate)) return "rate: must be positive and finite (Hz)";
-  if (sensors == 0) return "sensors: no sensor selected";
-  if (const char* e = synchroniser().validate(); *e) {
-    if (!positive_finite(max_row_interval))
-      return "max_row_interval: must be positive and finite (s)";
-    if (!(max_gap > 0.0)) return "max_gap: must be positive (s)";
-    return "max_row_interval: longer than 61 epochs (1/rate each); lower it or the rate";
+OptionCheck OdometryOptions::validate() const {
+  OptionsCheck c;
+  c.require(to_name(kEstimatorNames, estimator) != nullptr, "estimator",
+            "ls, sekimori, consensus, wheels or oracle (0 to 4)", static_cast<double>(estimator))
+      .require(sensors != 0, "sensors", "no sensor selected")
+      .positive("rate", rate);
+  // The synchroniser's own bounds, under the names of this struct's fields
+  // (its period is 1 / rate, checked above).
+  if (!c.failed()) c.nested("", synchroniser().validate());
+  if (initial) {
+    c.require(std::isfinite(initial->t.x()), "initial.x", "finite", initial->t.x())
+        .require(std::isfinite(initial->t.y()), "initial.y", "finite", initial->t.y())
+        .require(std::isfinite(initial->theta), "initial.theta", "finite", initial->theta);
   }
-  if (initial && !(std::isfinite(initial->t.x()) && std::isfinite(initial->t.y()) &&
-                   std::isfinite(initial->theta))) {
-    return "initial: pose must be finite";
-  }
-  if (!(std::isfinite(camera_latency) && camera_latency >= 0.0))
-    return "camera_latency: must be finite and not negative (s)";
-  if (!positive_finite(camera_sigma)) return "camera_sigma: must be positive and finite (m)";
-  if (!positive_finite(camera_heading_sigma))
-    return "camera_heading_sigma: must be positive and finite (rad)";
-  if (!positive_finite(sekimori.e_th)) return "sekimori.e_th: must be positive and finite (m^2)";
-  if (sekimori.r_th != -1 && (sekimori.r_th < 1 || sekimori.r_th > kMaxSensors))
-    return "sekimori.r_th: must be -1 (automatic) or 1 to 16";
-  if (const char* e = consensus.limits.validate(); *e) return e;
-  if (const char* e = consensus.health.validate(); *e) return e;
-  if (const char* e = self_calibration.validate(); *e) return e;
-  if (!(std::isfinite(consensus.alpha) && consensus.alpha > 0.0 && consensus.alpha < 0.5))
-    return "consensus.alpha: must be in (0, 0.5)";
-  const NoiseModelOptions& n = consensus.noise;
-  if (!(std::isfinite(n.relative) && n.relative >= 0.0))
-    return "consensus.noise.relative: must be finite and not negative";
-  if (!positive_finite(n.speed_onset)) return "consensus.noise.speed_onset: must be positive";
-  if (!(std::isfinite(n.speed_cap) && n.speed_cap >= 1.0))
-    return "consensus.noise.speed_cap: must be finite and at least 1";
-  for (const WheelNoise* w : {&consensus.wheels, &sekimori.wheels}) {
-    if (!(positive_finite(w->base_v) && positive_finite(w->base_omega) &&
-          std::isfinite(w->relative) && w->relative >= 0.0)) {
-      return "wheels noise: base_v, base_omega must be positive, relative not negative";
-    }
-  }
-  if (!ekf.twist_noise_floor.allFinite() || (ekf.twist_noise_floor.array() < 0.0).any())
-    return "ekf.twist_noise_floor: must be finite and not negative";
-  if (!ekf.scale_sd.allFinite() || (ekf.scale_sd.array() <= 0.0).any())
-    return "ekf.scale_sd: must be positive and finite";
-  if (!ekf.scale_random_walk.allFinite() || (ekf.scale_random_walk.array() < 0.0).any())
-    return "ekf.scale_random_walk: must be finite and not negative (1/sqrt(s))";
-  if (ekf.estimate_scale && !fuse_camera)
-    return "ekf.estimate_scale: needs fuse_camera (the scales are estimated from camera fixes)";
-  return "";
+  c.non_negative("camera_latency", camera_latency)
+      .positive("camera_sigma", camera_sigma)
+      .positive("camera_heading_sigma", camera_heading_sigma)
+      .nested("sekimori", sekimori.validate())
+      .nested("consensus", consensus.validate())
+      .nested("ekf", ekf.validate())
+      .require(!ekf.estimate_scale || fuse_camera, "ekf.estimate_scale",
+               "needs fuse_camera (the scales are estimated from camera fixes)")
+      .nested("self_calibration", self_calibration.validate());
+  return c.result();
 }
 
 Odometry::Odometry(const SensorArray& array, double t0, const OdometryOptions& options)
@@ -148,7 +109,7 @@ Odometry::Odometry(const SensorArray& array, double t0, const OdometryOptions& o
       SensorArray(std::span<const SensorMount>(mounts.data(), static_cast<std::size_t>(m_)));
   noise_ = NoiseModel(sub_array_, options_.consensus.noise);
   if (options_.self_calibration.enabled) {
-    self_calibration_.emplace(sub_array_, options_.self_calibration);
+    self_calibration_.emplace(sub_array_, options_.self_calibration, options_.consensus.noise);
   }
   const double period = 1.0 / options_.rate;
   const auto take = [&](auto built) {

@@ -23,7 +23,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 
 std::string yes_no(bool b) { return b ? "yes" : "no"; }
 
@@ -497,23 +496,12 @@ void json_array(JsonWriter& json, const Vector& xs) {
 }  // namespace
 
 const char* describe(CalibrationMethod method) {
-  switch (method) {
-    case CalibrationMethod::kKimLee:
-      return "kimlee";
-    case CalibrationMethod::kExact:
-      return "exact";
-    case CalibrationMethod::kGuided:
-      return "guided";
-  }
-  return "calibration method";
+  const char* name = to_name(kCalibrationMethodNames, method);
+  return name ? name : "calibration method";
 }
 
 std::optional<CalibrationMethod> calibration_method_from_name(std::string_view name) {
-  for (const auto m :
-       {CalibrationMethod::kKimLee, CalibrationMethod::kExact, CalibrationMethod::kGuided}) {
-    if (name == describe(m)) return m;
-  }
-  return std::nullopt;
+  return from_name(kCalibrationMethodNames, name);
 }
 
 void check_calibration_options(CalibrationMethod method, const fs::path& log,
@@ -599,7 +587,7 @@ std::string CalibrationSummary::brief_report() const {
   return fmt::format(
       "moa calibrate --method {}: {} sensors; largest 1-sigma: position {:.3f} mm, yaw {:.3f} "
       "deg, scale {:.2f} %; {} warning{}",
-      describe(method), sensors.size(), position * 1e3, yaw * kRadToDeg, scale * 100.0,
+      describe(method), sensors.size(), position * 1e3, to_degrees(yaw), scale * 100.0,
       warnings.size(), warnings.size() == 1 ? "" : "s");
 }
 
@@ -617,7 +605,7 @@ std::string CalibrationSummary::full_report() const {
     const std::array<const char*, kMountParameters> labels{"position x m", "position y m",
                                                            "yaw deg", "scale x", "scale y"};
     for (int p = 0; p < kMountParameters; ++p) {
-      const double unit = p == 2 ? kRadToDeg : 1.0;
+      const double unit = p == 2 ? to_degrees(1.0) : 1.0;
       const int digits = p < 2 ? 5 : 4;
       const std::string sigma = s.estimated[static_cast<std::size_t>(p)]
                                     ? fmt::format("{:.{}f}", s.sigma(p) * unit, p < 2 ? 6 : 5)

@@ -48,7 +48,7 @@ OdometryOptions resolve_odometry_options(OdometryOptions o, std::string_view est
       o.sensors |= SensorMask{1} << *i;
     }
   }
-  if (const char* e = o.validate(); *e) throw Error(fmt::format("invalid option: {}", e));
+  if (const auto e = o.validate()) throw Error(fmt::format("invalid option: {}", e->message()));
   return o;
 }
 
@@ -91,7 +91,9 @@ std::unique_ptr<Odometry> make_odometry(const RobotConfig& config, const std::st
   // The robot's limits, when its config gives them, for the motion prior.
   OdometryOptions options = given;
   if (config.limits) options.consensus.limits = *config.limits;
-  if (const char* e = options.validate(); *e) throw Error(fmt::format("invalid option: {}", e));
+  if (const auto e = options.validate()) {
+    throw Error(fmt::format("invalid option: {}", e->message()));
+  }
   const SensorMask beyond = options.sensors & ~all_sensors(config.array.size());
   if (beyond != 0 && options.sensors != ~SensorMask{0}) {
     throw Error(fmt::format("sensors: selection names a sensor beyond the {} of {}",

@@ -37,6 +37,7 @@
 
 #include <optional>
 
+#include "moa/core/options_check.hpp"
 #include "moa/core/fallback.hpp"
 #include "moa/core/health.hpp"
 #include "moa/core/motion_prior.hpp"
@@ -56,6 +57,9 @@ struct ConsensusOptions {
   /// Faults over time (health.hpp): frozen, zero and drifting sensors are
   /// kept out of the search.
   HealthOptions health;
+  /// nullopt when usable, else the first field out of its bounds, its path
+  /// relative to this struct (options_check.hpp).
+  OptionCheck validate() const;
 };
 
 class ConsensusEstimator {

@@ -48,6 +48,7 @@
 #include <array>
 #include <cstdint>
 
+#include "moa/core/options_check.hpp"
 #include "moa/core/array.hpp"
 #include "moa/core/robust_estimate.hpp"
 #include "moa/core/subset.hpp"
@@ -75,8 +76,9 @@ struct HealthOptions {
   real drift_step = 0.06;
   /// s; 0.5 s cost 1.1 mm on robust-faults' liftoff, seeds 1-5 (four sensors beat three).
   real probation = 0.1;
-  /// Empty when usable, else what is wrong, naming the field.
-  const char* validate() const;
+  /// nullopt when usable, else the first field out of its bounds, its path
+  /// relative to this struct (options_check.hpp).
+  OptionCheck validate() const;
 };
 
 enum class Health : std::uint8_t { kTrusted, kSuspect, kExcluded, kProbation };

@@ -7,6 +7,7 @@
 #include <array>
 #include <cstdint>
 
+#include "moa/core/options_check.hpp"
 #include "moa/core/array.hpp"
 #include "moa/core/robust_estimate.hpp"
 #include "moa/core/subset.hpp"
@@ -33,6 +34,9 @@ struct NoiseModelOptions {
   real low_squal_factor = 100.0;
   /// Counter overflow inflates the variance by this (the counts are clipped).
   real overflow_factor = 1e4;
+  /// nullopt when usable, else the first field out of its bounds, its path
+  /// relative to this struct (options_check.hpp).
+  OptionCheck validate() const;
 };
 
 /// Per-sensor covariance of the point velocity u_i (robot frame, m^2/s^2):

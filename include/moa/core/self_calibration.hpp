@@ -65,7 +65,7 @@
 //   b (scale and yaw), rotation alone a = G cos D, i.e. the scale (D only to
 //   second order: b keeps its estimate and its variance grows). Not used:
 //   epochs without a wheel twist or a mice estimate (a fallback to the
-//   wheels), with a used sensor over 0.8 times its rated speed, blocks with
+//   wheels), with a used sensor over speed_onset (0.8) times its rated speed, blocks with
 //   d under min_speed times their length, and blocks whose residual exceeds
 //   `gate` times d (the wheels slipped grossly). The measurement w of each
 //   sensor's update (above) is predicted from the others' corrections, which
@@ -113,7 +113,10 @@
 #include <optional>
 #include <string_view>
 
+#include "moa/core/options_check.hpp"
 #include "moa/core/array.hpp"
+#include "moa/core/names.hpp"
+#include "moa/core/noise_model.hpp"
 #include "moa/core/robust_estimate.hpp"
 #include "moa/core/subset.hpp"
 
@@ -124,9 +127,13 @@ enum class SelfCalibrationGauge {
   kSensors,  ///< the sensors' median keeps the configured values
   kWheels,   ///< the wheels' twist, when the epochs have one
 };
-/// "sensors", "wheels".
+inline constexpr std::array<NameEntry<SelfCalibrationGauge>, 2> kSelfCalibrationGaugeNames{{
+    {SelfCalibrationGauge::kSensors, "sensors"},
+    {SelfCalibrationGauge::kWheels, "wheels"},
+}};
+/// The gauge's token in kSelfCalibrationGaugeNames ("?" for a value not in it).
 const char* describe(SelfCalibrationGauge gauge);
-/// The gauge named by describe(); nullopt for any other name.
+/// The gauge of that token; nullopt for any other name.
 std::optional<SelfCalibrationGauge> self_calibration_gauge_from_name(std::string_view name);
 
 struct SelfCalibrationOptions {
@@ -175,8 +182,9 @@ struct SelfCalibrationOptions {
   /// simulator's noisy wheels: random slip 0.05 per wheel, correlated over
   /// 0.3 s).
   real wheel_noise = 0.05;
-  /// Empty when usable, else what is wrong, naming the field.
-  const char* validate() const;
+  /// nullopt when usable, else the first field out of its bounds, its path
+  /// relative to this struct (options_check.hpp).
+  OptionCheck validate() const;
 };
 
 /// One sensor's calibration relative to its configured mount.
@@ -187,7 +195,10 @@ struct SelfCalibrationEstimate {
 
 class SelfCalibration {
  public:
-  SelfCalibration(const SensorArray& array, SelfCalibrationOptions options);
+  /// `noise`: the estimator's noise model, whose min_squal and speed_onset
+  /// also mark the epochs not learnt from (low SQUAL, near the rating).
+  SelfCalibration(const SensorArray& array, SelfCalibrationOptions options,
+                  const NoiseModelOptions& noise = {});
 
   /// Applies each sensor's correction to the counts of `sample` (in place).
   /// The applied correction changes only when an estimate moved by
@@ -285,6 +296,8 @@ class SelfCalibration {
   SelfCalibrationEstimate applied_gauge() const;
 
   SelfCalibrationOptions options_;
+  int min_squal_;     ///< NoiseModelOptions::min_squal
+  real speed_onset_;  ///< NoiseModelOptions::speed_onset, of a sensor's max_speed
   int n_;
   SensorArray array_;
   SubsetSolver solver_;

@@ -33,12 +33,18 @@
 #include "moa/calibration/exact.hpp"
 #include "moa/calibration/guided.hpp"
 #include "moa/calibration/kimlee.hpp"
+#include "moa/core/names.hpp"
 #include "moa/formats/config.hpp"
 
 namespace moa::io {
 
 enum class CalibrationMethod { kKimLee, kExact, kGuided };
-/// "kimlee", "exact", "guided".
+inline constexpr std::array<NameEntry<CalibrationMethod>, 3> kCalibrationMethodNames{{
+    {CalibrationMethod::kKimLee, "kimlee"},
+    {CalibrationMethod::kExact, "exact"},
+    {CalibrationMethod::kGuided, "guided"},
+}};
+/// The method's token in kCalibrationMethodNames.
 const char* describe(CalibrationMethod method);
 /// The method of that name; nullopt otherwise.
 std::optional<CalibrationMethod> calibration_method_from_name(std::string_view name);
