@@ -272,12 +272,15 @@ py::dict odometry(const py::object& config_path, const fs::path& log, const std:
   const Config config = load_config(config_path);
   const OdometryOptions options = odometry_options(estimator, kwargs, config);
   Steps steps(config.config.array.size());
+  io::OdometryRun run;
   {
     py::gil_scoped_release release;
-    io::run_odometry(config.config, config.path, io::resolve_log(log), options,
-                     [&](const OdometryStep& s) { steps.add(s); });
+    run = io::run_odometry(config.config, config.path, io::resolve_log(log), options,
+                           [&](const OdometryStep& s) { steps.add(s); });
   }
-  return steps.take(config.config.names);
+  py::dict out = steps.take(config.config.names);
+  out["summary"] = py::cast(run.summary);
+  return out;
 }
 
 /// The pipeline fed from Python.
@@ -748,6 +751,43 @@ a dict of arrays like moa.odometry's (possibly empty).)")
       .def_property_readonly("pose", &PyOdometry::pose, "(x, y, theta) of the last step.")
       .def_property_readonly("steps", &PyOdometry::steps, "Steps emitted so far.")
       .def_property_readonly("names", &PyOdometry::names);
+
+  py::class_<io::RunSummary>(m, "RunSummary",
+                             R"(What an odometry run did (runs/run_summary.hpp): the
+"summary" of moa.odometry's result.)")
+      .def_readonly("epochs", &io::RunSummary::epochs)
+      .def_property_readonly(
+          "epochs_by_source",
+          [](const io::RunSummary& s) {
+            py::dict d;
+            for (std::size_t i = 0; i < io::kSourceCount; ++i)
+              d[describe(static_cast<Source>(i))] = s.epochs_by_source[i];
+            return d;
+          },
+          "Epochs by the source of their twist: mice, wheels, hold.")
+      .def_property_readonly(
+          "sensor_epochs",
+          [](const io::RunSummary& s) {
+            py::dict d;
+            for (std::size_t i = 0; i < io::kExclusionCount; ++i)
+              d[describe(static_cast<Exclusion>(i))] = s.sensor_epochs[i];
+            return d;
+          },
+          "Sensor-epochs by what happened to the sensor: used, or the reason it was excluded.")
+      .def_property_readonly("fixes",
+                             [](const io::RunSummary& s) {
+                               py::dict d;
+                               d["applied"] = s.fixes.applied;
+                               d["rejected"] = s.fixes.rejected;
+                               d["too_old"] = s.fixes.too_old;
+                               d["invalid"] = s.fixes.invalid;
+                               return d;
+                             })
+      .def_readonly("warnings", &io::RunSummary::warnings)
+      .def_property_readonly("usable", &io::RunSummary::usable,
+                             "At least one epoch, at most 1 % of them held.")
+      .def("verdict", &io::RunSummary::verdict)
+      .def("text", &io::RunSummary::text, "What `moa odometry` prints.");
 
   py::class_<io::CalibrationSummary>(m, "Calibration", R"(The result and report of moa.calibrate.)")
       .def_property_readonly("method",

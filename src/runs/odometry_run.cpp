@@ -338,13 +338,14 @@ OdometryRun run_odometry(const RobotConfig& config, const std::string& config_pa
         }
         runaway_seen |= SensorMask{1} << i;
         const auto& c = (*step.calibration_filter)[static_cast<std::size_t>(i)];
-        run.warnings.push_back(fmt::format(
+        run.summary.warnings.push_back(fmt::format(
             "sensor '{}': its self-calibration ran away (scale {:.3f}, {:.3f}, yaw offset {:.3f} "
             "rad at t = {} s; bounds {} and {} rad): excluded as 'calibration' while beyond",
             config.names[static_cast<std::size_t>(i)], c.scale_x, c.scale_y, c.yaw_offset, step.t(),
             options.self_calibration.runaway_scale, options.self_calibration.runaway_yaw));
       }
     }
+    run.summary.add(step, config.array.size());
     on_step(step);
   };
 
@@ -398,14 +399,14 @@ OdometryRun run_odometry(const RobotConfig& config, const std::string& config_pa
           where, name, config_path, describe(options.estimator)));
     }
     if (options.estimator != EstimatorKind::kWheels) {
-      run.warnings.push_back(fmt::format(
+      run.summary.warnings.push_back(fmt::format(
           "{}: sensor '{}' of {} never reports: the {} estimator saw it as a still sensor", where,
           name, config_path, describe(options.estimator)));
     }
   }
   odometry->finish(run.t_end, sink);
   run.steps = odometry->steps();
-  run.fixes = odometry->fixes();
+  run.summary.fixes = odometry->fixes();
   return run;
 }
 

@@ -14,6 +14,7 @@
 
 #include "moa/core/odometry.hpp"
 #include "moa/formats/config.hpp"
+#include "moa/runs/run_summary.hpp"
 
 namespace moa::io {
 
@@ -43,10 +44,10 @@ struct OdometryRun {
   std::size_t rows = 0;          ///< mice rows read
   std::size_t steps = 0;         ///< epochs written
   double t0 = 0.0, t_end = 0.0;  ///< s, first epoch's start, last row's time
-  FixCounts fixes;
-  /// What the caller should tell the user (a configured sensor that never
-  /// reported, used as still by a robust estimator).
-  std::vector<std::string> warnings;
+  /// Epochs by source, exclusions by reason, camera fixes, warnings (a
+  /// configured sensor that never reported, used as still by a robust
+  /// estimator; a self-calibration that ran away) and the verdict.
+  RunSummary summary;
 };
 
 using StepCallback = std::function<void(const OdometryStep&)>;
