@@ -74,8 +74,7 @@ struct HealthOptions {
   /// window has drift_step_tau of samples.
   real drift_step_tau = 0.2;
   real drift_step = 0.06;
-  /// s; 0.5 s cost 1.1 mm on robust-faults' liftoff, seeds 1-5 (four sensors beat three).
-  real probation = 0.1;
+  real probation = 0.1;  ///< s an excluded sensor must behave before it is used again
   /// nullopt when usable, else the first field out of its bounds, its path
   /// relative to this struct (options_check.hpp).
   OptionCheck validate() const;

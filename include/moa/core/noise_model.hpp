@@ -22,11 +22,8 @@ struct NoiseModelOptions {
   /// for the predicted point speed s: a sensor near or over its rating weighs
   /// less than one well under it. The cap matters: over its rating a sensor
   /// fails by losing counts (a gross error, not a wider Gaussian), which the
-  /// consistency test must still see. Uncapped (~90 at 1.4 times the rating)
-  /// the test let lost sensors in. Chosen on `moa experiment sekimori-table4
-  /// --runs 5 --seed 1` (seeds 1-5; tests use 101 on, docs 201 on),
-  /// speed (b), consensus 151.9 mm uncapped, 26.7 mm with a cap of 4, 23.1 mm
-  /// with 2, oracle selection 21.3 mm.
+  /// consistency test must still see (docs/experiments.md, sekimori-table4,
+  /// gives the measurements behind the cap).
   real speed_onset = 0.8;
   real speed_cap = 2.0;
   /// SQUAL below this inflates the variance by low_squal_factor.
