@@ -84,82 +84,89 @@ void OptionError::prefix(std::string_view parent) {
   *this = out;
 }
 
-void OptionsCheck::fail(const char* field, const char* must, double bound, double value) {
+namespace {
+// "field: must be " : the head of every message.
+OptionError must_be(const char* field) {
   OptionError e;
   e.append(field);
   e.append(": must be ");
-  e.append(must);
-  if (!std::isnan(bound)) e.append_number(bound);
+  return e;
+}
+}  // namespace
+
+void OptionsCheck::refuse(OptionError e, double value) {
   e.append(", is ");
   e.append_number(value);
   error_ = e;
 }
 
-OptionsCheck& OptionsCheck::greater(const char* field, double x, double lo) {
-  if (error_) return *this;
-  if (!std::isfinite(x)) {
-    fail(field, "finite", NAN, x);
-  } else if (!(x > lo)) {
-    fail(field, "> ", lo, x);
+bool OptionsCheck::finite(const char* field, double x) {
+  if (error_) return false;
+  if (std::isfinite(x)) return true;
+  OptionError e = must_be(field);
+  e.append("finite");
+  refuse(e, x);
+  return false;
+}
+
+void OptionsCheck::compare(const char* field, double x, bool ok, const char* op,
+                           const char* bound_name, double bound) {
+  if (ok) return;
+  OptionError e = must_be(field);
+  e.append(op);
+  if (bound_name != nullptr) {
+    e.append(bound_name);
+    e.append(" (");
+    e.append_number(bound);
+    e.append(")");
+  } else {
+    e.append_number(bound);
   }
+  refuse(e, x);
+}
+
+void OptionsCheck::interval(const char* field, double x, bool ok, const char* open_bracket,
+                            double lo, double hi, const char* close_bracket) {
+  if (ok) return;
+  OptionError e = must_be(field);
+  e.append("in ");
+  e.append(open_bracket);
+  e.append_number(lo);
+  e.append(", ");
+  e.append_number(hi);
+  e.append(close_bracket);
+  refuse(e, x);
+}
+
+OptionsCheck& OptionsCheck::greater(const char* field, double x, double lo) {
+  if (finite(field, x)) compare(field, x, x > lo, "> ", nullptr, lo);
   return *this;
 }
 
 OptionsCheck& OptionsCheck::at_least(const char* field, double x, double lo) {
-  if (error_) return *this;
-  if (!std::isfinite(x)) {
-    fail(field, "finite", NAN, x);
-  } else if (!(x >= lo)) {
-    fail(field, ">= ", lo, x);
-  }
+  if (finite(field, x)) compare(field, x, x >= lo, ">= ", nullptr, lo);
   return *this;
 }
 
 OptionsCheck& OptionsCheck::positive_or_infinite(const char* field, double x) {
-  if (error_) return *this;
-  if (!(x > 0.0)) fail(field, "> ", 0.0, x);
+  if (!error_) compare(field, x, x > 0.0, "> ", nullptr, 0.0);
   return *this;
 }
 
 OptionsCheck& OptionsCheck::open(const char* field, double x, double lo, double hi) {
-  if (error_) return *this;
-  if (!std::isfinite(x)) return require(false, field, "finite", x);
-  if (!(x > lo && x < hi)) {
-    OptionError e;
-    e.append(field);
-    e.append(": must be in (");
-    e.append_number(lo);
-    e.append(", ");
-    e.append_number(hi);
-    e.append("), is ");
-    e.append_number(x);
-    error_ = e;
-  }
+  if (finite(field, x)) interval(field, x, x > lo && x < hi, "(", lo, hi, ")");
   return *this;
 }
 
 OptionsCheck& OptionsCheck::closed(const char* field, double x, double lo, double hi) {
-  if (error_) return *this;
-  if (!std::isfinite(x)) return require(false, field, "finite", x);
-  if (!(x >= lo && x <= hi)) {
-    OptionError e;
-    e.append(field);
-    e.append(": must be in [");
-    e.append_number(lo);
-    e.append(", ");
-    e.append_number(hi);
-    e.append("], is ");
-    e.append_number(x);
-    error_ = e;
-  }
+  if (finite(field, x)) interval(field, x, x >= lo && x <= hi, "[", lo, hi, "]");
   return *this;
 }
 
 OptionsCheck& OptionsCheck::at_least(const char* field, long long x, long long lo) {
   if (error_ || x >= lo) return *this;
-  OptionError e;
-  e.append(field);
-  e.append(": must be >= ");
+  OptionError e = must_be(field);
+  e.append(">= ");
   e.append_integer(lo);
   e.append(", is ");
   e.append_integer(x);
@@ -169,37 +176,13 @@ OptionsCheck& OptionsCheck::at_least(const char* field, long long x, long long l
 
 OptionsCheck& OptionsCheck::at_least_field(const char* field, double x, const char* bound_field,
                                            double bound) {
-  if (error_) return *this;
-  if (!std::isfinite(x)) return require(false, field, "finite", x);
-  if (!(x >= bound)) {
-    OptionError e;
-    e.append(field);
-    e.append(": must be >= ");
-    e.append(bound_field);
-    e.append(" (");
-    e.append_number(bound);
-    e.append("), is ");
-    e.append_number(x);
-    error_ = e;
-  }
+  if (finite(field, x)) compare(field, x, x >= bound, ">= ", bound_field, bound);
   return *this;
 }
 
 OptionsCheck& OptionsCheck::at_most_named(const char* field, double x, const char* bound_name,
                                           double bound) {
-  if (error_) return *this;
-  if (!std::isfinite(x)) return require(false, field, "finite", x);
-  if (!(x <= bound)) {
-    OptionError e;
-    e.append(field);
-    e.append(": must be <= ");
-    e.append(bound_name);
-    e.append(" (");
-    e.append_number(bound);
-    e.append("), is ");
-    e.append_number(x);
-    error_ = e;
-  }
+  if (finite(field, x)) compare(field, x, x <= bound, "<= ", bound_name, bound);
   return *this;
 }
 
@@ -218,7 +201,9 @@ void OptionsCheck::component(const char* field, int i, double x, bool strict) {
 
 OptionsCheck& OptionsCheck::require(bool ok, const char* field, const char* bound, double value) {
   if (error_ || ok) return *this;
-  fail(field, bound, NAN, value);
+  OptionError e = must_be(field);
+  e.append(bound);
+  refuse(e, value);
   return *this;
 }
 

@@ -98,7 +98,16 @@ class OptionsCheck {
   OptionCheck result() const { return error_; }
 
  private:
-  void fail(const char* field, const char* must, double bound, double value);
+  /// Stores e + ", is VALUE".
+  void refuse(OptionError e, double value);
+  /// False (and refused unless an earlier check failed) when x is not finite.
+  bool finite(const char* field, double x);
+  /// Unless ok: "must be OP BOUND" or "must be OP BOUND_NAME (BOUND)".
+  void compare(const char* field, double x, bool ok, const char* op, const char* bound_name,
+               double bound);
+  /// Unless ok: "must be in (lo, hi]" with the brackets given.
+  void interval(const char* field, double x, bool ok, const char* open_bracket, double lo,
+                double hi, const char* close_bracket);
   void component(const char* field, int i, double x, bool strict);
   OptionCheck error_;
 };
