@@ -600,15 +600,7 @@ py::dict simulate(const std::string& scenario_name, std::uint64_t seed,
 
 py::dict error_dict(const TrajectoryError& e) {
   py::dict d;
-  d["samples"] = e.samples;
-  d["outside_truth_span"] = e.outside;
-  d["distance_m"] = e.distance;
-  d["max_translation_m"] = e.max_translation;
-  d["rms_translation_m"] = e.rms_translation;
-  d["max_heading_rad"] = e.max_heading;
-  d["rms_heading_rad"] = e.rms_heading;
-  d["final_translation_m"] = e.final_translation;
-  d["final_heading_rad"] = e.final_heading;
+  for_each_member(e, [&d](const char* name, const auto& value) { d[name] = value; });
   return d;
 }
 

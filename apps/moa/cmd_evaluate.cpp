@@ -56,16 +56,8 @@ int run_evaluate(const EvaluateArgs& args) {
   if (args.json) {
     // Shortest round-trip numbers: the experiments' figures read back exactly.
     io::JsonWriter json;
-    json.begin_object()
-        .member("samples", e.samples)
-        .member("outside_truth_span", e.outside)
-        .member("distance_m", e.distance)
-        .member("max_translation_m", e.max_translation)
-        .member("rms_translation_m", e.rms_translation)
-        .member("max_heading_rad", e.max_heading)
-        .member("rms_heading_rad", e.rms_heading)
-        .member("final_translation_m", e.final_translation)
-        .member("final_heading_rad", e.final_heading);
+    json.begin_object();
+    for_each_member(e, [&json](const char* name, const auto& value) { json.member(name, value); });
     if (!references.empty()) {
       json.key("references").begin_array();
       for (const ErrorReference& r : references) {
