@@ -32,25 +32,6 @@ const char* describe(OdometryError error) {
   return "?";
 }
 
-namespace {
-
-// v.norm() > limit (limit > 0), without the square root when |v|^2 is clear
-// of limit^2 by far more than the rounding of either: the same answer.
-bool beyond(const Vec2& v, real limit) {
-#if defined(MOA_SCALAR_FLOAT)
-  constexpr real kTiny = 1e-30f, kHuge = 1e30f, kClear = 1e-5f;
-#else
-  constexpr real kTiny = 1e-200, kHuge = 1e200, kClear = 1e-9;
-#endif
-  const real n2 = v.squaredNorm(), l2 = limit * limit;
-  if (l2 > kTiny && l2 < kHuge) {
-    if (n2 < l2 * (1 - kClear)) return false;
-    if (n2 > l2 * (1 + kClear)) return true;
-  }
-  return v.norm() > limit;
-}
-}  // namespace
-
 OptionCheck OdometryOptions::validate() const {
   OptionsCheck c;
   c.require(to_name(kEstimatorNames, estimator) != nullptr, "estimator",
@@ -93,8 +74,7 @@ Odometry::Odometry(const SensorArray& array, double t0, const OdometryOptions& o
   for (int i = 0; i < n_; ++i) {
     const auto u = static_cast<std::size_t>(i);
     velocity_from_counts_[u] = array[i].robot_velocity_from_counts();
-    impossible_speed_[u] =
-        array[i].max_speed ? kImpossibleSpeedFactor * *array[i].max_speed : kImpossibleUnratedSpeed;
+    impossible_speed_[u] = impossible_speed(array[i]);
   }
   // The selected sensors as an array of their own: every estimator sees
   // exactly the sensors it may use.
@@ -161,7 +141,7 @@ std::optional<OdometryError> Odometry::push(const SensorRow& row, StepSink sink)
     const auto i = static_cast<std::size_t>(row.sensor);
     const double begin = std::max(sync_.last_time(row.sensor), row.t - options_.max_row_interval);
     const real dt = static_cast<real>(std::max(row.t - begin, period_));
-    if (beyond(velocity_from_counts_[i] * row.counts, impossible_speed_[i] * dt)) {
+    if (counts_impossible(velocity_from_counts_[i], row.counts, impossible_speed_[i], dt)) {
       return OdometryError::kImpossibleCounts;
     }
   }

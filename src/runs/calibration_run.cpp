@@ -39,7 +39,7 @@ std::string list_kept(const std::array<bool, kMountParameters>& estimated) {
 
 // A row whose counts imply a speed far beyond what its sensor can track is
 // a corrupt value (2e9 counts), refused as `moa odometry` refuses it
-// (core/odometry.hpp: 10 x max_speed, 50 m/s unrated). The row's interval
+// (core/sensor.hpp: impossible_speed, counts_impossible). The row's interval
 // is taken as at least max_row_interval (odometry: one epoch, shorter), so
 // nothing odometry accepts is refused here.
 class CountsCheck {
@@ -49,15 +49,14 @@ class CountsCheck {
         last_(static_cast<std::size_t>(config.array.size()), t0) {
     for (int i = 0; i < config.array.size(); ++i) {
       to_velocity_.push_back(config.array[i].robot_velocity_from_counts());
-      const auto& rated = config.array[i].max_speed;
-      limit_.push_back(rated ? kImpossibleSpeedFactor * *rated : kImpossibleUnratedSpeed);
+      limit_.push_back(impossible_speed(config.array[i]));
     }
   }
   void check(const SensorRow& row, const MiceReader& reader) {
     const auto i = static_cast<std::size_t>(row.sensor);
     const double dt = std::max(row.t - last_[i], max_row_interval_);  // s
     last_[i] = std::max(last_[i], row.t);
-    if (!((to_velocity_[i] * row.counts).norm() <= limit_[i] * dt)) {
+    if (counts_impossible(to_velocity_[i], row.counts, limit_[i], dt)) {
       throw Error(fmt::format("{}:{}: row at t = {} s: {}", reader.file(), reader.line(), row.t,
                               describe(OdometryError::kImpossibleCounts)));
     }

@@ -151,11 +151,6 @@ enum class OdometryError : std::uint8_t {
   kImpossibleCounts,  ///< counts implying a speed far beyond what the sensor can track
 };
 
-/// A row whose counts imply a sensor-point speed above this is refused: ten
-/// times the rated max_speed, or 50 m/s for an unrated sensor (optical mouse
-/// sensors track at most a few m/s; a count far beyond is a corrupt value).
-inline constexpr real kImpossibleSpeedFactor = 10.0;
-inline constexpr real kImpossibleUnratedSpeed = 50.0;  ///< m/s
 const char* describe(OdometryError error);
 
 /// A non-owning reference to a callable, as std::function without the heap:
