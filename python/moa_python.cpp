@@ -203,7 +203,7 @@ class Steps {
       scale_.push_back(v);
     }
     scaled_ = scaled_ || step.scaled;
-    source_.emplace_back(describe(e.source));
+    source_.emplace_back(to_name(e.source));
     for (int i = 0; i < n_; ++i) {
       const bool used = contains(e.estimate.used, i);
       const auto u = static_cast<std::size_t>(i);
@@ -429,7 +429,7 @@ const std::set<std::string> kCalibrationOptions{"max_row_interval",
 
 io::CalibrationSummary calibrate(const py::object& config_path, const py::object& log,
                                  const std::string& method_name, const py::kwargs& kwargs) {
-  const auto method = io::calibration_method_from_name(method_name);
+  const auto method = from_name<io::CalibrationMethod>(method_name);
   if (!method) {
     throw io::Error(
         fmt::format("--method: unknown method '{}' (kimlee, exact, guided)", method_name));
@@ -753,7 +753,7 @@ a dict of arrays like moa.odometry's (possibly empty).)")
           [](const io::RunSummary& s) {
             py::dict d;
             for (std::size_t i = 0; i < io::kSourceCount; ++i)
-              d[describe(static_cast<Source>(i))] = s.epochs_by_source[i];
+              d[to_name(static_cast<Source>(i))] = s.epochs_by_source[i];
             return d;
           },
           "Epochs by the source of their twist: mice, wheels, hold.")
@@ -762,7 +762,7 @@ a dict of arrays like moa.odometry's (possibly empty).)")
           [](const io::RunSummary& s) {
             py::dict d;
             for (std::size_t i = 0; i < io::kExclusionCount; ++i)
-              d[describe(static_cast<Exclusion>(i))] = s.sensor_epochs[i];
+              d[to_name(static_cast<Exclusion>(i))] = s.sensor_epochs[i];
             return d;
           },
           "Sensor-epochs by what happened to the sensor: used, or the reason it was excluded.")
@@ -783,7 +783,7 @@ a dict of arrays like moa.odometry's (possibly empty).)")
 
   py::class_<io::CalibrationSummary>(m, "Calibration", R"(The result and report of moa.calibrate.)")
       .def_property_readonly("method",
-                             [](const io::CalibrationSummary& s) { return io::describe(s.method); })
+                             [](const io::CalibrationSummary& s) { return to_name(s.method); })
       .def_property_readonly(
           "sensors",
           [](const io::CalibrationSummary& s) {

@@ -80,7 +80,7 @@ TEST(RunSummary, CountsAreThoseOfOdometryCsv) {
     EXPECT_EQ(s.epochs, run.steps) << estimator;
     std::size_t by_source = 0;
     for (std::size_t i = 0; i < kSourceCount; ++i) {
-      const std::string name = describe(static_cast<Source>(i));
+      const std::string name = to_name(static_cast<Source>(i));
       const auto it = csv.sources.find(name);
       EXPECT_EQ(s.epochs_by_source[i], it == csv.sources.end() ? 0u : it->second)
           << estimator << " " << name;
@@ -89,7 +89,7 @@ TEST(RunSummary, CountsAreThoseOfOdometryCsv) {
     EXPECT_EQ(by_source, s.epochs);
     std::size_t by_reason = 0, excluded = 0;
     for (std::size_t i = 0; i < kExclusionCount; ++i) {
-      const std::string name = describe(static_cast<Exclusion>(i));
+      const std::string name = to_name(static_cast<Exclusion>(i));
       const auto it = csv.sensors.find(name);
       EXPECT_EQ(s.sensor_epochs[i], it == csv.sensors.end() ? 0u : it->second)
           << estimator << " " << name;

@@ -79,9 +79,9 @@ SelfCalibrationOptions wheels_gauge() {
 
 TEST(SelfCalibrationGauge, NamesRoundTrip) {
   for (const auto g : {SelfCalibrationGauge::kSensors, SelfCalibrationGauge::kWheels}) {
-    EXPECT_EQ(self_calibration_gauge_from_name(describe(g)), g);
+    EXPECT_EQ(from_name<SelfCalibrationGauge>(to_name(g)), g);
   }
-  EXPECT_FALSE(self_calibration_gauge_from_name("wheel"));
+  EXPECT_FALSE(from_name<SelfCalibrationGauge>("wheel"));
   EXPECT_EQ(SelfCalibrationOptions{}.gauge, SelfCalibrationGauge::kSensors);
 }
 

@@ -199,7 +199,7 @@ volatile double g_checksum = 0.0;
 }  // namespace
 
 int run_replay_bench(const ReplayBenchArgs& args) {
-  const auto estimator = estimator_from_name(args.estimator);
+  const auto estimator = from_name<EstimatorKind>(args.estimator);
   // The log has mice.csv only: no wheels, no faults.
   if (!estimator || *estimator == EstimatorKind::kOracle || *estimator == EstimatorKind::kWheels) {
     throw std::runtime_error(

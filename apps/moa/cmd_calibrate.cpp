@@ -37,7 +37,7 @@ struct CalibrateArgs {
 };
 
 int run_calibrate(CalibrateArgs args) {
-  const auto method = io::calibration_method_from_name(args.method);
+  const auto method = from_name<io::CalibrationMethod>(args.method);
   if (!method) throw io::Error(fmt::format("--method: unknown method '{}'", args.method));
   args.options.push_x = args.push_x;
   args.options.push_y = args.push_y;

@@ -74,7 +74,7 @@ int run_odometry(const OdometryArgs& args) {
     fmt::print(
         "moa odometry: {} rows, {} samples over {:.3f} s at {} Hz ({} estimator); odometry written "
         "to {}\n",
-        run.rows, run.steps, run.t_end - run.t0, options.rate, describe(options.estimator),
+        run.rows, run.steps, run.t_end - run.t0, options.rate, to_name(options.estimator),
         args.out);
     fmt::print("{}", run.summary.text());
   }

@@ -27,20 +27,6 @@ OptionCheck HealthOptions::validate() const {
   return c.result();
 }
 
-const char* describe(Health health) {
-  switch (health) {
-    case Health::kTrusted:
-      return "trusted";
-    case Health::kSuspect:
-      return "suspect";
-    case Health::kExcluded:
-      return "excluded";
-    case Health::kProbation:
-      return "probation";
-  }
-  return "?";
-}
-
 HealthMonitor::HealthMonitor(int sensors, HealthOptions options, real alpha)
     : options_(options),
       residual_gate_(static_cast<real>(chi2_quantile(1.0 - alpha, 2))),

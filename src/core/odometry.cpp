@@ -5,14 +5,6 @@
 
 namespace moa {
 
-const char* describe(EstimatorKind kind) {
-  const char* name = to_name(kEstimatorNames, kind);
-  return name ? name : "?";
-}
-
-std::optional<EstimatorKind> estimator_from_name(std::string_view name) {
-  return from_name(kEstimatorNames, name);
-}
 
 const char* describe(OdometryError error) {
   switch (error) {
@@ -34,7 +26,7 @@ const char* describe(OdometryError error) {
 
 OptionCheck OdometryOptions::validate() const {
   OptionsCheck c;
-  c.require(to_name(kEstimatorNames, estimator) != nullptr, "estimator",
+  c.require(is_named(estimator), "estimator",
             "ls, sekimori, consensus, wheels or oracle (0 to 4)", static_cast<double>(estimator))
       .require(sensors != 0, "sensors", "no sensor selected")
       .positive("rate", rate);

@@ -9,18 +9,10 @@
 
 namespace moa {
 
-const char* describe(SelfCalibrationGauge gauge) {
-  const char* name = to_name(kSelfCalibrationGaugeNames, gauge);
-  return name ? name : "?";
-}
-
-std::optional<SelfCalibrationGauge> self_calibration_gauge_from_name(std::string_view name) {
-  return from_name(kSelfCalibrationGaugeNames, name);
-}
 
 OptionCheck SelfCalibrationOptions::validate() const {
   return OptionsCheck()
-      .require(to_name(kSelfCalibrationGaugeNames, gauge) != nullptr, "gauge", "sensors (0) or wheels (1)", static_cast<double>(gauge))
+      .require(is_named(gauge), "gauge", "sensors (0) or wheels (1)", static_cast<double>(gauge))
       .positive("block", block)
       .non_negative("min_speed", min_speed)
       .non_negative("scale_walk", scale_walk)

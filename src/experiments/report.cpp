@@ -37,7 +37,7 @@ void write_odometry(const fs::path& log, const ExperimentReportRecipe& recipe,
   const fs::path config_path = log / "robot.yaml";
   const io::RobotConfig config = io::read_config(config_path);
   OdometryOptions options;
-  options.estimator = *estimator_from_name(recipe.estimator);
+  options.estimator = *from_name<EstimatorKind>(recipe.estimator);
   options.fuse_camera = recipe.fuse_camera;
   options.camera_latency = camera_latency;
   options.self_calibration.enabled = recipe.self_calibrate;

@@ -18,7 +18,7 @@ namespace fs = std::filesystem;
 std::vector<std::string> odometry_flags(const OdometryOptions& o, const io::RobotConfig& config) {
   const OdometryOptions d;
   std::vector<std::string> flags;
-  if (o.estimator != d.estimator) flags.insert(flags.end(), {"--estimator", describe(o.estimator)});
+  if (o.estimator != d.estimator) flags.insert(flags.end(), {"--estimator", to_name(o.estimator)});
   const SensorMask all = all_sensors(config.array.size());
   if ((o.sensors & all) != all) {
     std::string names;

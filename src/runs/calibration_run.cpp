@@ -103,7 +103,7 @@ ReferenceData read_reference(const RobotConfig& config, const fs::path& log,
   if (!files.wheels) {
     throw Error(fmt::format(
         "{}: not found: --method {} needs the reference twists (t,vx,vy,omega) of the robot",
-        ref.wheels.string(), describe(method)));
+        ref.wheels.string(), to_name(method)));
   }
   const auto rows = read_all<WheelRow>(ref.wheels);
   ref.wheel_rows = rows.size();
@@ -201,7 +201,7 @@ void check_sample_count(const ReferenceData& ref, CalibrationMethod method) {
     throw Error(fmt::format(
         "{}: {} usable reference interval(s) within the time span of mice.csv; --method {} needs "
         "at least {}",
-        ref.wheels.string(), ref.samples.size(), describe(method), need));
+        ref.wheels.string(), ref.samples.size(), to_name(method), need));
   }
 }
 
@@ -209,7 +209,7 @@ template <class Result>
 Result solved(std::variant<Result, CalibrationError>&& result, const std::string& where,
               CalibrationMethod method) {
   if (const auto* e = std::get_if<CalibrationError>(&result)) {
-    throw Error(fmt::format("{}: --method {}: {}", where, describe(method), describe(*e)));
+    throw Error(fmt::format("{}: --method {}: {}", where, to_name(method), describe(*e)));
   }
   return std::get<Result>(std::move(result));
 }
@@ -494,18 +494,9 @@ void json_array(JsonWriter& json, const Vector& xs) {
 
 }  // namespace
 
-const char* describe(CalibrationMethod method) {
-  const char* name = to_name(kCalibrationMethodNames, method);
-  return name ? name : "calibration method";
-}
-
-std::optional<CalibrationMethod> calibration_method_from_name(std::string_view name) {
-  return from_name(kCalibrationMethodNames, name);
-}
-
 void check_calibration_options(CalibrationMethod method, const fs::path& log,
                                const CalibrationOptions& o) {
-  const char* name = describe(method);
+  const char* name = to_name(method);
   const auto need = [&](bool present, const char* flag) {
     if (!present) throw Error(fmt::format("--method {} needs {}", name, flag));
   };
@@ -566,7 +557,7 @@ CalibrationSummary calibrate_log(const RobotConfig& config, const std::string& c
           "{:.4g} rad, scale ({:.4g}, {:.4g}): not a sensor mount (a scale must be positive); the "
           "data do not fit "
           "the model. Nothing written",
-          method == CalibrationMethod::kGuided ? config_path : log.string(), describe(method),
+          method == CalibrationMethod::kGuided ? config_path : log.string(), to_name(method),
           s.name, p(0), p(1), p(2), p(3), p(4)));
     }
     for (auto& w : plausibility_warnings(s.name, s.nominal, s.calibrated)) {
@@ -586,14 +577,14 @@ std::string CalibrationSummary::brief_report() const {
   return fmt::format(
       "moa calibrate --method {}: {} sensors; largest 1-sigma: position {:.3f} mm, yaw {:.3f} "
       "deg, scale {:.2f} %; {} warning{}",
-      describe(method), sensors.size(), position * 1e3, to_degrees(yaw), scale * 100.0,
+      to_name(method), sensors.size(), position * 1e3, to_degrees(yaw), scale * 100.0,
       warnings.size(), warnings.size() == 1 ? "" : "s");
 }
 
 std::string CalibrationSummary::full_report() const {
   std::string text;
   auto out = std::back_inserter(text);
-  fmt::format_to(out, "moa calibrate --method {}\n", describe(method));
+  fmt::format_to(out, "moa calibrate --method {}\n", to_name(method));
   for (const auto& line : facts) fmt::format_to(out, "  {}\n", line);
   for (const auto& s : sensors) {
     fmt::format_to(out, "\nsensor {}\n", s.name);
@@ -638,7 +629,7 @@ std::string CalibrationSummary::full_report() const {
 
 std::string CalibrationSummary::to_json(std::string_view out) const {
   JsonWriter json;
-  json.begin_object().member("method", describe(method));
+  json.begin_object().member("method", to_name(method));
   if (!out.empty()) json.member("out", out);
   if (const auto* k = std::get_if<KimLeeCalibration>(&result)) {
     json.member("samples", k->measurements)

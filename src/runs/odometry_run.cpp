@@ -21,7 +21,7 @@ OdometryOptions resolve_odometry_options(OdometryOptions o, std::string_view est
                                          const std::vector<std::string>& sensors, bool no_wheels,
                                          const RobotConfig& config,
                                          const std::string& config_path) {
-  const auto kind = estimator_from_name(estimator);
+  const auto kind = from_name<EstimatorKind>(estimator);
   if (!kind) throw Error(fmt::format("--estimator: unknown estimator '{}'", estimator));
   o.estimator = *kind;
   o.use_wheels = !no_wheels;
@@ -102,7 +102,7 @@ std::unique_ptr<Odometry> make_odometry(const RobotConfig& config, const std::st
   auto odometry = std::make_unique<Odometry>(config.array, t0, options);
   if (const auto e = odometry->geometry_error()) {
     throw Error(fmt::format("{}: {} (estimator {})", config_path, describe(*e),
-                            describe(options.estimator)));
+                            to_name(options.estimator)));
   }
   return odometry;
 }
@@ -396,12 +396,12 @@ OdometryRun run_odometry(const RobotConfig& config, const std::string& config_pa
       throw Error(fmt::format(
           "{}: sensor '{}' of {} never reports: {} would take it as still; leave it out "
           "(--sensors) or use a robust estimator (consensus, sekimori)",
-          where, name, config_path, describe(options.estimator)));
+          where, name, config_path, to_name(options.estimator)));
     }
     if (options.estimator != EstimatorKind::kWheels) {
       run.summary.warnings.push_back(fmt::format(
           "{}: sensor '{}' of {} never reports: the {} estimator saw it as a still sensor", where,
-          name, config_path, describe(options.estimator)));
+          name, config_path, to_name(options.estimator)));
     }
   }
   odometry->finish(run.t_end, sink);

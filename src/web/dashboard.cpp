@@ -187,7 +187,7 @@ std::string Dashboard::Impl::event_json(const OdometryStep& step,
       .member("vx", v.v.x())
       .member("vy", v.v.y())
       .member("omega", v.omega)
-      .member("source", describe(step.estimate.source))
+      .member("source", to_name(step.estimate.source))
       .member("epochs", pending.epochs)
       .key("sensors")
       .begin_array();

@@ -50,6 +50,7 @@
 
 #include "moa/core/options_check.hpp"
 #include "moa/core/array.hpp"
+#include "moa/core/names.hpp"
 #include "moa/core/robust_estimate.hpp"
 #include "moa/core/subset.hpp"
 
@@ -81,7 +82,15 @@ struct HealthOptions {
 };
 
 enum class Health : std::uint8_t { kTrusted, kSuspect, kExcluded, kProbation };
-const char* describe(Health health);
+template <>
+struct EnumNames<Health> {
+  static constexpr std::array<NameEntry<Health>, 4> kTable{{
+      {Health::kTrusted, "trusted"},
+      {Health::kSuspect, "suspect"},
+      {Health::kExcluded, "excluded"},
+      {Health::kProbation, "probation"},
+  }};
+};
 
 class HealthMonitor {
  public:

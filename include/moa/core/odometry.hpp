@@ -63,17 +63,16 @@ enum class EstimatorKind : std::uint8_t {
   kWheels,     ///< wheel odometry alone (the mice are not used)
   kOracle,     ///< least squares over the sensors with no simulated fault in the epoch
 };
-inline constexpr std::array<NameEntry<EstimatorKind>, 5> kEstimatorNames{{
-    {EstimatorKind::kLs, "ls"},
-    {EstimatorKind::kSekimori, "sekimori"},
-    {EstimatorKind::kConsensus, "consensus"},
-    {EstimatorKind::kWheels, "wheels"},
-    {EstimatorKind::kOracle, "oracle"},
-}};
-/// The estimator's token in kEstimatorNames ("?" for a value not in it).
-const char* describe(EstimatorKind kind);
-/// The estimator of that token; nullopt otherwise.
-std::optional<EstimatorKind> estimator_from_name(std::string_view name);
+template <>
+struct EnumNames<EstimatorKind> {
+  static constexpr std::array<NameEntry<EstimatorKind>, 5> kTable{{
+      {EstimatorKind::kLs, "ls"},
+      {EstimatorKind::kSekimori, "sekimori"},
+      {EstimatorKind::kConsensus, "consensus"},
+      {EstimatorKind::kWheels, "wheels"},
+      {EstimatorKind::kOracle, "oracle"},
+  }};
+};
 
 struct OdometryOptions {
   EstimatorKind estimator = EstimatorKind::kConsensus;

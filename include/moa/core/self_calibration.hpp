@@ -124,14 +124,13 @@ enum class SelfCalibrationGauge {
   kSensors,  ///< the sensors' median keeps the configured values
   kWheels,   ///< the wheels' twist, when the epochs have one
 };
-inline constexpr std::array<NameEntry<SelfCalibrationGauge>, 2> kSelfCalibrationGaugeNames{{
-    {SelfCalibrationGauge::kSensors, "sensors"},
-    {SelfCalibrationGauge::kWheels, "wheels"},
-}};
-/// The gauge's token in kSelfCalibrationGaugeNames ("?" for a value not in it).
-const char* describe(SelfCalibrationGauge gauge);
-/// The gauge of that token; nullopt for any other name.
-std::optional<SelfCalibrationGauge> self_calibration_gauge_from_name(std::string_view name);
+template <>
+struct EnumNames<SelfCalibrationGauge> {
+  static constexpr std::array<NameEntry<SelfCalibrationGauge>, 2> kTable{{
+      {SelfCalibrationGauge::kSensors, "sensors"},
+      {SelfCalibrationGauge::kWheels, "wheels"},
+  }};
+};
 
 struct SelfCalibrationOptions {
   bool enabled = false;

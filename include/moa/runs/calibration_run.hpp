@@ -39,15 +39,19 @@
 namespace moa::io {
 
 enum class CalibrationMethod { kKimLee, kExact, kGuided };
-inline constexpr std::array<NameEntry<CalibrationMethod>, 3> kCalibrationMethodNames{{
-    {CalibrationMethod::kKimLee, "kimlee"},
-    {CalibrationMethod::kExact, "exact"},
-    {CalibrationMethod::kGuided, "guided"},
-}};
-/// The method's token in kCalibrationMethodNames.
-const char* describe(CalibrationMethod method);
-/// The method of that name; nullopt otherwise.
-std::optional<CalibrationMethod> calibration_method_from_name(std::string_view name);
+
+}  // namespace moa::io
+
+template <>
+struct moa::EnumNames<moa::io::CalibrationMethod> {
+  static constexpr std::array<NameEntry<io::CalibrationMethod>, 3> kTable{{
+      {io::CalibrationMethod::kKimLee, "kimlee"},
+      {io::CalibrationMethod::kExact, "exact"},
+      {io::CalibrationMethod::kGuided, "guided"},
+  }};
+};
+
+namespace moa::io {
 
 struct CalibrationOptions {
   /// kimlee, exact: longest interval one mice.csv row may cover, s.
