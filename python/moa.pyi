@@ -181,6 +181,12 @@ class Calibration:
     @property
     def method(self) -> str: ...
     @property
+    def usable(self) -> bool:
+        """The solve converged and the data determined what the method estimates."""
+    @property
+    def termination(self) -> str:
+        """converged, not-converged, model-misfit, underdetermined or too-few-measurements."""
+    @property
     def sensors(self) -> list[dict[str, Any]]:
         """Per sensor: name, position (2,) m, yaw rad, scale (2,), mirrored, cpi;
         sd_position, sd_yaw, sd_scale (1-sigma, 0 where kept); estimated (the

@@ -813,6 +813,12 @@ and exact), push_misfit (m, guided), information_eigenvalues (exact).)")
 others were kept at nominal) and information_eigenvalues (exact: of the
 Fisher information in units of a generous mounting error, ascending; below 1
 means not excited).)")
+      .def_readonly("usable", &io::CalibrationSummary::usable,
+                    "The solve converged and the data determined what the method estimates.")
+      .def_property_readonly(
+          "termination",
+          [](const io::CalibrationSummary& s) { return to_name(s.termination); },
+          "converged, not-converged, model-misfit, underdetermined or too-few-measurements.")
       .def_property_readonly("facts", [](const io::CalibrationSummary& s) { return s.facts; })
       .def_property_readonly("warnings", [](const io::CalibrationSummary& s) { return s.warnings; })
       .def_property_readonly(

@@ -253,6 +253,8 @@ void run_kimlee(CalibrationSummary& r, const RobotConfig& config, const fs::path
     s.residual_rms = cal.residual_rms[static_cast<std::size_t>(i)];
     r.sensors.push_back(s);
   }
+  if (cal.too_few_measurements()) r.termination = CalibrationTermination::kTooFewMeasurements;
+  if (cal.rank_deficient()) r.termination = CalibrationTermination::kUnderdetermined;
   if (cal.rank_deficient()) {
     r.warnings.push_back(fmt::format(
         "S is rank deficient ({} < {}): the motion determines only {} combinations of the {} "
@@ -381,7 +383,11 @@ void run_exact(CalibrationSummary& r, const RobotConfig& config, const fs::path&
     r.warnings.push_back(fmt::format(
         "{} samples skipped: a sensor reported lift or counter overflow", cal.samples_unusable));
   }
-  if (!cal.converged) r.warnings.push_back("the optimiser did not converge: the result is rough");
+  if (!cal.converged) {
+    r.termination = CalibrationTermination::kNotConverged;
+    r.warnings.push_back("the optimiser did not converge: the result is rough");
+  }
+  if (cal.model_misfit || cal.check.misfit()) r.termination = CalibrationTermination::kModelMisfit;
   model_check(r, cal.check, config, log, options.force);
   if (ref.samples.size() < 30) {
     r.warnings.push_back(fmt::format(
@@ -564,6 +570,7 @@ CalibrationSummary calibrate_log(const RobotConfig& config, const std::string& c
       r.warnings.push_back(std::move(w));
     }
   }
+  r.usable = r.termination == CalibrationTermination::kConverged;
   return r;
 }
 
@@ -584,7 +591,8 @@ std::string CalibrationSummary::brief_report() const {
 std::string CalibrationSummary::full_report() const {
   std::string text;
   auto out = std::back_inserter(text);
-  fmt::format_to(out, "moa calibrate --method {}\n", to_name(method));
+  fmt::format_to(out, "moa calibrate --method {}: {} ({})\n", to_name(method),
+                 usable ? "usable" : "not usable", to_name(termination));
   for (const auto& line : facts) fmt::format_to(out, "  {}\n", line);
   for (const auto& s : sensors) {
     fmt::format_to(out, "\nsensor {}\n", s.name);
@@ -629,7 +637,10 @@ std::string CalibrationSummary::full_report() const {
 
 std::string CalibrationSummary::to_json(std::string_view out) const {
   JsonWriter json;
-  json.begin_object().member("method", to_name(method));
+  json.begin_object()
+      .member("method", to_name(method))
+      .member("usable", usable)
+      .member("termination", to_name(termination));
   if (!out.empty()) json.member("out", out);
   if (const auto* k = std::get_if<KimLeeCalibration>(&result)) {
     json.member("samples", k->measurements)

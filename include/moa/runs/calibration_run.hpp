@@ -94,9 +94,42 @@ struct SensorCalibrationReport {
   std::optional<MountVector> information_eigenvalues;  ///< exact: observability.hpp
 };
 
+/// How a calibration's solve ended, as Ceres' Summary::termination_type.
+enum class CalibrationTermination {
+  kConverged,           ///< solved; the data determined what the method estimates
+  kNotConverged,        ///< exact: the optimiser stopped before converging (rough)
+  kModelMisfit,         ///< exact: the model does not explain the data (kept with --force)
+  kUnderdetermined,     ///< kimlee: S rank deficient, a minimum-norm correction
+  kTooFewMeasurements,  ///< kimlee: M < 2N - 2 (Kim & Lee eq. (49))
+};
+
+}  // namespace moa::io
+
+template <>
+struct moa::EnumNames<moa::io::CalibrationTermination> {
+  static constexpr std::array<NameEntry<io::CalibrationTermination>, 5> kTable{{
+      {io::CalibrationTermination::kConverged, "converged"},
+      {io::CalibrationTermination::kNotConverged, "not-converged"},
+      {io::CalibrationTermination::kModelMisfit, "model-misfit"},
+      {io::CalibrationTermination::kUnderdetermined, "underdetermined"},
+      {io::CalibrationTermination::kTooFewMeasurements, "too-few-measurements"},
+  }};
+};
+
+namespace moa::io {
+
 /// A calibration's result and report, as Ceres' Solver::Summary.
 struct CalibrationSummary {
   CalibrationMethod method = CalibrationMethod::kExact;
+  /// The first that applies, in the order of CalibrationTermination's values
+  /// after kConverged: misfit before non-convergence (exact), rank before
+  /// the count of measurements (kimlee).
+  CalibrationTermination termination = CalibrationTermination::kConverged;
+  /// The rule, as Ceres' IsSolutionUsable: termination is kConverged. A
+  /// usable calibration may still carry warnings (parameters kept at
+  /// nominal, implausible values): they say what to check, not that the
+  /// solve failed.
+  bool usable = false;
   /// The nominal config with the calibrated mounts: what `moa calibrate --out` writes.
   RobotConfig calibrated;
   std::vector<SensorCalibrationReport> sensors;
