@@ -35,7 +35,7 @@ TEST(CalibrationSummary, ExactIsUsableWhenItConvergedAndItsModelFits) {
   EXPECT_EQ(s.usable, fits);
   EXPECT_EQ(s.termination == CalibrationTermination::kConverged, fits);
   EXPECT_TRUE(s.usable) << "a clean simulated calibration drive";
-  EXPECT_NE(s.to_json().find("\"usable\":true,\"termination\":\"converged\""), std::string::npos)
+  EXPECT_NE(s.to_json().find(R"("usable": true, "termination": "converged")"), std::string::npos)
       << s.to_json();
   fs::remove_all(dir);
 }
