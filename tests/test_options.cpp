@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "moa/calibration/guided_steps.hpp"
 #include "moa/core/odometry.hpp"
 #include "moa/core/options_check.hpp"
 
@@ -261,6 +262,40 @@ TEST(OptionsCheck, ANestedStructNamesItsFieldsRelativeToItself) {
   s.period = 0.1;
   s.max_row_interval = 7;
   EXPECT_EQ(message(s.validate()), "max_row_interval: must be <= 61 periods (" + g6(6.1) + "), is 7");
+}
+
+TEST(MotionLimits, EveryFieldIsCheckedNamingBoundAndValue) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(message(MotionLimits{}.validate()), "");
+  struct LimitCase {
+    std::function<void(MotionLimits&)> apply;
+    std::string expected;
+  };
+  const std::vector<LimitCase> cases = {
+      {[&](auto& l) { l.distance = nan; }, "distance: must be finite, is nan"},
+      {[](auto& l) { l.distance = 0; }, "distance: must be > 0, is 0"},
+      {[](auto& l) { l.turns = 0; }, "turns: must be != 0, is 0"},
+      {[&](auto& l) { l.turns = nan; }, "turns: must be finite, is nan"},
+      {[](auto& l) { l.distance_tolerance = 1; }, "distance_tolerance: must be in (0, 1), is 1"},
+      {[](auto& l) { l.max_off_axis = -1; }, "max_off_axis: must be > 0, is -1"},
+      {[](auto& l) { l.max_deviation = 0; }, "max_deviation: must be > 0, is 0"},
+      {[&](auto& l) { l.max_heading_change = nan; }, "max_heading_change: must be finite, is nan"},
+      {[](auto& l) { l.turn_tolerance = 0; }, "turn_tolerance: must be > 0, is 0"},
+      {[](auto& l) { l.max_spin_offset = -0.5; }, "max_spin_offset: must be > 0, is -0.5"},
+      {[](auto& l) { l.max_speed_fraction = 0; }, "max_speed_fraction: must be > 0, is 0"},
+      {[](auto& l) { l.still_speed = 0; }, "still_speed: must be > 0, is 0"},
+      {[](auto& l) { l.still_rate = -2; }, "still_rate: must be > 0, is -2"},
+      {[](auto& l) { l.still_time = 0; }, "still_time: must be > 0, is 0"},
+  };
+  for (const auto& c : cases) {
+    MotionLimits l;
+    c.apply(l);
+    EXPECT_EQ(message(l.validate()), c.expected);
+  }
+  // A negative number of turns is a direction, not an error.
+  MotionLimits clockwise;
+  clockwise.turns = -3;
+  EXPECT_EQ(message(clockwise.validate()), "");
 }
 
 }  // namespace

@@ -11,8 +11,6 @@ namespace {
 
 constexpr double kTurn = 2.0 * std::numbers::pi;
 
-bool positive(double x) { return std::isfinite(x) && x > 0.0; }
-
 }  // namespace
 
 const char* describe(GuidedStep step) {
@@ -27,22 +25,22 @@ const char* describe(GuidedStep step) {
   return "?";
 }
 
-const char* MotionLimits::validate() const {
-  if (!positive(distance)) return "distance: must be positive and finite (m)";
-  if (!std::isfinite(turns) || turns == 0.0) return "turns: must be finite and not 0";
-  if (!(positive(distance_tolerance) && distance_tolerance < 1.0)) {
-    return "distance_tolerance: must be in (0, 1)";
-  }
-  if (!positive(max_off_axis)) return "max_off_axis: must be positive and finite (rad)";
-  if (!positive(max_deviation)) return "max_deviation: must be positive and finite (m)";
-  if (!positive(max_heading_change)) return "max_heading_change: must be positive and finite (rad)";
-  if (!positive(turn_tolerance)) return "turn_tolerance: must be positive and finite (turns)";
-  if (!positive(max_spin_offset)) return "max_spin_offset: must be positive and finite (m)";
-  if (!positive(max_speed_fraction)) return "max_speed_fraction: must be positive and finite";
-  if (!positive(still_speed)) return "still_speed: must be positive and finite (m/s)";
-  if (!positive(still_rate)) return "still_rate: must be positive and finite (rad/s)";
-  if (!positive(still_time)) return "still_time: must be positive and finite (s)";
-  return "";
+OptionCheck MotionLimits::validate() const {
+  return OptionsCheck()
+      .positive("distance", distance)
+      .require(std::isfinite(turns), "turns", "finite", turns)
+      .require(turns != 0.0, "turns", "!= 0", turns)
+      .open("distance_tolerance", distance_tolerance, 0.0, 1.0)
+      .positive("max_off_axis", max_off_axis)
+      .positive("max_deviation", max_deviation)
+      .positive("max_heading_change", max_heading_change)
+      .positive("turn_tolerance", turn_tolerance)
+      .positive("max_spin_offset", max_spin_offset)
+      .positive("max_speed_fraction", max_speed_fraction)
+      .positive("still_speed", still_speed)
+      .positive("still_rate", still_rate)
+      .positive("still_time", still_time)
+      .result();
 }
 
 MotionWatcher::MotionWatcher(const SensorArray& nominal, const MotionLimits& limits)
