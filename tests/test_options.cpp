@@ -12,6 +12,7 @@
 
 #include "moa/calibration/guided_steps.hpp"
 #include "moa/core/odometry.hpp"
+#include "moa/runs/calibration_run.hpp"
 #include "moa/core/options_check.hpp"
 
 namespace moa {
@@ -296,6 +297,37 @@ TEST(MotionLimits, EveryFieldIsCheckedNamingBoundAndValue) {
   MotionLimits clockwise;
   clockwise.turns = -3;
   EXPECT_EQ(message(clockwise.validate()), "");
+}
+
+TEST(CalibrationOptions, EveryFieldIsCheckedNamingPathBoundAndValue) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(message(io::CalibrationOptions{}.validate()), "");
+  struct CalibrationCase {
+    std::function<void(io::CalibrationOptions&)> apply;
+    std::string expected;
+  };
+  const std::vector<CalibrationCase> cases = {
+      {[](auto& o) { o.max_row_interval = 0; }, "max_row_interval: must be > 0, is 0"},
+      {[&](auto& o) { o.max_row_interval = nan; }, "max_row_interval: must be finite, is nan"},
+      {[](auto& o) { o.min_interval = -0.5; }, "min_interval: must be >= 0, is -0.5"},
+      {[](auto& o) { o.measurements = -1; }, "measurements: must be >= 0, is -1"},
+      {[](auto& o) { o.distance = 0; }, "distance: must be > 0, is 0"},
+      {[](auto& o) { o.turns = 0; }, "turns: must be != 0, is 0"},
+      {[&](auto& o) { o.turns = nan; }, "turns: must be finite, is nan"},
+      {[](auto& o) { o.tolerances.distance_sd = 0; },
+       "tolerances.distance_sd: must be > 0, is 0"},
+      {[](auto& o) { o.tolerances.turn_sd = -1; }, "tolerances.turn_sd: must be > 0, is -1"},
+      {[&](auto& o) { o.tolerances.centre_sd = nan; },
+       "tolerances.centre_sd: must be finite, is nan"},
+      {[](auto& o) { o.tolerances.heading_sd = 0; }, "tolerances.heading_sd: must be > 0, is 0"},
+      {[](auto& o) { o.tolerances.anisotropy_sd = -0.02; },
+       "tolerances.anisotropy_sd: must be > 0, is -0.02"},
+  };
+  for (const auto& c : cases) {
+    io::CalibrationOptions o;
+    c.apply(o);
+    EXPECT_EQ(message(o.validate()), c.expected);
+  }
 }
 
 }  // namespace

@@ -9,6 +9,16 @@
 
 namespace moa {
 
+OptionCheck GuidedTolerances::validate() const {
+  return OptionsCheck()
+      .positive("distance_sd", distance_sd)
+      .positive("turn_sd", turn_sd)
+      .positive("centre_sd", centre_sd)
+      .positive("heading_sd", heading_sd)
+      .positive("anisotropy_sd", anisotropy_sd)
+      .result();
+}
+
 namespace {
 
 // Least squares fit of (yaw, sx, sy) to a measured sensor matrix

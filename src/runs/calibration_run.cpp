@@ -500,6 +500,19 @@ void json_array(JsonWriter& json, const Vector& xs) {
 
 }  // namespace
 
+OptionCheck CalibrationOptions::validate() const {
+  OptionsCheck c;
+  c.positive("max_row_interval", max_row_interval);
+  if (min_interval) c.non_negative("min_interval", *min_interval);
+  if (measurements) c.at_least("measurements", *measurements, 0);
+  if (distance) c.positive("distance", *distance);
+  if (turns) {
+    c.require(std::isfinite(*turns), "turns", "finite", *turns)
+        .require(*turns != 0.0, "turns", "!= 0", *turns);
+  }
+  return c.nested("tolerances", tolerances.validate()).result();
+}
+
 void check_calibration_options(CalibrationMethod method, const fs::path& log,
                                const CalibrationOptions& o) {
   const char* name = to_name(method);
@@ -533,6 +546,7 @@ void check_calibration_options(CalibrationMethod method, const fs::path& log,
     refuse(o.distance.has_value(), "--distance", why);
     refuse(o.turns.has_value(), "--turns", why);
   }
+  if (const auto e = o.validate()) throw Error(fmt::format("invalid option: {}", e->message()));
 }
 
 CalibrationSummary calibrate_log(const RobotConfig& config, const std::string& config_path,

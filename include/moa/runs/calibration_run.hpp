@@ -74,6 +74,12 @@ struct CalibrationOptions {
   /// exact: return a calibration whose model does not explain the data
   /// (ExactModelCheck::misfit()) with a warning instead of refusing it.
   bool force = false;
+  /// nullopt when the numbers can be used, else the first field out of its
+  /// bounds (core/options_check.hpp): max_row_interval positive,
+  /// min_interval and measurements not negative, distance positive, turns
+  /// finite and not 0, every tolerance positive. Which options a method
+  /// needs is check_calibration_options'.
+  OptionCheck validate() const;
 };
 
 /// Checks that the options fit the method (`log` empty: none given); throws
