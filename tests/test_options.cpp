@@ -27,15 +27,20 @@ std::string g6(double x) {
   return buffer;
 }
 
-TEST(OptionError, NumbersAreWrittenAsPrintfG6) {
-  const std::vector<double> values = {0.0,     1.0,      -1.0,       0.5,    2.0,
-                                      13.8155, 16.2662,  1e-12,      1e-3,   0.0003,
-                                      1e-5,    123456.0, 1234567.0,  1e300,  -2.5e-7,
-                                      0.61,    999999.5, 0.00012345, 3600.0, 1.0 / 3.0};
+TEST(OptionError, NumbersAreWrittenAsPrintfG6AndWholeNumbersWhole) {
+  const std::vector<double> values = {0.5,     13.8155,   16.2662,    1e-12, 1e-3,
+                                      0.0003,  1e-5,      1e300,      -1e20, -2.5e-7,
+                                      0.61,    999999.5,  0.00012345, 1.0 / 3.0,
+                                      -1.0 / 7, 123456.7, 1234567.8,  2.5e15};
   for (const double x : values) {
     OptionError e;
     e.append_number(x);
     EXPECT_EQ(std::string(e.message()), g6(x)) << x;
+  }
+  for (const long long n : {0LL, 1LL, -1LL, 65535LL, 16777216LL, 2000000LL, -999999999999999LL}) {
+    OptionError e;
+    e.append_number(static_cast<double>(n));
+    EXPECT_EQ(std::string(e.message()), std::to_string(n)) << n;
   }
   OptionError special;
   special.append_number(std::numeric_limits<double>::quiet_NaN());

@@ -77,9 +77,8 @@ LiveSource open_source(const SourceFlags& f, const io::RobotConfig& config,
   } else {
     io::ReplayOptions options;
     options.speed = f.speed;
-    if (const char* why = options.validate(); *why) {
-      throw io::Error(fmt::format("--speed {}: must be positive and finite", f.speed));
-    }
+    // The option's name is the flag's: "--speed: must be > 0, is -1".
+    if (const auto e = options.validate()) throw io::Error(fmt::format("--{}", e->message()));
     auto reader = std::make_unique<io::ReplayReader>(f.replay, config, options, hooks);
     s.replay = reader.get();
     s.source = std::move(reader);

@@ -31,7 +31,8 @@ void OptionError::append_integer(long long x) {
 void OptionError::append_number(double x) {
   if (std::isnan(x)) return append("nan");
   if (std::isinf(x)) return append(x > 0 ? "inf" : "-inf");
-  if (x == 0.0) return append("0");
+  // Whole numbers as they are (a port, a buffer size): 16777216, not 1.67772e+07.
+  if (std::fabs(x) < 1e15 && std::floor(x) == x) return append_integer(std::llround(x));
   if (x < 0) append("-");
   const double a = std::fabs(x);
   // Six significant digits d (100000 <= d < 1000000) with a ~ d 10^(e - 5).
@@ -145,6 +146,11 @@ OptionsCheck& OptionsCheck::greater(const char* field, double x, double lo) {
 
 OptionsCheck& OptionsCheck::at_least(const char* field, double x, double lo) {
   if (finite(field, x)) compare(field, x, x >= lo, ">= ", nullptr, lo);
+  return *this;
+}
+
+OptionsCheck& OptionsCheck::at_most(const char* field, double x, double hi) {
+  if (finite(field, x)) compare(field, x, x <= hi, "<= ", nullptr, hi);
   return *this;
 }
 

@@ -33,7 +33,8 @@ class OptionError {
   std::string_view view() const { return {text_.data(), size_}; }
 
   void append(std::string_view text);
-  /// x as printf's %.6g would write it ("nan", "inf", "-inf" for the others).
+  /// A whole number below 1e15 in magnitude as an integer, any other x as
+  /// printf's %.6g would write it ("nan", "inf", "-inf").
   void append_number(double x);
   void append_integer(long long x);
   /// Prefixes `parent` and a '.' to the path: "frozen_run: ..." becomes
@@ -61,6 +62,8 @@ class OptionsCheck {
   OptionsCheck& positive_or_infinite(const char* field, double x);
   OptionsCheck& positive(const char* field, double x) { return greater(field, x, 0.0); }
   OptionsCheck& non_negative(const char* field, double x) { return at_least(field, x, 0.0); }
+  /// x <= hi.
+  OptionsCheck& at_most(const char* field, double x, double hi);
   /// lo < x < hi.
   OptionsCheck& open(const char* field, double x, double lo, double hi);
   /// lo <= x <= hi.
