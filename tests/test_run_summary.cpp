@@ -125,7 +125,7 @@ TEST(RunSummary, MoaOdometryPrintsItsSummary) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const CsvCounts csv = count_csv(out);
   EXPECT_NE(r.out.find("epochs: " + std::to_string(csv.rows) + " (" +
-                       std::to_string(csv.sources["mice"]) + " mice"),
+                       std::to_string(csv.sources.at("mice")) + " mice"),
             std::string::npos)
       << r.out;
   EXPECT_NE(r.out.find("\nusable: "), std::string::npos) << r.out;
