@@ -56,7 +56,9 @@ CsvCounts count_csv(const fs::path& file) {
     }
     for (const auto& entry : split(fields[column.at("excluded")], ';')) {
       if (entry.empty()) continue;
-      ++c.sensors[entry.substr(entry.rfind(':') + 1)];
+      // name:reason[/flag...]
+      const std::string reason = entry.substr(entry.rfind(':') + 1);
+      ++c.sensors[reason.substr(0, reason.find('/'))];
     }
   }
   return c;

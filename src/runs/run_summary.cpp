@@ -34,13 +34,13 @@ std::string RunSummary::verdict() const {
 std::string RunSummary::text() const {
   std::string out = fmt::format("epochs: {}", epochs);
   for (std::size_t s = 0; s < kSourceCount; ++s) {
-    out += fmt::format("{} {} {}", s == 0 ? " (" : ", ", epochs_by_source[s],
+    out += fmt::format("{}{} {}", s == 0 ? " (" : ", ", epochs_by_source[s],
                        to_name(static_cast<Source>(s)));
   }
   out += ")\nsensor-epochs:";
   for (std::size_t e = 0; e < kExclusionCount; ++e) {
     if (sensor_epochs[e] == 0 && e != 0) continue;
-    out += fmt::format("{} {} {}", e == 0 ? " " : ", ", sensor_epochs[e],
+    out += fmt::format("{}{} {}", e == 0 ? " " : ", ", sensor_epochs[e],
                        to_name(static_cast<Exclusion>(e)));
   }
   out += "\n";
