@@ -20,12 +20,12 @@
 
 #include "moa/analysis/evaluate.hpp"
 #include "moa/core/odometry.hpp"
-#include "moa/runs/calibration_run.hpp"
 #include "moa/formats/config.hpp"
 #include "moa/formats/error.hpp"
-#include "moa/runs/evaluate.hpp"
 #include "moa/formats/log.hpp"
 #include "moa/formats/odometry_csv.hpp"
+#include "moa/runs/calibration_run.hpp"
+#include "moa/runs/evaluate.hpp"
 #include "moa/runs/odometry_run.hpp"
 #include "moa/sim/log_writer.hpp"
 #include "moa/sim/scenario.hpp"
@@ -816,8 +816,7 @@ means not excited).)")
       .def_readonly("usable", &io::CalibrationSummary::usable,
                     "The solve converged and the data determined what the method estimates.")
       .def_property_readonly(
-          "termination",
-          [](const io::CalibrationSummary& s) { return to_name(s.termination); },
+          "termination", [](const io::CalibrationSummary& s) { return to_name(s.termination); },
           "converged, not-converged, model-misfit, underdetermined or too-few-measurements.")
       .def_property_readonly("facts", [](const io::CalibrationSummary& s) { return s.facts; })
       .def_property_readonly("warnings", [](const io::CalibrationSummary& s) { return s.warnings; })

@@ -51,10 +51,9 @@ TEST(CalibrationSummary, KimLeeIsUnderdeterminedWhenSIsRankDeficient) {
   for (const double sv : cal.singular_values) rank += sv > cal.threshold ? 1 : 0;
   const int unknowns = 2 * config.array.size();
   const bool few = cal.measurements < unknowns - 2;
-  const CalibrationTermination expected =
-      rank < unknowns ? CalibrationTermination::kUnderdetermined
-      : few           ? CalibrationTermination::kTooFewMeasurements
-                      : CalibrationTermination::kConverged;
+  const CalibrationTermination expected = rank < unknowns ? CalibrationTermination::kUnderdetermined
+                                          : few ? CalibrationTermination::kTooFewMeasurements
+                                                : CalibrationTermination::kConverged;
   EXPECT_EQ(s.termination, expected) << to_name(s.termination) << " rank " << rank;
   EXPECT_EQ(s.usable, expected == CalibrationTermination::kConverged);
   fs::remove_all(dir);

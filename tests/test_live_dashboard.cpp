@@ -18,10 +18,10 @@
 #include <thread>
 
 #include "moa/formats/config.hpp"
-#include "moa/web/dashboard.hpp"
 #include "moa/formats/error.hpp"
 #include "moa/formats/log.hpp"
 #include "moa/sources/replay_reader.hpp"
+#include "moa/web/dashboard.hpp"
 #include "support/browser.hpp"
 #include "support/http.hpp"
 #include "support/run.hpp"

@@ -12,8 +12,8 @@
 
 #include "moa/calibration/guided_steps.hpp"
 #include "moa/core/odometry.hpp"
-#include "moa/runs/calibration_run.hpp"
 #include "moa/core/options_check.hpp"
+#include "moa/runs/calibration_run.hpp"
 
 namespace moa {
 namespace {
@@ -28,10 +28,9 @@ std::string g6(double x) {
 }
 
 TEST(OptionError, NumbersAreWrittenAsPrintfG6AndWholeNumbersWhole) {
-  const std::vector<double> values = {0.5,     13.8155,   16.2662,    1e-12, 1e-3,
-                                      0.0003,  1e-5,      1e300,      -1e20, -2.5e-7,
-                                      0.61,    999999.5,  0.00012345, 1.0 / 3.0,
-                                      -1.0 / 7, 123456.7, 1234567.8,  2.5e15};
+  const std::vector<double> values = {
+      0.5,     13.8155, 16.2662,  1e-12,      1e-3,      0.0003,   1e-5,     1e300,     -1e20,
+      -2.5e-7, 0.61,    999999.5, 0.00012345, 1.0 / 3.0, -1.0 / 7, 123456.7, 1234567.8, 2.5e15};
   for (const double x : values) {
     OptionError e;
     e.append_number(x);
@@ -83,9 +82,21 @@ TEST(OdometryOptions, EveryFieldIsCheckedNamingPathBoundAndValue) {
        "must be <= 61 periods (" + g6(61 * 0.01) + "), is 1"},
       {"max_gap", [](auto& o) { o.max_gap = 0; }, "must be > 0, is 0"},
       {"max_gap", [&](auto& o) { o.max_gap = nan; }, "must be > 0, is nan"},
-      {"initial.x", [&](auto& o) { o.initial = Pose2{{nan, 0}, 0}; }, finite_nan},
-      {"initial.y", [&](auto& o) { o.initial = Pose2{{0, inf}, 0}; }, finite_inf},
-      {"initial.theta", [&](auto& o) { o.initial = Pose2{{0, 0}, nan}; }, finite_nan},
+      {"initial.x",
+       [&](auto& o) {
+         o.initial = Pose2{{nan, 0}, 0};
+       },
+       finite_nan},
+      {"initial.y",
+       [&](auto& o) {
+         o.initial = Pose2{{0, inf}, 0};
+       },
+       finite_inf},
+      {"initial.theta",
+       [&](auto& o) {
+         o.initial = Pose2{{0, 0}, nan};
+       },
+       finite_nan},
       {"camera_latency", [](auto& o) { o.camera_latency = -0.5; }, "must be >= 0, is -0.5"},
       {"camera_latency", [&](auto& o) { o.camera_latency = inf; }, finite_inf},
       {"camera_sigma", [](auto& o) { o.camera_sigma = 0; }, "must be > 0, is 0"},
@@ -105,8 +116,7 @@ TEST(OdometryOptions, EveryFieldIsCheckedNamingPathBoundAndValue) {
       {"sekimori.hold.angular_accel", [&](auto& o) { o.sekimori.hold.angular_accel = inf; },
        finite_inf},
       {"consensus.alpha", [](auto& o) { o.consensus.alpha = 0; }, "must be in (0, 0.5), is 0"},
-      {"consensus.alpha", [](auto& o) { o.consensus.alpha = 0.5; },
-       "must be in (0, 0.5), is 0.5"},
+      {"consensus.alpha", [](auto& o) { o.consensus.alpha = 0.5; }, "must be in (0, 0.5), is 0.5"},
       {"consensus.alpha", [&](auto& o) { o.consensus.alpha = nan; }, finite_nan},
       {"consensus.noise.relative", [](auto& o) { o.consensus.noise.relative = -1; },
        "must be >= 0, is -1"},
@@ -120,8 +130,8 @@ TEST(OdometryOptions, EveryFieldIsCheckedNamingPathBoundAndValue) {
        "must be in [0, 255], is 256"},
       {"consensus.noise.low_squal_factor",
        [](auto& o) { o.consensus.noise.low_squal_factor = 0.5; }, "must be >= 1, is 0.5"},
-      {"consensus.noise.overflow_factor",
-       [&](auto& o) { o.consensus.noise.overflow_factor = nan; }, finite_nan},
+      {"consensus.noise.overflow_factor", [&](auto& o) { o.consensus.noise.overflow_factor = nan; },
+       finite_nan},
       {"consensus.wheels.base_v", [](auto& o) { o.consensus.wheels.base_v = -1; },
        "must be > 0, is -1"},
       {"consensus.wheels.base_omega", [](auto& o) { o.consensus.wheels.base_omega = 0; },
@@ -133,16 +143,16 @@ TEST(OdometryOptions, EveryFieldIsCheckedNamingPathBoundAndValue) {
        "must be > 0, is -5"},
       {"consensus.limits.accel", [](auto& o) { o.consensus.limits.accel = 0; },
        "must be > 0, is 0"},
-      {"consensus.limits.angular_accel",
-       [&](auto& o) { o.consensus.limits.angular_accel = nan; }, finite_nan},
+      {"consensus.limits.angular_accel", [&](auto& o) { o.consensus.limits.angular_accel = nan; },
+       finite_nan},
       {"consensus.health.frozen_run", [](auto& o) { o.consensus.health.frozen_run = 1; },
        "must be >= 2, is 1"},
       {"consensus.health.frozen_min_counts",
        [](auto& o) { o.consensus.health.frozen_min_counts = -1; }, "must be >= 0, is -1"},
-      {"consensus.health.frozen_change",
-       [&](auto& o) { o.consensus.health.frozen_change = nan; }, finite_nan},
-      {"consensus.health.frozen_long_run",
-       [](auto& o) { o.consensus.health.frozen_long_run = 5; }, "must be >= 10, is 5"},
+      {"consensus.health.frozen_change", [&](auto& o) { o.consensus.health.frozen_change = nan; },
+       finite_nan},
+      {"consensus.health.frozen_long_run", [](auto& o) { o.consensus.health.frozen_long_run = 5; },
+       "must be >= 10, is 5"},
       {"consensus.health.zero_run", [](auto& o) { o.consensus.health.zero_run = 0; },
        "must be >= 1, is 0"},
       {"consensus.health.zero_speed", [](auto& o) { o.consensus.health.zero_speed = -0.5; },
@@ -151,18 +161,16 @@ TEST(OdometryOptions, EveryFieldIsCheckedNamingPathBoundAndValue) {
        "must be > 0, is 0"},
       {"consensus.health.drift_min_speed",
        [&](auto& o) { o.consensus.health.drift_min_speed = inf; }, finite_inf},
-      {"consensus.health.drift_min_time",
-       [](auto& o) { o.consensus.health.drift_min_time = -1; }, "must be >= 0, is -1"},
-      {"consensus.health.drift_release",
-       [&](auto& o) { o.consensus.health.drift_release = nan; }, finite_nan},
-      {"consensus.health.drift_suspect",
-       [](auto& o) { o.consensus.health.drift_suspect = 0.005; },
+      {"consensus.health.drift_min_time", [](auto& o) { o.consensus.health.drift_min_time = -1; },
+       "must be >= 0, is -1"},
+      {"consensus.health.drift_release", [&](auto& o) { o.consensus.health.drift_release = nan; },
+       finite_nan},
+      {"consensus.health.drift_suspect", [](auto& o) { o.consensus.health.drift_suspect = 0.005; },
        "must be >= drift_release (0.01), is 0.005"},
-      {"consensus.health.drift_exclude",
-       [](auto& o) { o.consensus.health.drift_exclude = 0.01; },
+      {"consensus.health.drift_exclude", [](auto& o) { o.consensus.health.drift_exclude = 0.01; },
        "must be >= drift_suspect (0.015), is 0.01"},
-      {"consensus.health.drift_step_tau",
-       [](auto& o) { o.consensus.health.drift_step_tau = 0; }, "must be > 0, is 0"},
+      {"consensus.health.drift_step_tau", [](auto& o) { o.consensus.health.drift_step_tau = 0; },
+       "must be > 0, is 0"},
       {"consensus.health.drift_step", [](auto& o) { o.consensus.health.drift_step = -1; },
        "must be >= 0, is -1"},
       {"consensus.health.probation", [&](auto& o) { o.consensus.health.probation = nan; },
@@ -192,22 +200,21 @@ TEST(OdometryOptions, EveryFieldIsCheckedNamingPathBoundAndValue) {
        "must be >= 0, is -1"},
       {"self_calibration.yaw_walk", [&](auto& o) { o.self_calibration.yaw_walk = nan; },
        finite_nan},
-      {"self_calibration.prior_scale_sd",
-       [](auto& o) { o.self_calibration.prior_scale_sd = 0; }, "must be > 0, is 0"},
+      {"self_calibration.prior_scale_sd", [](auto& o) { o.self_calibration.prior_scale_sd = 0; },
+       "must be > 0, is 0"},
       {"self_calibration.prior_yaw_sd", [](auto& o) { o.self_calibration.prior_yaw_sd = -0.5; },
        "must be > 0, is -0.5"},
-      {"self_calibration.relative_noise",
-       [](auto& o) { o.self_calibration.relative_noise = -1; }, "must be >= 0, is -1"},
+      {"self_calibration.relative_noise", [](auto& o) { o.self_calibration.relative_noise = -1; },
+       "must be >= 0, is -1"},
       {"self_calibration.deadband", [&](auto& o) { o.self_calibration.deadband = inf; },
        finite_inf},
       {"self_calibration.isotropic_deadband",
        [](auto& o) { o.self_calibration.isotropic_deadband = -1; }, "must be >= 0, is -1"},
-      {"self_calibration.gate", [](auto& o) { o.self_calibration.gate = 0; },
-       "must be > 0, is 0"},
-      {"self_calibration.predictor_alpha",
-       [](auto& o) { o.self_calibration.predictor_alpha = 1; }, "must be in (0, 1), is 1"},
-      {"self_calibration.runaway_scale",
-       [](auto& o) { o.self_calibration.runaway_scale = 1.5; }, "must be in (0, 1), is 1.5"},
+      {"self_calibration.gate", [](auto& o) { o.self_calibration.gate = 0; }, "must be > 0, is 0"},
+      {"self_calibration.predictor_alpha", [](auto& o) { o.self_calibration.predictor_alpha = 1; },
+       "must be in (0, 1), is 1"},
+      {"self_calibration.runaway_scale", [](auto& o) { o.self_calibration.runaway_scale = 1.5; },
+       "must be in (0, 1), is 1.5"},
       {"self_calibration.runaway_yaw", [](auto& o) { o.self_calibration.runaway_yaw = 0; },
        "must be > 0, is 0"},
       {"self_calibration.reacquire_blocks",
@@ -267,7 +274,8 @@ TEST(OptionsCheck, ANestedStructNamesItsFieldsRelativeToItself) {
   SynchroniserOptions s;
   s.period = 0.1;
   s.max_row_interval = 7;
-  EXPECT_EQ(message(s.validate()), "max_row_interval: must be <= 61 periods (" + g6(6.1) + "), is 7");
+  EXPECT_EQ(message(s.validate()),
+            "max_row_interval: must be <= 61 periods (" + g6(6.1) + "), is 7");
 }
 
 TEST(MotionLimits, EveryFieldIsCheckedNamingBoundAndValue) {
@@ -319,8 +327,7 @@ TEST(CalibrationOptions, EveryFieldIsCheckedNamingPathBoundAndValue) {
       {[](auto& o) { o.distance = 0; }, "distance: must be > 0, is 0"},
       {[](auto& o) { o.turns = 0; }, "turns: must be != 0, is 0"},
       {[&](auto& o) { o.turns = nan; }, "turns: must be finite, is nan"},
-      {[](auto& o) { o.tolerances.distance_sd = 0; },
-       "tolerances.distance_sd: must be > 0, is 0"},
+      {[](auto& o) { o.tolerances.distance_sd = 0; }, "tolerances.distance_sd: must be > 0, is 0"},
       {[](auto& o) { o.tolerances.turn_sd = -1; }, "tolerances.turn_sd: must be > 0, is -1"},
       {[&](auto& o) { o.tolerances.centre_sd = nan; },
        "tolerances.centre_sd: must be finite, is nan"},

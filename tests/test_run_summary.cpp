@@ -119,8 +119,8 @@ TEST(RunSummary, UsableUnlessNoEpochOrMoreThanOnePercentHeld) {
 
 TEST(RunSummary, MoaOdometryPrintsItsSummary) {
   const fs::path dir = test::scratch_dir("run_summary_cli");
-  ASSERT_EQ(test::run_moa("simulate --scenario sekimori-b --seed 3 --out " + dir.string()).exit_code,
-            0);
+  ASSERT_EQ(
+      test::run_moa("simulate --scenario sekimori-b --seed 3 --out " + dir.string()).exit_code, 0);
   const fs::path out = dir / "odometry.csv";
   const auto r = test::run_moa("odometry --config " + (dir / "robot.yaml").string() + " --log " +
                                dir.string() + " --out " + out.string());

@@ -2,11 +2,11 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
 #include <vector>
-#include <algorithm>
 
 #include "moa/core/se2.hpp"
 #include "support/checks.hpp"

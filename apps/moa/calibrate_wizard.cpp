@@ -39,7 +39,6 @@
 namespace moa::cli {
 namespace {
 
-
 volatile std::sig_atomic_t g_quit = 0;
 extern "C" void on_quit_signal(int) { g_quit = 1; }
 

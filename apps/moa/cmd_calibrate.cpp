@@ -13,9 +13,9 @@
 
 #include "calibrate_wizard.hpp"
 #include "commands.hpp"
-#include "moa/runs/calibration_run.hpp"
 #include "moa/formats/config.hpp"
 #include "moa/formats/error.hpp"
+#include "moa/runs/calibration_run.hpp"
 #include "moa/runs/odometry_run.hpp"
 #include "moa/runs/output_path.hpp"
 #include "odometry_options.hpp"

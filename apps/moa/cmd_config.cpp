@@ -19,7 +19,6 @@
 namespace moa::cli {
 namespace {
 
-
 struct ConfigInitArgs {
   std::string layout;
   std::optional<int> sensors;

@@ -14,9 +14,9 @@
 #include "moa/analysis/evaluate.hpp"
 #include "moa/formats/config.hpp"
 #include "moa/formats/error.hpp"
-#include "moa/runs/evaluate.hpp"
 #include "moa/formats/json.hpp"
 #include "moa/formats/log.hpp"
+#include "moa/runs/evaluate.hpp"
 
 namespace moa::cli {
 namespace {
@@ -29,7 +29,6 @@ struct EvaluateArgs {
   std::string reference_label = "the reference";
   bool json = false;
 };
-
 
 int run_evaluate(const EvaluateArgs& args) {
   if (args.reference_mm && !(std::isfinite(*args.reference_mm) && *args.reference_mm > 0.0)) {

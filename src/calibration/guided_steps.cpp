@@ -200,8 +200,8 @@ std::string summarise(const MotionSummary& m) {
       "{:.3f} m along {}{}, {:.1f} deg off the axis, {:.1f} mm off a straight line, turned {:.1f} "
       "deg, in {:.1f} s, fastest sensor {:.2f} m/s",
       std::abs(along), x ? 'x' : 'y', along < 0 ? " (backwards)" : "",
-      to_degrees(std::atan2(std::abs(across), std::abs(along))), m.deviation * 1e3, to_degrees(m.rotation),
-      m.duration, m.top_speed);
+      to_degrees(std::atan2(std::abs(across), std::abs(along))), m.deviation * 1e3,
+      to_degrees(m.rotation), m.duration, m.top_speed);
 }
 
 std::string explain(const MotionSummary& m, MotionProblem problem, const MotionLimits& l) {
@@ -218,7 +218,8 @@ std::string explain(const MotionSummary& m, MotionProblem problem, const MotionL
       return fmt::format(
           "not along {}: {:.1f} deg off the robot's {} axis (at most {:.1f}); keep "
           "its side against the straight edge",
-          axis, to_degrees(std::atan2(std::abs(x ? m.displacement.y() : m.displacement.x()), along)),
+          axis,
+          to_degrees(std::atan2(std::abs(x ? m.displacement.y() : m.displacement.x()), along)),
           axis, to_degrees(l.max_off_axis));
     case MotionProblem::kNotStraight:
       return fmt::format(

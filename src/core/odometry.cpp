@@ -5,7 +5,6 @@
 
 namespace moa {
 
-
 const char* describe(OdometryError error) {
   switch (error) {
     case OdometryError::kRow:
@@ -26,8 +25,8 @@ const char* describe(OdometryError error) {
 
 OptionCheck OdometryOptions::validate() const {
   OptionsCheck c;
-  c.require(is_named(estimator), "estimator",
-            "ls, sekimori, consensus, wheels or oracle (0 to 4)", static_cast<double>(estimator))
+  c.require(is_named(estimator), "estimator", "ls, sekimori, consensus, wheels or oracle (0 to 4)",
+            static_cast<double>(estimator))
       .require(sensors != 0, "sensors", "no sensor selected")
       .positive("rate", rate);
   // The synchroniser's own bounds, under the names of this struct's fields

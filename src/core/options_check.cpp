@@ -17,8 +17,8 @@ void OptionError::append(std::string_view text) {
 void OptionError::append_integer(long long x) {
   if (x < 0) append("-");
   // Digits of |x| from the last; unsigned so that the most negative value fits.
-  unsigned long long u = x < 0 ? 0ULL - static_cast<unsigned long long>(x)
-                               : static_cast<unsigned long long>(x);
+  unsigned long long u =
+      x < 0 ? 0ULL - static_cast<unsigned long long>(x) : static_cast<unsigned long long>(x);
   std::array<char, 24> digits{};
   std::size_t n = 0;
   do {
@@ -45,7 +45,8 @@ void OptionError::append_number(double x) {
   if (d >= 1000000) d = scaled(++e);
   if (d < 100000) d = scaled(--e);
   std::array<char, 6> s{};
-  for (int i = 5; i >= 0; --i, d /= 10) s[static_cast<std::size_t>(i)] = static_cast<char>('0' + d % 10);
+  for (int i = 5; i >= 0; --i, d /= 10)
+    s[static_cast<std::size_t>(i)] = static_cast<char>('0' + d % 10);
   int n = 6;  // significant digits, trailing zeros dropped
   while (n > 1 && s[static_cast<std::size_t>(n - 1)] == '0') --n;
   const auto digits = [&s](int from, int to) {

@@ -9,7 +9,6 @@
 
 namespace moa {
 
-
 OptionCheck SelfCalibrationOptions::validate() const {
   return OptionsCheck()
       .require(is_named(gauge), "gauge", "sensors (0) or wheels (1)", static_cast<double>(gauge))
@@ -41,7 +40,9 @@ SelfCalibration::SelfCalibration(const SensorArray& array, SelfCalibrationOption
     : options_(options),
       min_squal_(noise.min_squal),
       speed_onset_(noise.speed_onset),
-      n_(std::min(array.size(), kMaxSensors)), array_(array), solver_(array) {
+      n_(std::min(array.size(), kMaxSensors)),
+      array_(array),
+      solver_(array) {
   const Vec3 prior(options_.prior_scale_sd, options_.prior_scale_sd, options_.prior_yaw_sd);
   for (int i = 0; i < n_; ++i) {
     const auto u = static_cast<std::size_t>(i);

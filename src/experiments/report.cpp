@@ -11,9 +11,9 @@
 #include "moa/formats/error.hpp"
 #include "moa/formats/log.hpp"
 #include "moa/runs/odometry_run.hpp"
-#include "moa/web/report.hpp"
 #include "moa/sim/log_writer.hpp"
 #include "moa/sim/scenario.hpp"
+#include "moa/web/report.hpp"
 
 namespace moa::experiments {
 namespace {

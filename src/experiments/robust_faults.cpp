@@ -18,7 +18,6 @@
 namespace moa::experiments {
 namespace {
 
-
 struct FaultCase {
   const char* name;
   const char* scenario;

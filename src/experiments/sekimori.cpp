@@ -17,7 +17,6 @@
 namespace moa::experiments {
 namespace {
 
-
 struct Table4Method {
   const char* name;
   EstimatorKind estimator;

@@ -31,7 +31,6 @@
 namespace moa::experiments {
 namespace {
 
-
 struct ScaleCase {
   const char* scenario;
   const char* describes;

@@ -6,9 +6,9 @@
 #include <random>
 #include <stdexcept>
 
+#include "moa/formats/self_calibration_csv.hpp"
 #include "moa/runs/evaluate.hpp"
 #include "moa/runs/odometry_run.hpp"
-#include "moa/formats/self_calibration_csv.hpp"
 #include "moa/sim/log_writer.hpp"
 #include "moa/sim/scenario.hpp"
 

@@ -23,7 +23,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-
 std::string yes_no(bool b) { return b ? "yes" : "no"; }
 
 std::string list_kept(const std::array<bool, kMountParameters>& estimated) {

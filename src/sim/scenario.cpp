@@ -27,7 +27,6 @@ using Source = io::YamlSource;
 using Fields = io::YamlFields;
 using io::describe_kind;
 
-
 // Physical bounds on a scenario's numbers (docs/simulator.md). Real sensors
 // run at 1 500 to 12 000 frames/s and 400 to 25 600 cpi; the bounds are
 // wide around that, and narrow enough that every count, frame number and

@@ -10,7 +10,9 @@
 
 namespace moa::io {
 
-OptionCheck ReplayOptions::validate() const { return OptionsCheck().positive("speed", speed).result(); }
+OptionCheck ReplayOptions::validate() const {
+  return OptionsCheck().positive("speed", speed).result();
+}
 
 namespace {
 const ReplayOptions& checked(const ReplayOptions& options) {

@@ -14,7 +14,6 @@
 namespace moa::io {
 namespace {
 
-
 /// Builds JSON text. Strings are escaped so that they cannot end the
 /// <script> element they sit in ('<', '>' and '&' as \u escapes).
 class Json {

@@ -37,8 +37,8 @@
 #include <variant>
 #include <vector>
 
-#include "moa/core/options_check.hpp"
 #include "moa/calibration/exact.hpp"
+#include "moa/core/options_check.hpp"
 
 namespace moa {
 

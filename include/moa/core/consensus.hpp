@@ -37,11 +37,11 @@
 
 #include <optional>
 
-#include "moa/core/options_check.hpp"
 #include "moa/core/fallback.hpp"
 #include "moa/core/health.hpp"
 #include "moa/core/motion_prior.hpp"
 #include "moa/core/noise_model.hpp"
+#include "moa/core/options_check.hpp"
 
 namespace moa {
 

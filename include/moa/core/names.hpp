@@ -25,7 +25,9 @@ template <class E>
 struct EnumNames;
 
 template <class E>
-concept NamedEnum = requires { EnumNames<E>::kTable; };
+concept NamedEnum = requires {
+  EnumNames<E>::kTable;
+};
 
 /// The token of `value`; "?" for a value not in the table (cast from an
 /// out-of-range integer).

@@ -7,8 +7,8 @@
 #include <array>
 #include <cstdint>
 
-#include "moa/core/options_check.hpp"
 #include "moa/core/array.hpp"
+#include "moa/core/options_check.hpp"
 #include "moa/core/robust_estimate.hpp"
 #include "moa/core/subset.hpp"
 

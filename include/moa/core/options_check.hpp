@@ -74,8 +74,7 @@ class OptionsCheck {
     return at_least(field, static_cast<long long>(x), static_cast<long long>(lo));
   }
   /// x >= the field `bound_field` (of value `bound`): "must be >= frozen_run (10), is 5".
-  OptionsCheck& at_least_field(const char* field, double x, const char* bound_field,
-                               double bound);
+  OptionsCheck& at_least_field(const char* field, double x, const char* bound_field, double bound);
   /// x <= the bound named `bound_name` (of value `bound`):
   /// "must be <= 61 periods (0.61), is 1".
   OptionsCheck& at_most_named(const char* field, double x, const char* bound_name, double bound);

@@ -22,9 +22,9 @@
 #include <array>
 #include <optional>
 
-#include "moa/core/options_check.hpp"
 #include "moa/core/fallback.hpp"
 #include "moa/core/noise_model.hpp"
+#include "moa/core/options_check.hpp"
 
 namespace moa {
 

@@ -110,10 +110,10 @@
 #include <optional>
 #include <string_view>
 
-#include "moa/core/options_check.hpp"
 #include "moa/core/array.hpp"
 #include "moa/core/names.hpp"
 #include "moa/core/noise_model.hpp"
+#include "moa/core/options_check.hpp"
 #include "moa/core/robust_estimate.hpp"
 #include "moa/core/subset.hpp"
 

@@ -60,7 +60,7 @@ struct SensorMount {
 /// m/s). `moa odometry` and the calibrations refuse the same rows.
 inline constexpr real kImpossibleSpeedFactor = 10.0;
 inline constexpr real kImpossibleUnratedSpeed = 50.0;  ///< m/s
-real impossible_speed(const SensorMount& mount);  ///< m/s
+real impossible_speed(const SensorMount& mount);       ///< m/s
 /// |velocity_from_counts * counts| > limit * dt: the counts over dt (s)
 /// imply a speed above `limit` (m/s, > 0). Decided without the square root
 /// where |.|^2 is clear of (limit dt)^2 by far more than the rounding of

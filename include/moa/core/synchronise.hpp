@@ -25,8 +25,8 @@
 #include <limits>
 #include <optional>
 
-#include "moa/core/options_check.hpp"
 #include "moa/core/array.hpp"
+#include "moa/core/options_check.hpp"
 #include "moa/core/ring.hpp"
 
 namespace moa {

@@ -17,7 +17,8 @@ namespace moa::io {
 
 /// Values of Source and of Exclusion (kNone, "used", included).
 inline constexpr std::size_t kSourceCount = static_cast<std::size_t>(Source::kHold) + 1;
-inline constexpr std::size_t kExclusionCount = static_cast<std::size_t>(Exclusion::kCalibration) + 1;
+inline constexpr std::size_t kExclusionCount =
+    static_cast<std::size_t>(Exclusion::kCalibration) + 1;
 
 struct RunSummary {
   /// Epochs written (rows of odometry.csv).

@@ -18,8 +18,8 @@
 
 #include "moa/core/options_check.hpp"
 #include "moa/formats/config.hpp"
-#include "moa/sources/live.hpp"
 #include "moa/formats/log.hpp"
+#include "moa/sources/live.hpp"
 
 namespace moa::io {
 

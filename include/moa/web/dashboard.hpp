@@ -37,8 +37,8 @@
 #include <string>
 #include <string_view>
 
-#include "moa/core/options_check.hpp"
 #include "moa/core/odometry.hpp"
+#include "moa/core/options_check.hpp"
 #include "moa/formats/config.hpp"
 
 namespace moa::io {
