@@ -134,5 +134,28 @@ TEST(RunSummary, MoaOdometryPrintsItsSummary) {
   fs::remove_all(dir);
 }
 
+TEST(RunSummary, MoaLivePrintsItsSummaryAtTheEnd) {
+  const fs::path dir = test::scratch_dir("run_summary_live");
+  ASSERT_EQ(
+      test::run_moa("simulate --scenario sekimori-b --seed 3 --out " + dir.string()).exit_code, 0);
+  const fs::path out = dir / "live.csv";
+  const auto r = test::run_moa("live --config " + (dir / "robot.yaml").string() + " --replay " +
+                               dir.string() + " --speed 1000 --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const CsvCounts csv = count_csv(out);
+  EXPECT_NE(
+      r.out.find("epochs: " + std::to_string(csv.rows) + " (" +
+                 std::to_string(csv.sources.count("mice") ? csv.sources.at("mice") : 0) + " mice"),
+      std::string::npos)
+      << r.out;
+  // Live reads no wheels: epochs without a trusted sensor are held.
+  const std::size_t held = csv.sources.count("hold") ? csv.sources.at("hold") : 0;
+  const bool usable = static_cast<double>(held) <= 0.01 * static_cast<double>(csv.rows);
+  EXPECT_NE(r.out.find(usable ? "\nusable: " : "\nnot usable: " + std::to_string(held) + " of "),
+            std::string::npos)
+      << r.out;
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace moa::io

@@ -40,6 +40,7 @@
 #include "moa/formats/self_calibration_csv.hpp"
 #include "moa/runs/odometry_run.hpp"
 #include "moa/runs/output_path.hpp"
+#include "moa/runs/run_summary.hpp"
 #include "moa/web/dashboard.hpp"
 #include "odometry_options.hpp"
 #include "sensor_binding.hpp"
@@ -213,8 +214,10 @@ int run_live(LiveArgs args) {
   }
   const auto odometry = io::make_odometry(config, args.config, t0, odometry_options);
   Pose2 pose = odometry_options.initial.value_or(Pose2{});
+  io::RunSummary summary;
   const auto on_step = [&](const OdometryStep& step) {
     pose = step.pose;
+    summary.add(step, config.array.size());
     if (odometry_out) odometry_out->write(step);
     if (calibration_out) calibration_out->write(step);
     if (dashboard) dashboard->publish(step);
@@ -276,6 +279,8 @@ int run_live(LiveArgs args) {
         report,
         "moa live: {} rows, {} samples over {:.3f} s; final pose x {} m, y {} m, theta {} rad\n",
         rows, odometry->steps(), t_last - t0, pose.t.x(), pose.t.y(), pose.theta);
+    summary.fixes = odometry->fixes();
+    fmt::print(report, "{}", summary.text());
     if (live.evdev) {
       const auto bindings = parse_bindings(args.source.mice, "--mouse");
       for (std::size_t i = 0; i < bindings.size(); ++i) {
