@@ -71,7 +71,7 @@ TEST(OdometryOptions, EveryFieldIsCheckedNamingPathBoundAndValue) {
   const std::string finite_inf = "must be finite, is inf";
   const std::vector<Case> cases = {
       {"estimator", [](auto& o) { o.estimator = static_cast<EstimatorKind>(9); },
-       "must be ls, sekimori, consensus, wheels or oracle (0 to 4), is 9"},
+       "must be one of ls (0), sekimori (1), consensus (2), wheels (3), oracle (4), is 9"},
       {"sensors", [](auto& o) { o.sensors = 0; }, "no sensor selected"},
       {"rate", [](auto& o) { o.rate = -1; }, "must be > 0, is -1"},
       {"rate", [&](auto& o) { o.rate = nan; }, finite_nan},

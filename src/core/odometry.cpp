@@ -24,9 +24,17 @@ const char* describe(OdometryError error) {
 }
 
 OptionCheck OdometryOptions::validate() const {
+  OptionError names;  // "one of ls (0), sekimori (1), ..." from the name table
+  names.append("one of ");
+  for (const auto& entry : EnumNames<EstimatorKind>::kTable) {
+    if (entry.value != EnumNames<EstimatorKind>::kTable[0].value) names.append(", ");
+    names.append(entry.name);
+    names.append(" (");
+    names.append_integer(static_cast<long long>(entry.value));
+    names.append(")");
+  }
   OptionsCheck c;
-  c.require(is_named(estimator), "estimator", "ls, sekimori, consensus, wheels or oracle (0 to 4)",
-            static_cast<double>(estimator))
+  c.require(is_named(estimator), "estimator", names.message(), static_cast<double>(estimator))
       .require(sensors != 0, "sensors", "no sensor selected")
       .positive("rate", rate);
   // The synchroniser's own bounds, under the names of this struct's fields
