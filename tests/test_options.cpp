@@ -27,21 +27,21 @@ std::string g6(double x) {
   return buffer;
 }
 
-TEST(OptionError, NumbersAreWrittenAsPrintfG6AndWholeNumbersWhole) {
+TEST(InvalidOption, NumbersAreWrittenAsPrintfG6AndWholeNumbersWhole) {
   const std::vector<double> values = {
       0.5,     13.8155, 16.2662,  1e-12,      1e-3,      0.0003,   1e-5,     1e300,     -1e20,
       -2.5e-7, 0.61,    999999.5, 0.00012345, 1.0 / 3.0, -1.0 / 7, 123456.7, 1234567.8, 2.5e15};
   for (const double x : values) {
-    OptionError e;
+    InvalidOption e;
     e.append_number(x);
     EXPECT_EQ(std::string(e.message()), g6(x)) << x;
   }
   for (const long long n : {0LL, 1LL, -1LL, 65535LL, 16777216LL, 2000000LL, -999999999999999LL}) {
-    OptionError e;
+    InvalidOption e;
     e.append_number(static_cast<double>(n));
     EXPECT_EQ(std::string(e.message()), std::to_string(n)) << n;
   }
-  OptionError special;
+  InvalidOption special;
   special.append_number(std::numeric_limits<double>::quiet_NaN());
   special.append(" ");
   special.append_number(-std::numeric_limits<double>::infinity());
@@ -50,10 +50,10 @@ TEST(OptionError, NumbersAreWrittenAsPrintfG6AndWholeNumbersWhole) {
   EXPECT_EQ(std::string(special.message()), "nan -inf -9223372036854775808");
 }
 
-TEST(OptionError, ALongMessageIsCutNotOverrun) {
-  OptionError e;
+TEST(InvalidOption, ALongMessageIsCutNotOverrun) {
+  InvalidOption e;
   for (int i = 0; i < 100; ++i) e.append("abcdefgh");
-  EXPECT_EQ(std::string(e.message()).size(), OptionError::kCapacity - 1);
+  EXPECT_EQ(std::string(e.message()).size(), InvalidOption::kCapacity - 1);
 }
 
 TEST(OdometryOptions, DefaultsAreValid) { EXPECT_EQ(message(OdometryOptions{}.validate()), ""); }

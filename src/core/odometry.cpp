@@ -24,7 +24,7 @@ const char* describe(OdometryError error) {
 }
 
 OptionCheck OdometryOptions::validate() const {
-  OptionError names;  // "one of ls (0), sekimori (1), ..." from the name table
+  InvalidOption names;  // "one of ls (0), sekimori (1), ..." from the name table
   names.append("one of ");
   for (const auto& entry : EnumNames<EstimatorKind>::kTable) {
     if (entry.value != EnumNames<EstimatorKind>::kTable[0].value) names.append(", ");

@@ -6,7 +6,7 @@
 
 namespace moa {
 
-void OptionError::append(std::string_view text) {
+void InvalidOption::append(std::string_view text) {
   for (const char c : text) {
     if (size_ + 1 >= kCapacity) break;
     text_[size_++] = c;
@@ -14,7 +14,7 @@ void OptionError::append(std::string_view text) {
   text_[size_] = '\0';
 }
 
-void OptionError::append_integer(long long x) {
+void InvalidOption::append_integer(long long x) {
   if (x < 0) append("-");
   // Digits of |x| from the last; unsigned so that the most negative value fits.
   unsigned long long u =
@@ -28,7 +28,7 @@ void OptionError::append_integer(long long x) {
   while (n > 0) append(std::string_view(&digits[--n], 1));
 }
 
-void OptionError::append_number(double x) {
+void InvalidOption::append_number(double x) {
   if (std::isnan(x)) return append("nan");
   if (std::isinf(x)) return append(x > 0 ? "inf" : "-inf");
   // Whole numbers as they are (a port, a buffer size): 16777216, not 1.67772e+07.
@@ -77,9 +77,9 @@ void OptionError::append_number(double x) {
   append_integer(std::abs(e));
 }
 
-void OptionError::prefix(std::string_view parent) {
+void InvalidOption::prefix(std::string_view parent) {
   if (parent.empty()) return;
-  OptionError out;
+  InvalidOption out;
   out.append(parent);
   out.append(".");
   out.append(view());
@@ -88,15 +88,15 @@ void OptionError::prefix(std::string_view parent) {
 
 namespace {
 // "field: must be " : the head of every message.
-OptionError must_be(const char* field) {
-  OptionError e;
+InvalidOption must_be(const char* field) {
+  InvalidOption e;
   e.append(field);
   e.append(": must be ");
   return e;
 }
 }  // namespace
 
-void OptionsCheck::refuse(OptionError e, double value) {
+void OptionsCheck::refuse(InvalidOption e, double value) {
   e.append(", is ");
   e.append_number(value);
   error_ = e;
@@ -105,7 +105,7 @@ void OptionsCheck::refuse(OptionError e, double value) {
 bool OptionsCheck::finite(const char* field, double x) {
   if (error_) return false;
   if (std::isfinite(x)) return true;
-  OptionError e = must_be(field);
+  InvalidOption e = must_be(field);
   e.append("finite");
   refuse(e, x);
   return false;
@@ -114,7 +114,7 @@ bool OptionsCheck::finite(const char* field, double x) {
 void OptionsCheck::compare(const char* field, double x, bool ok, const char* op,
                            const char* bound_name, double bound) {
   if (ok) return;
-  OptionError e = must_be(field);
+  InvalidOption e = must_be(field);
   e.append(op);
   if (bound_name != nullptr) {
     e.append(bound_name);
@@ -130,7 +130,7 @@ void OptionsCheck::compare(const char* field, double x, bool ok, const char* op,
 void OptionsCheck::interval(const char* field, double x, bool ok, const char* open_bracket,
                             double lo, double hi, const char* close_bracket) {
   if (ok) return;
-  OptionError e = must_be(field);
+  InvalidOption e = must_be(field);
   e.append("in ");
   e.append(open_bracket);
   e.append_number(lo);
@@ -172,7 +172,7 @@ OptionsCheck& OptionsCheck::closed(const char* field, double x, double lo, doubl
 
 OptionsCheck& OptionsCheck::at_least(const char* field, long long x, long long lo) {
   if (error_ || x >= lo) return *this;
-  OptionError e = must_be(field);
+  InvalidOption e = must_be(field);
   e.append(">= ");
   e.append_integer(lo);
   e.append(", is ");
@@ -194,7 +194,7 @@ OptionsCheck& OptionsCheck::at_most_named(const char* field, double x, const cha
 }
 
 void OptionsCheck::component(const char* field, int i, double x, bool strict) {
-  OptionError name;
+  InvalidOption name;
   name.append(field);
   name.append("[");
   name.append_integer(i);
@@ -208,7 +208,7 @@ void OptionsCheck::component(const char* field, int i, double x, bool strict) {
 
 OptionsCheck& OptionsCheck::require(bool ok, const char* field, const char* bound, double value) {
   if (error_ || ok) return *this;
-  OptionError e = must_be(field);
+  InvalidOption e = must_be(field);
   e.append(bound);
   refuse(e, value);
   return *this;
@@ -216,7 +216,7 @@ OptionsCheck& OptionsCheck::require(bool ok, const char* field, const char* boun
 
 OptionsCheck& OptionsCheck::require(bool ok, const char* field, const char* reason) {
   if (error_ || ok) return *this;
-  OptionError e;
+  InvalidOption e;
   e.append(field);
   e.append(": ");
   e.append(reason);

@@ -8,7 +8,7 @@
 namespace moa {
 
 OptionCheck SekimoriOptions::validate() const {
-  OptionError bound;  // "-1 (automatic) or in [1, 16]"
+  InvalidOption bound;  // "-1 (automatic) or in [1, 16]"
   bound.append("-1 (automatic) or in [1, ");
   bound.append_integer(kMaxSensors);
   bound.append("]");

@@ -26,7 +26,7 @@ const char* describe(RowError error) {
 
 OptionCheck SynchroniserOptions::validate() const {
   constexpr auto kSpan = static_cast<long long>(kMaxPendingEpochs - 3);  // periods one row covers
-  OptionError span;  // the bound's name: "61 periods"
+  InvalidOption span;  // the bound's name: "61 periods"
   span.append_integer(kSpan);
   span.append(" periods");
   OptionsCheck c;

@@ -23,8 +23,8 @@
 
 namespace moa {
 
-/// One refused option: "path: must be BOUND, is VALUE".
-class OptionError {
+/// One refused option: "path: must be BOUND, is VALUE", in a fixed buffer.
+class InvalidOption {
  public:
   static constexpr std::size_t kCapacity = 192;  ///< characters, with the terminating 0
 
@@ -47,7 +47,7 @@ class OptionError {
 };
 
 /// What validate() returns: nullopt when the options can be used.
-using OptionCheck = std::optional<OptionError>;
+using OptionCheck = std::optional<InvalidOption>;
 
 /// Collects the first failure of a sequence of checks; the later checks are
 /// skipped once one failed. `field` is a path relative to the struct being
@@ -101,7 +101,7 @@ class OptionsCheck {
 
  private:
   /// Stores e + ", is VALUE".
-  void refuse(OptionError e, double value);
+  void refuse(InvalidOption e, double value);
   /// False (and refused unless an earlier check failed) when x is not finite.
   bool finite(const char* field, double x);
   /// Unless ok: "must be OP BOUND" or "must be OP BOUND_NAME (BOUND)".
