@@ -263,7 +263,7 @@ extern "C" [[noreturn]] void moa_m4f_main() {
   options.rate = header.rate;
   options.max_row_interval = header.max_row_interval;
   options.max_gap = header.max_gap;
-  if (const char* e = options.validate(); *e != '\0') fail(e);
+  if (const auto e = options.validate()) fail(e->message());
   g_odometry.emplace(array, header.t0, options);
   if (g_odometry->geometry_error()) fail(moa::describe(*g_odometry->geometry_error()));
 

@@ -36,8 +36,23 @@ class Config:
 
 ConfigLike = Union[PathLike, Config]
 
+class RunSummary:
+    """What an odometry run did (the "summary" of odometry()'s result)."""
+
+    epochs: int
+    epochs_by_source: dict[str, int]  # mice, wheels, hold
+    sensor_epochs: dict[str, int]  # used, or the reason of the exclusion
+    fixes: dict[str, int]  # applied, rejected, too_old, invalid
+    warnings: list[str]
+    usable: bool  # at least one epoch, at most 1 % of them held
+    def verdict(self) -> str: ...
+    def text(self) -> str:
+        """What `moa odometry` prints."""
+
 class Steps(TypedDict, total=False):
     """Odometry steps, one row per epoch: the columns of odometry.csv."""
+
+    summary: RunSummary  # odometry() only
 
     t: FloatArray  # s, epoch end
     x: FloatArray  # m, world frame
@@ -165,6 +180,12 @@ class Calibration:
 
     @property
     def method(self) -> str: ...
+    @property
+    def usable(self) -> bool:
+        """The solve converged and the data determined what the method estimates."""
+    @property
+    def termination(self) -> str:
+        """converged, not-converged, model-misfit, underdetermined or too-few-measurements."""
     @property
     def sensors(self) -> list[dict[str, Any]]:
         """Per sensor: name, position (2,) m, yaw rad, scale (2,), mirrored, cpi;

@@ -20,12 +20,12 @@
 
 #include "moa/analysis/evaluate.hpp"
 #include "moa/core/odometry.hpp"
-#include "moa/runs/calibration_run.hpp"
 #include "moa/formats/config.hpp"
 #include "moa/formats/error.hpp"
-#include "moa/runs/evaluate.hpp"
 #include "moa/formats/log.hpp"
 #include "moa/formats/odometry_csv.hpp"
+#include "moa/runs/calibration_run.hpp"
+#include "moa/runs/evaluate.hpp"
 #include "moa/runs/odometry_run.hpp"
 #include "moa/sim/log_writer.hpp"
 #include "moa/sim/scenario.hpp"
@@ -203,7 +203,7 @@ class Steps {
       scale_.push_back(v);
     }
     scaled_ = scaled_ || step.scaled;
-    source_.emplace_back(describe(e.source));
+    source_.emplace_back(to_name(e.source));
     for (int i = 0; i < n_; ++i) {
       const bool used = contains(e.estimate.used, i);
       const auto u = static_cast<std::size_t>(i);
@@ -272,12 +272,15 @@ py::dict odometry(const py::object& config_path, const fs::path& log, const std:
   const Config config = load_config(config_path);
   const OdometryOptions options = odometry_options(estimator, kwargs, config);
   Steps steps(config.config.array.size());
+  io::OdometryRun run;
   {
     py::gil_scoped_release release;
-    io::run_odometry(config.config, config.path, io::resolve_log(log), options,
-                     [&](const OdometryStep& s) { steps.add(s); });
+    run = io::run_odometry(config.config, config.path, io::resolve_log(log), options,
+                           [&](const OdometryStep& s) { steps.add(s); });
   }
-  return steps.take(config.config.names);
+  py::dict out = steps.take(config.config.names);
+  out["summary"] = py::cast(run.summary);
+  return out;
 }
 
 /// The pipeline fed from Python.
@@ -426,7 +429,7 @@ const std::set<std::string> kCalibrationOptions{"max_row_interval",
 
 io::CalibrationSummary calibrate(const py::object& config_path, const py::object& log,
                                  const std::string& method_name, const py::kwargs& kwargs) {
-  const auto method = io::calibration_method_from_name(method_name);
+  const auto method = from_name<io::CalibrationMethod>(method_name);
   if (!method) {
     throw io::Error(
         fmt::format("--method: unknown method '{}' (kimlee, exact, guided)", method_name));
@@ -597,15 +600,7 @@ py::dict simulate(const std::string& scenario_name, std::uint64_t seed,
 
 py::dict error_dict(const TrajectoryError& e) {
   py::dict d;
-  d["samples"] = e.samples;
-  d["outside_truth_span"] = e.outside;
-  d["distance_m"] = e.distance;
-  d["max_translation_m"] = e.max_translation;
-  d["rms_translation_m"] = e.rms_translation;
-  d["max_heading_rad"] = e.max_heading;
-  d["rms_heading_rad"] = e.rms_heading;
-  d["final_translation_m"] = e.final_translation;
-  d["final_heading_rad"] = e.final_heading;
+  for_each_member(e, [&d](const char* name, const auto& value) { d[name] = value; });
   return d;
 }
 
@@ -749,9 +744,46 @@ a dict of arrays like moa.odometry's (possibly empty).)")
       .def_property_readonly("steps", &PyOdometry::steps, "Steps emitted so far.")
       .def_property_readonly("names", &PyOdometry::names);
 
+  py::class_<io::RunSummary>(m, "RunSummary",
+                             R"(What an odometry run did (runs/run_summary.hpp): the
+"summary" of moa.odometry's result.)")
+      .def_readonly("epochs", &io::RunSummary::epochs)
+      .def_property_readonly(
+          "epochs_by_source",
+          [](const io::RunSummary& s) {
+            py::dict d;
+            for (std::size_t i = 0; i < io::kSourceCount; ++i)
+              d[to_name(static_cast<Source>(i))] = s.epochs_by_source[i];
+            return d;
+          },
+          "Epochs by the source of their twist: mice, wheels, hold.")
+      .def_property_readonly(
+          "sensor_epochs",
+          [](const io::RunSummary& s) {
+            py::dict d;
+            for (std::size_t i = 0; i < io::kExclusionCount; ++i)
+              d[to_name(static_cast<Exclusion>(i))] = s.sensor_epochs[i];
+            return d;
+          },
+          "Sensor-epochs by what happened to the sensor: used, or the reason it was excluded.")
+      .def_property_readonly("fixes",
+                             [](const io::RunSummary& s) {
+                               py::dict d;
+                               d["applied"] = s.fixes.applied;
+                               d["rejected"] = s.fixes.rejected;
+                               d["too_old"] = s.fixes.too_old;
+                               d["invalid"] = s.fixes.invalid;
+                               return d;
+                             })
+      .def_readonly("warnings", &io::RunSummary::warnings)
+      .def_property_readonly("usable", &io::RunSummary::usable,
+                             "At least one epoch, at most 1 % of them held.")
+      .def("verdict", &io::RunSummary::verdict)
+      .def("text", &io::RunSummary::text, "What `moa odometry` prints.");
+
   py::class_<io::CalibrationSummary>(m, "Calibration", R"(The result and report of moa.calibrate.)")
       .def_property_readonly("method",
-                             [](const io::CalibrationSummary& s) { return io::describe(s.method); })
+                             [](const io::CalibrationSummary& s) { return to_name(s.method); })
       .def_property_readonly(
           "sensors",
           [](const io::CalibrationSummary& s) {
@@ -781,6 +813,11 @@ and exact), push_misfit (m, guided), information_eigenvalues (exact).)")
 others were kept at nominal) and information_eigenvalues (exact: of the
 Fisher information in units of a generous mounting error, ascending; below 1
 means not excited).)")
+      .def_readonly("usable", &io::CalibrationSummary::usable,
+                    "The solve converged and the data determined what the method estimates.")
+      .def_property_readonly(
+          "termination", [](const io::CalibrationSummary& s) { return to_name(s.termination); },
+          "converged, not-converged, model-misfit, underdetermined or too-few-measurements.")
       .def_property_readonly("facts", [](const io::CalibrationSummary& s) { return s.facts; })
       .def_property_readonly("warnings", [](const io::CalibrationSummary& s) { return s.warnings; })
       .def_property_readonly(

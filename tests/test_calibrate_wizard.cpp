@@ -279,16 +279,6 @@ TEST(MotionWatcher, SaysWhatIsWrongWithABadMotion) {
       Contains(P::kOffCentre));
 }
 
-TEST(MotionWatcher, LimitsValidateNamingTheField) {
-  MotionLimits limits;
-  EXPECT_STREQ(limits.validate(), "");
-  limits.distance = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_STREQ(limits.validate(), "distance: must be positive and finite (m)");
-  limits = {};
-  limits.turns = 0.0;
-  EXPECT_STREQ(limits.validate(), "turns: must be finite and not 0");
-}
-
 // ------------------------------------------------ the session's decisions
 
 TEST(GuidedSession, AsksForEachMotionInTurnAndHandsTheKeptTotalsToTheSolver) {

@@ -102,27 +102,6 @@ TEST(EkfScaleCli, ScaleStatesReduceTheHeadingErrorOfAWrongRadius) {
   if (!HasFailure()) fs::remove_all(dir);
 }
 
-TEST(EkfScaleOptions, InvalidFieldsAreNamed) {
-  const auto message = [](auto change) {
-    OdometryOptions o;
-    o.fuse_camera = true;
-    o.ekf.estimate_scale = true;
-    change(o);
-    return std::string(o.validate());
-  };
-  EXPECT_EQ(message([](auto&) {}), "");
-  EXPECT_EQ(message([](auto& o) { o.fuse_camera = false; }).rfind("ekf.estimate_scale:", 0), 0u);
-  EXPECT_EQ(message([](auto& o) { o.ekf.scale_sd.x() = 0.0; }).rfind("ekf.scale_sd:", 0), 0u);
-  EXPECT_EQ(message([](auto& o) { o.ekf.scale_sd.y() = std::nan(""); }).rfind("ekf.scale_sd:", 0),
-            0u);
-  EXPECT_EQ(message([](auto& o) {
-              o.ekf.scale_random_walk.x() = -1e-3;
-            }).rfind("ekf.scale_random_walk:", 0),
-            0u);
-  // A random walk of 0: scales constant over the run, but unknown.
-  EXPECT_EQ(message([](auto& o) { o.ekf.scale_random_walk.setZero(); }), "");
-}
-
 TEST(EkfScaleCli, ScaleStatesNeedCameraFusion) {
   const auto dir = test::scratch_dir("ekf-scale-refused");
   const SensorArray array = test::skewed_array();

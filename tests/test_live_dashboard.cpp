@@ -127,7 +127,12 @@ TEST(ReplayReader, SpeedMustBePositiveAndFinite) {
   }
   io::ReplayOptions options;
   options.speed = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_STREQ(options.validate(), "speed: must be positive and finite");
+  ASSERT_TRUE(options.validate());
+  EXPECT_STREQ(options.validate()->message(), "speed: must be finite, is nan");
+  options.speed = -1;
+  EXPECT_STREQ(options.validate()->message(), "speed: must be > 0, is -1");
+  options.speed = 2;
+  EXPECT_FALSE(options.validate());
 }
 
 TEST(LiveDashboard, ServesThePageAndAtLeastTwentyEventsInTwoSeconds) {
@@ -298,7 +303,26 @@ TEST(LiveDashboard, ListenAddressIsHostColonPortOrAPort) {
   EXPECT_THAT(r.err, HasSubstr("--serve nowhere: the port must be a number"));
   io::DashboardOptions invalid;
   invalid.max_rate = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_STREQ(invalid.validate(), "max_rate: must be in (0, 100] events/s");
+  ASSERT_TRUE(invalid.validate());
+  EXPECT_STREQ(invalid.validate()->message(), "max_rate: must be finite, is nan");
+  const auto message = [](auto change) {
+    io::DashboardOptions changed;
+    change(changed);
+    const auto e = changed.validate();
+    return e ? std::string(e->message()) : std::string();
+  };
+  EXPECT_EQ(message([](auto&) {}), "");
+  EXPECT_EQ(message([](auto& d) { d.host.clear(); }), "host: must not be empty");
+  EXPECT_EQ(message([](auto& d) { d.port = 65536; }), "port: must be in [0, 65535], is 65536");
+  EXPECT_EQ(message([](auto& d) { d.max_clients = 0; }), "max_clients: must be in [1, 64], is 0");
+  EXPECT_EQ(message([](auto& d) { d.client_queue = 5000; }),
+            "client_queue: must be in [1, 4096], is 5000");
+  EXPECT_EQ(message([](auto& d) { d.max_rate = 0; }), "max_rate: must be > 0, is 0");
+  EXPECT_EQ(message([](auto& d) { d.max_rate = 101; }), "max_rate: must be <= 100, is 101");
+  EXPECT_EQ(message([](auto& d) { d.send_buffer = 1023; }),
+            "send_buffer: must be in [1024, 16777216], is 1023");
+  EXPECT_EQ(message([](auto& d) { d.history_points = 2000000; }),
+            "history_points: must be <= 1000000, is 2000000");
 }
 
 unsigned long attribute(const std::string& tag, const std::string& name) {

@@ -41,37 +41,6 @@ void feed(Odometry& odometry, const test::SynthLog& log, Collected& out) {
   odometry.finish(log.rows.back().t, out);
 }
 
-TEST(OdometryOptions, DefaultsAreValid) { EXPECT_STREQ(OdometryOptions{}.validate(), ""); }
-
-TEST(OdometryOptions, EachInvalidFieldIsNamed) {
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  const double inf = std::numeric_limits<double>::infinity();
-  const auto message = [](auto change) {
-    OdometryOptions o;
-    change(o);
-    return std::string(o.validate());
-  };
-  EXPECT_EQ(message([&](auto& o) { o.rate = nan; }).rfind("rate:", 0), 0u);
-  EXPECT_EQ(message([&](auto& o) { o.rate = -1; }).rfind("rate:", 0), 0u);
-  EXPECT_EQ(message([&](auto& o) { o.max_row_interval = nan; }).rfind("max_row_interval:", 0), 0u);
-  EXPECT_EQ(message([&](auto& o) { o.max_row_interval = 1.0; }).rfind("max_row_interval:", 0), 0u);
-  EXPECT_EQ(message([&](auto& o) { o.max_gap = nan; }).rfind("max_gap:", 0), 0u);
-  EXPECT_EQ(message([&](auto& o) { o.camera_latency = inf; }).rfind("camera_latency:", 0), 0u);
-  EXPECT_EQ(message([&](auto& o) { o.camera_sigma = 0; }).rfind("camera_sigma:", 0), 0u);
-  EXPECT_EQ(message([&](auto& o) { o.sekimori.e_th = nan; }).rfind("sekimori.e_th:", 0), 0u);
-  EXPECT_EQ(message([&](auto& o) { o.sekimori.r_th = 0; }).rfind("sekimori.r_th:", 0), 0u);
-  EXPECT_EQ(message([&](auto& o) { o.consensus.alpha = nan; }).rfind("consensus.alpha:", 0), 0u);
-  EXPECT_EQ(message([&](auto& o) { o.consensus.alpha = 0.0; }).rfind("consensus.alpha:", 0), 0u);
-  EXPECT_EQ(message([&](auto& o) { o.initial = Pose2{{nan, 0}, 0}; }).rfind("initial:", 0), 0u);
-  EXPECT_EQ(message([&](auto& o) { o.sensors = 0; }).rfind("sensors:", 0), 0u);
-  // A long max_row_interval is fine at a low rate: the bound is in epochs.
-  EXPECT_EQ(message([&](auto& o) {
-              o.rate = 10;
-              o.max_row_interval = 1.0;
-            }),
-            "");
-}
-
 TEST(Odometry, LeastSquaresEqualsTheStagesComposedByHand) {
   const SensorArray array = test::skewed_array();
   const auto log = test::synthesise(array, test::mixed_motion, 3.0, 0.013);

@@ -281,7 +281,7 @@ TEST(Consensus, CommonModeDropoutIsBridgedByTheWheelsAndReleased) {
     ArraySample s = clean_sample(a, kTruth);
     s.t = t;
     const auto e = est.estimate(s, wheels);
-    ASSERT_EQ(e->source, Source::kMice) << "epoch " << k << " " << describe(e->excluded[0]);
+    ASSERT_EQ(e->source, Source::kMice) << "epoch " << k << " " << to_name(e->excluded[0]);
   }
   for (int k = 0; k < 30; ++k, t += kDt) {
     const auto e = est.estimate(dropout_sample(a, t), wheels);

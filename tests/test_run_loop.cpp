@@ -164,14 +164,14 @@ TEST(RunLoop, ASilentSensorIsRefusedForLeastSquaresAndAWarningForConsensus) {
       "the rows: sensor 'd' of robot.yaml never reports: the consensus estimator saw it as a "
       "still sensor";
   EXPECT_EQ(said, std::vector<std::string>{warning});
-  EXPECT_EQ(run.warnings, std::vector<std::string>{warning});
+  EXPECT_EQ(run.summary.warnings, std::vector<std::string>{warning});
 
   // Left out of the selection, it is not asked for.
   options.estimator = EstimatorKind::kLs;
   options.sensors = 0b0111;
   VectorSource selected_rows(0.0, rows);
   EXPECT_TRUE(
-      run_loop(config, "robot.yaml", options, selected_rows, "the rows", {}).warnings.empty());
+      run_loop(config, "robot.yaml", options, selected_rows, "the rows", {}).summary.warnings.empty());
 }
 
 TEST(OptionError, NamesTheOptionsAsTheLibraryDoesAndAsTheCallerRendersThem) {

@@ -2,9 +2,11 @@
 
 #include <Eigen/Geometry>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <vector>
 
 #include "moa/core/se2.hpp"
 #include "support/checks.hpp"
@@ -131,6 +133,44 @@ TEST(Se2, TwistBetweenInvertsExp) {
   EXPECT_NEAR(back.v.x(), 0.2, 1e-12);
   EXPECT_NEAR(back.v.y(), -0.1, 1e-12);
   EXPECT_NEAR(back.omega, 1e-7, 1e-15);
+}
+
+Eigen::Vector3d vec(const Pose2& p) { return {p.t.x(), p.t.y(), p.theta}; }
+Pose2 pose_of(const Eigen::Vector3d& x) { return {{x(0), x(1)}, x(2)}; }
+
+TEST(Se2, ExpStepJacobiansMatchFiniteDifferencesAtIdentityNearZeroAndRandom) {
+  std::mt19937_64 rng(50);
+  std::vector<std::pair<Pose2, Twist2>> cases{
+      {Pose2{}, Twist2{}},                                  // identity, zero twist
+      {Pose2{}, Twist2{{0.3, 0.1}, 1e-7}},                  // near-zero rotation (Taylor branch)
+      {Pose2{{1.0, -2.0}, 0.4}, Twist2{{0.0, 0.0}, 2.0}}};  // pure rotation
+  for (int k = 0; k < 20; ++k) {
+    std::uniform_real_distribution<double> d(-3.0, 3.0);
+    cases.push_back({Pose2{{d(rng), d(rng)}, d(rng)}, test::random_twist(rng)});
+  }
+  for (const auto& [pose, twist] : cases) {
+    for (double dt : {0.01, 0.5}) {
+      const auto f_pose = [&](const Eigen::Vector3d& x) {
+        return vec(integrate_exact(pose_of(x), twist, dt));
+      };
+      const auto f_twist = [&](const Eigen::Vector3d& x) {
+        return vec(integrate_exact(pose, Twist2::from_vector(x), dt));
+      };
+      const Eigen::Matrix3d nf = test::numerical_jacobian<3, 3>(f_pose, vec(pose));
+      const Eigen::Matrix3d ng = test::numerical_jacobian<3, 3>(f_twist, twist.vector());
+      // Central differences with h = 1e-6: error ~h^2 * third derivative + 1e-16/h.
+      EXPECT_LT((nf - exact_step_pose_jacobian(pose, twist, dt)).cwiseAbs().maxCoeff(), 1e-8);
+      EXPECT_LT((ng - exact_step_twist_jacobian(pose, twist, dt)).cwiseAbs().maxCoeff(), 1e-8);
+    }
+  }
+}
+
+TEST(Se2, DegreesAndRadiansAreInverseAndExactAtRightAngles) {
+  EXPECT_DOUBLE_EQ(to_degrees(std::numbers::pi / 2), 90.0);
+  EXPECT_DOUBLE_EQ(to_radians(180.0), std::numbers::pi);
+  for (const double x : {-7.5, -1.0, 0.0, 0.3, 2.0, 100.0}) {
+    EXPECT_NEAR(to_radians(to_degrees(x)), x, 1e-15 * std::max(1.0, std::abs(x)));
+  }
 }
 
 }  // namespace

@@ -114,16 +114,6 @@ void not_worse(const std::vector<double>& a, const std::vector<double>& b, const
   EXPECT_LE(mean, 3.747 * std::sqrt(var / n) + 5e-4) << what;
 }
 
-TEST(SelfCalibration, OptionsAreValidatedByName) {
-  OdometryOptions o;
-  o.self_calibration.scale_walk = -1.0;
-  EXPECT_THAT(std::string(o.validate()), HasSubstr("self_calibration.scale_walk"));
-  o = OdometryOptions{};
-  o.self_calibration.runaway_scale = 1.5;
-  EXPECT_THAT(std::string(o.validate()), HasSubstr("self_calibration.runaway_scale"));
-  EXPECT_STREQ(OdometryOptions{}.validate(), "");
-}
-
 TEST(SelfCalibration, UntouchedArrayKeepsIdentityCorrection) {
   const SensorArray array = regular_polygon(4, 0.1, 0.0);
   SelfCalibration cal(array, SelfCalibrationOptions{});

@@ -129,5 +129,27 @@ TEST(Sensor, PresetsCarryDatasheetFigures) {
   EXPECT_EQ(kAdns3080MaxFrameRate, 6469.0);
 }
 
+TEST(SensorMount, ImpossibleCountsAreThoseBeyondTheLimitByTheNorm) {
+  SensorMount rated;
+  rated.max_speed = 1.5;
+  EXPECT_DOUBLE_EQ(impossible_speed(rated), 10 * 1.5);
+  EXPECT_DOUBLE_EQ(impossible_speed(SensorMount{}), 50.0);
+  SensorMount m;
+  m.yaw = 0.7;
+  m.scale = Vec2(1.1, 0.9);
+  const Mat2 g = m.robot_velocity_from_counts();
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const double dt = 0.01, limit = 2.0;
+  for (int k = 0; k < 2000; ++k) {
+    // Counts around the limit: |g c| / (limit dt) in [0.5, 1.5], and a few exactly on it.
+    Vec2 c(u(rng), u(rng));
+    c *= limit * dt / (g * c).norm() * (k % 100 == 0 ? 1.0 : 1.0 + 0.5 * u(rng));
+    EXPECT_EQ(counts_impossible(g, c, limit, dt), (g * c).norm() > limit * dt) << k;
+  }
+  EXPECT_TRUE(counts_impossible(g, Vec2(2e9, 0.0), limit, dt));
+  EXPECT_FALSE(counts_impossible(g, Vec2::Zero(), limit, dt));
+}
+
 }  // namespace
 }  // namespace moa

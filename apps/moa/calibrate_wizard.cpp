@@ -42,8 +42,6 @@
 namespace moa::cli {
 namespace {
 
-constexpr double kDeg = 180.0 / std::numbers::pi;
-
 volatile std::sig_atomic_t g_quit = 0;
 extern "C" void on_quit_signal(int) { g_quit = 1; }
 
@@ -103,7 +101,7 @@ void say(fmt::format_string<Args...> format, Args&&... args) {
 void print_mounts(const io::RobotConfig& config, const GuidedCalibration& cal) {
   const std::array<const char*, kMountParameters> labels{"x mm", "y mm", "yaw deg", "scale x",
                                                          "scale y"};
-  const std::array<double, kMountParameters> unit{1e3, 1e3, kDeg, 1.0, 1.0};
+  const std::array<double, kMountParameters> unit{1e3, 1e3, to_degrees(1.0), 1.0, 1.0};
   const std::array<int, kMountParameters> digits{3, 3, 3, 5, 5};
   for (std::size_t i = 0; i < cal.sensors.size(); ++i) {
     const SensorCalibration& c = cal.sensors[i];

@@ -17,6 +17,7 @@
 #include "moa/runs/calibration_run.hpp"
 #include "moa/formats/config.hpp"
 #include "moa/formats/error.hpp"
+#include "moa/runs/calibration_run.hpp"
 #include "moa/runs/odometry_run.hpp"
 #include "moa/runs/output_path.hpp"
 #include "odometry_options.hpp"
@@ -38,7 +39,7 @@ struct CalibrateArgs {
 };
 
 int calibrate_with_options(CalibrateArgs args) {
-  const auto method = io::calibration_method_from_name(args.method);
+  const auto method = from_name<io::CalibrationMethod>(args.method);
   if (!method) throw io::Error(fmt::format("--method: unknown method '{}'", args.method));
   args.options.push_x = args.push_x;
   args.options.push_y = args.push_y;

@@ -19,8 +19,6 @@
 namespace moa::cli {
 namespace {
 
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
-
 struct ConfigInitArgs {
   std::string layout;
   std::optional<int> sensors;
@@ -62,7 +60,7 @@ void add_sensor(const std::string& spec, const SensorMount& prototype, io::Robot
   SensorMount m = prototype;
   m.position = {finite_option("--sensor " + spec, fields[0]),
                 finite_option("--sensor " + spec, fields[1])};
-  m.yaw = finite_option("--sensor " + spec, fields[2]) * kRadPerDeg;
+  m.yaw = to_radians(finite_option("--sensor " + spec, fields[2]));
   m.mirrored = fields.size() == 4;
   config.names.push_back(spec.substr(0, eq));
   std::vector<SensorMount> mounts(config.array.mounts().begin(), config.array.mounts().end());
@@ -118,7 +116,7 @@ int run_config_init(const ConfigInitArgs& a) {
       throw io::Error(
           fmt::format("--theta-deg {}: must be a finite number of degrees", a.theta_deg));
     }
-    config = io::polygon_config(*a.sensors, *a.radius, a.theta_deg * kRadPerDeg, prototype);
+    config = io::polygon_config(*a.sensors, *a.radius, to_radians(a.theta_deg), prototype);
     title = fmt::format(
         "{} {}sensors at {} cpi on a regular polygon of radius {} m,\n"
         "the first at {} deg from the robot's x axis, all aligned with the robot (yaw 0)",

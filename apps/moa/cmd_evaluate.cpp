@@ -14,9 +14,9 @@
 #include "moa/analysis/evaluate.hpp"
 #include "moa/formats/config.hpp"
 #include "moa/formats/error.hpp"
-#include "moa/runs/evaluate.hpp"
 #include "moa/formats/json.hpp"
 #include "moa/formats/log.hpp"
+#include "moa/runs/evaluate.hpp"
 
 namespace moa::cli {
 namespace {
@@ -29,8 +29,6 @@ struct EvaluateArgs {
   std::string reference_label = "the reference";
   bool json = false;
 };
-
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 int run_evaluate(const EvaluateArgs& args) {
   if (args.reference_mm && !(std::isfinite(*args.reference_mm) && *args.reference_mm > 0.0)) {
@@ -57,16 +55,8 @@ int run_evaluate(const EvaluateArgs& args) {
   if (args.json) {
     // Shortest round-trip numbers: the experiments' figures read back exactly.
     io::JsonWriter json;
-    json.begin_object()
-        .member("samples", e.samples)
-        .member("outside_truth_span", e.outside)
-        .member("distance_m", e.distance)
-        .member("max_translation_m", e.max_translation)
-        .member("rms_translation_m", e.rms_translation)
-        .member("max_heading_rad", e.max_heading)
-        .member("rms_heading_rad", e.rms_heading)
-        .member("final_translation_m", e.final_translation)
-        .member("final_heading_rad", e.final_heading);
+    json.begin_object();
+    for_each_member(e, [&json](const char* name, const auto& value) { json.member(name, value); });
     if (!references.empty()) {
       json.key("references").begin_array();
       for (const ErrorReference& r : references) {
@@ -85,8 +75,8 @@ int run_evaluate(const EvaluateArgs& args) {
   fmt::print("samples compared        {}\n", e.samples);
   if (e.outside > 0) fmt::print("outside the truth's span {} (not compared)\n", e.outside);
   fmt::print("translation error       {}\n", describe_translation(e));
-  fmt::print("heading error           max {:.3g} deg, rms {:.3g} deg\n", e.max_heading * kDegPerRad,
-             e.rms_heading * kDegPerRad);
+  fmt::print("heading error           max {:.3g} deg, rms {:.3g} deg\n", to_degrees(e.max_heading),
+             to_degrees(e.rms_heading));
   for (const ErrorReference& r : references)
     fmt::print("verdict                 {}\n", verdict(e, r));
   return 0;

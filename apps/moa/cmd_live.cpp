@@ -48,6 +48,7 @@
 #include "moa/runs/output_path.hpp"
 #include "moa/runs/run_loop.hpp"
 #include "moa/sources/stream_lines.hpp"
+#include "moa/runs/run_summary.hpp"
 #include "moa/web/dashboard.hpp"
 #include "odometry_options.hpp"
 
@@ -305,7 +306,7 @@ int run_live(LiveArgs args) {
         stderr,
         "\r\033[Kmoa live: {:.1f} s, {:.0f} rows/s, {}, x {:+.3f} m y {:+.3f} m theta {:+.1f} deg",
         std::chrono::duration<double>(now - started).count(), meter.rate(now), alive, pose.t.x(),
-        pose.t.y(), pose.theta * 180.0 / std::numbers::pi);
+        pose.t.y(), to_degrees(pose.theta));
     status_shown = true;
   };
 
@@ -354,6 +355,7 @@ int run_live(LiveArgs args) {
         report,
         "moa live: {} rows, {} samples over {:.3f} s; final pose x {} m, y {} m, theta {} rad\n",
         run.rows, run.steps, run.t_end - run.t0, pose.t.x(), pose.t.y(), pose.theta);
+    fmt::print(report, "{}", run.summary.text());
     if (live.evdev) {
       for (std::size_t i = 0; i < spec.mice.size(); ++i) {
         const auto& d = live.evdev->status(static_cast<int>(i));

@@ -77,20 +77,16 @@ int run_odometry(const OdometryArgs& args) {
       io::write_odometry(config, args.config, log, options, args.out, on_progress,
                          args.flags.self_calibration_out, args.flags.diagnostics_out);
   if (progress) fmt::print(stderr, "\r\033[K");
-  for (const auto& w : run.warnings) fmt::print(stderr, "moa odometry: warning: {}\n", w);
+  for (const auto& w : run.summary.warnings) {
+    fmt::print(stderr, "moa odometry: warning: {}\n", w);
+  }
   if (!args.quiet) {
     fmt::print(
         "moa odometry: {} rows, {} samples over {:.3f} s at {} Hz ({} estimator); odometry written "
         "to {}\n",
-        run.rows, run.steps, run.t_end - run.t0, options.rate, describe(options.estimator),
+        run.rows, run.steps, run.t_end - run.t0, options.rate, to_name(options.estimator),
         args.out);
-    if (options.fuse_camera) {
-      const FixCounts& f = run.fixes;
-      fmt::print(
-          "camera fixes: {} applied, {} rejected as outliers, {} older than the filter's history, "
-          "{} invalid\n",
-          f.applied, f.rejected, f.too_old, f.invalid);
-    }
+    fmt::print("{}", run.summary.text());
   }
   return 0;
 }

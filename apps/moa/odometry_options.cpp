@@ -175,7 +175,7 @@ OdometryOptions resolve_odometry_flags(const OdometryFlags& f, const io::RobotCo
   o.self_calibration.enabled =
       f.self_calibrate || !f.self_calibration_out.empty() || !f.self_calibration_gauge.empty();
   if (!f.self_calibration_gauge.empty()) {
-    const auto gauge = self_calibration_gauge_from_name(f.self_calibration_gauge);
+    const auto gauge = from_name<SelfCalibrationGauge>(f.self_calibration_gauge);
     if (!gauge) {
       throw io::Error(fmt::format("--self-calibration-gauge: unknown gauge '{}' (sensors, wheels)",
                                   f.self_calibration_gauge));

@@ -199,7 +199,7 @@ ReplayBenchResult run_replay_bench(const ReplayBenchOptions& args,
   const auto say = [&](const std::string& line) {
     if (progress) progress(line);
   };
-  const auto estimator = estimator_from_name(args.estimator);
+  const auto estimator = from_name<EstimatorKind>(args.estimator);
   // The log has mice.csv only: no wheels, no faults.
   if (!estimator || *estimator == EstimatorKind::kOracle || *estimator == EstimatorKind::kWheels) {
     throw std::invalid_argument(

@@ -103,6 +103,24 @@ def test_faults_scenario_exercises_the_selection_columns(logs):
     assert (py["excluded"] != "").any()
 
 
+def test_odometry_summary_counts_are_the_columns(logs):
+    py = moa.odometry(logs["faults-liftoff"] / "robot.yaml", logs["faults-liftoff"])
+    s = py["summary"]
+    assert s.epochs == len(py["t"])
+    sources = list(py["source"])
+    assert s.epochs_by_source == {k: sources.count(k) for k in ("mice", "wheels", "hold")}
+    counted = {"used": int(py["used"].sum())}
+    for row_used, row_excluded in zip(py["used"], py["excluded"]):
+        for u, e in zip(row_used, row_excluded):
+            if not u:
+                reason = e.split("/")[0]
+                counted[reason] = counted.get(reason, 0) + 1
+    assert {k: v for k, v in s.sensor_epochs.items() if v} == counted
+    held = s.epochs_by_source["hold"]
+    assert s.usable == (s.epochs > 0 and held <= 0.01 * s.epochs)
+    assert s.verdict() in s.text()
+
+
 def test_odometry_object_in_bulk_and_row_by_row_equals_the_file_pipeline(logs):
     d = logs["calibration"]
     expected = moa.odometry(d / "robot.yaml", d, "ls", no_wheels=True)
@@ -241,6 +259,10 @@ def test_calibrate_refuses_a_misfit_unless_forced(logs, tmp_path):
         moa.calibrate(d / "robot.yaml", d, method="exact")
     cal = moa.calibrate(d / "robot.yaml", d, method="exact", force=True)
     assert any("does not explain the data" in w for w in cal.warnings)
+    assert not cal.usable
+    assert cal.termination == "model-misfit"
+    good = moa.calibrate(logs["calibration"] / "robot.yaml", logs["calibration"], method="exact")
+    assert good.usable and good.termination == "converged"
 
 
 def as_keywords(message):

@@ -9,14 +9,20 @@
 
 namespace moa {
 
-namespace {
-
-Eigen::Matrix2d sensor_matrix(double k, double yaw, const Eigen::Vector2d& scale, bool mirrored) {
-  const Eigen::Vector2d diag(scale.x(), mirrored ? -scale.y() : scale.y());
-  return k * diag.asDiagonal() * rotation(yaw).transpose();
+OptionCheck GuidedTolerances::validate() const {
+  return OptionsCheck()
+      .positive("distance_sd", distance_sd)
+      .positive("turn_sd", turn_sd)
+      .positive("centre_sd", centre_sd)
+      .positive("heading_sd", heading_sd)
+      .positive("anisotropy_sd", anisotropy_sd)
+      .result();
 }
 
-// Least squares fit of (yaw, sx, sy) to a measured sensor matrix, mirroring fixed.
+namespace {
+
+// Least squares fit of (yaw, sx, sy) to a measured sensor matrix
+// (SensorMount::counts_from_robot_velocity), mirroring and cpi fixed.
 struct MatrixFit {
   using Scalar = double;
   enum { InputsAtCompileTime = Eigen::Dynamic, ValuesAtCompileTime = Eigen::Dynamic };
@@ -25,14 +31,16 @@ struct MatrixFit {
   using JacobianType = Eigen::MatrixXd;
 
   Eigen::Matrix2d target;
-  double k = 1.0;
-  bool mirrored = false;
+  SensorMount mount;  ///< cpi and mirroring as fitted; yaw and scale from x
 
   int inputs() const { return 3; }
   int values() const { return 4; }
   int operator()(const Eigen::VectorXd& x, Eigen::VectorXd& f) const {
-    // In units of k, so that the residuals are O(1).
-    const Eigen::Matrix2d e = (sensor_matrix(k, x(0), x.tail<2>(), mirrored) - target) / k;
+    SensorMount m = mount;
+    m.yaw = x(0);
+    m.scale = x.tail<2>();
+    // In units of counts per metre, so that the residuals are O(1).
+    const Eigen::Matrix2d e = (m.counts_from_robot_velocity() - target) / m.counts_per_metre();
     f = Eigen::Map<const Eigen::Vector4d>(e.data());
     return 0;
   }
@@ -80,7 +88,9 @@ std::optional<Solution> solve(const SensorArray& nominal, const GuidedInput& in,
       measured.col(1) = (*in.push_y)[u] / dy;
       const auto parts = decompose_sensor_matrix(measured, k);
       if (!parts) return std::nullopt;
-      MatrixFit functor{measured, k, parts->mirrored};
+      SensorMount fitted = m;
+      fitted.mirrored = parts->mirrored;
+      MatrixFit functor{measured, fitted};
       Eigen::NumericalDiff<MatrixFit, Eigen::Central> diff(functor);
       Eigen::LevenbergMarquardt<Eigen::NumericalDiff<MatrixFit, Eigen::Central>> lm(diff);
       lm.parameters.ftol = 1e-14;

@@ -9,10 +9,7 @@
 namespace moa {
 namespace {
 
-constexpr double kDeg = 180.0 / std::numbers::pi;
 constexpr double kTurn = 2.0 * std::numbers::pi;
-
-bool positive(double x) { return std::isfinite(x) && x > 0.0; }
 
 }  // namespace
 
@@ -28,22 +25,22 @@ const char* describe(GuidedStep step) {
   return "?";
 }
 
-const char* MotionLimits::validate() const {
-  if (!positive(distance)) return "distance: must be positive and finite (m)";
-  if (!std::isfinite(turns) || turns == 0.0) return "turns: must be finite and not 0";
-  if (!(positive(distance_tolerance) && distance_tolerance < 1.0)) {
-    return "distance_tolerance: must be in (0, 1)";
-  }
-  if (!positive(max_off_axis)) return "max_off_axis: must be positive and finite (rad)";
-  if (!positive(max_deviation)) return "max_deviation: must be positive and finite (m)";
-  if (!positive(max_heading_change)) return "max_heading_change: must be positive and finite (rad)";
-  if (!positive(turn_tolerance)) return "turn_tolerance: must be positive and finite (turns)";
-  if (!positive(max_spin_offset)) return "max_spin_offset: must be positive and finite (m)";
-  if (!positive(max_speed_fraction)) return "max_speed_fraction: must be positive and finite";
-  if (!positive(still_speed)) return "still_speed: must be positive and finite (m/s)";
-  if (!positive(still_rate)) return "still_rate: must be positive and finite (rad/s)";
-  if (!positive(still_time)) return "still_time: must be positive and finite (s)";
-  return "";
+OptionCheck MotionLimits::validate() const {
+  return OptionsCheck()
+      .positive("distance", distance)
+      .require(std::isfinite(turns), "turns", "finite", turns)
+      .require(turns != 0.0, "turns", "!= 0", turns)
+      .open("distance_tolerance", distance_tolerance, 0.0, 1.0)
+      .positive("max_off_axis", max_off_axis)
+      .positive("max_deviation", max_deviation)
+      .positive("max_heading_change", max_heading_change)
+      .positive("turn_tolerance", turn_tolerance)
+      .positive("max_spin_offset", max_spin_offset)
+      .positive("max_speed_fraction", max_speed_fraction)
+      .positive("still_speed", still_speed)
+      .positive("still_rate", still_rate)
+      .positive("still_time", still_time)
+      .result();
 }
 
 MotionWatcher::MotionWatcher(const SensorArray& nominal, const MotionLimits& limits)
@@ -203,8 +200,8 @@ std::string summarise(const MotionSummary& m) {
       "{:.3f} m along {}{}, {:.1f} deg off the axis, {:.1f} mm off a straight line, turned {:.1f} "
       "deg, in {:.1f} s, fastest sensor {:.2f} m/s",
       std::abs(along), x ? 'x' : 'y', along < 0 ? " (backwards)" : "",
-      std::atan2(std::abs(across), std::abs(along)) * kDeg, m.deviation * 1e3, m.rotation * kDeg,
-      m.duration, m.top_speed);
+      to_degrees(std::atan2(std::abs(across), std::abs(along))), m.deviation * 1e3,
+      to_degrees(m.rotation), m.duration, m.top_speed);
 }
 
 std::string explain(const MotionSummary& m, MotionProblem problem, const MotionLimits& l) {
@@ -221,8 +218,9 @@ std::string explain(const MotionSummary& m, MotionProblem problem, const MotionL
       return fmt::format(
           "not along {}: {:.1f} deg off the robot's {} axis (at most {:.1f}); keep "
           "its side against the straight edge",
-          axis, std::atan2(std::abs(x ? m.displacement.y() : m.displacement.x()), along) * kDeg,
-          axis, l.max_off_axis * kDeg);
+          axis,
+          to_degrees(std::atan2(std::abs(x ? m.displacement.y() : m.displacement.x()), along)),
+          axis, to_degrees(l.max_off_axis));
     case MotionProblem::kNotStraight:
       return fmt::format(
           "not straight: the path strayed {:.1f} mm from a straight line (at most "
@@ -232,7 +230,7 @@ std::string explain(const MotionSummary& m, MotionProblem problem, const MotionL
       return fmt::format(
           "turned while pushing: {:.1f} deg (at most {:.1f}); keep it against the "
           "edge without turning",
-          m.rotation * kDeg, l.max_heading_change * kDeg);
+          to_degrees(m.rotation), to_degrees(l.max_heading_change));
     case MotionProblem::kTooFewTurns:
     case MotionProblem::kTooManyTurns:
       return fmt::format(

@@ -7,6 +7,18 @@
 
 namespace moa {
 
+OptionCheck ConsensusOptions::validate() const {
+  return OptionsCheck()
+      .open("alpha", alpha, 0.0, 0.5)
+      .positive("max_bridge", max_bridge)
+      .nested("noise", noise.validate())
+      .nested("wheels", wheels.validate())
+      .nested("hold", hold.validate())
+      .nested("limits", limits.validate())
+      .nested("health", health.validate())
+      .result();
+}
+
 std::variant<ConsensusEstimator, GeometryError> ConsensusEstimator::create(
     const SensorArray& array, ConsensusOptions options) {
   // The same acceptance rules as the plain estimator over all sensors.

@@ -5,6 +5,18 @@
 
 namespace moa {
 
+OptionCheck EkfOptions::validate() const {
+  return OptionsCheck()
+      .positive("scale_sd", scale_sd)
+      .non_negative("scale_random_walk", scale_random_walk)
+      .non_negative("twist_noise_floor", twist_noise_floor)
+      .non_negative("twist_noise_relative", twist_noise_relative)
+      .at_least("max_consecutive_rejections", max_consecutive_rejections, 1)
+      .positive("gate_position", gate_position)
+      .positive("gate_pose", gate_pose)
+      .result();
+}
+
 const char* describe(FixResult result) {
   switch (result) {
     case FixResult::kApplied:
@@ -19,24 +31,6 @@ const char* describe(FixResult result) {
       return "not finite or not positive definite";
   }
   return "?";
-}
-
-Mat3 exact_step_pose_jacobian(const Pose2& pose, const Twist2& twist, real dt) {
-  const VTerms v = v_terms(twist.omega * dt);
-  const Vec2 d = v_matrix(v.s, v.c) * twist.v * dt;
-  Mat3 f = Mat3::Identity();
-  f.block<2, 1>(0, 2) = rotation(pose.theta) * skew_unit() * d;
-  return f;
-}
-
-Mat3 exact_step_twist_jacobian(const Pose2& pose, const Twist2& twist, real dt) {
-  const VTerms v = v_terms(twist.omega * dt);
-  const Mat2 r = rotation(pose.theta);
-  Mat3 g = Mat3::Zero();
-  g.block<2, 2>(0, 0) = r * v_matrix(v.s, v.c) * dt;
-  g.block<2, 1>(0, 2) = r * v_matrix(v.ds, v.dc) * twist.v * dt * dt;
-  g(2, 2) = dt;
-  return g;
 }
 
 Twist2 scaled_twist(const Twist2& twist, const Vec2& scale) {

@@ -4,6 +4,18 @@
 
 namespace moa {
 
+OptionCheck WheelNoise::validate() const {
+  return OptionsCheck()
+      .positive("base_v", base_v)
+      .positive("base_omega", base_omega)
+      .non_negative("relative", relative)
+      .result();
+}
+
+OptionCheck HoldModel::validate() const {
+  return OptionsCheck().positive("accel", accel).positive("angular_accel", angular_accel).result();
+}
+
 Mat3 WheelNoise::covariance(const Twist2& wheels) const {
   const real sv = base_v + relative * wheels.v.norm();
   const real sw = base_omega + relative * std::abs(wheels.omega);

@@ -7,35 +7,24 @@
 
 namespace moa {
 
-const char* HealthOptions::validate() const {
-  if (frozen_run < 2) return "health.frozen_run: must be at least 2 epochs";
-  if (frozen_long_run < frozen_run) return "health.frozen_long_run: must be at least frozen_run";
-  if (zero_run < 1) return "health.zero_run: must be at least 1 epoch";
-  for (const real x :
-       {frozen_min_counts, frozen_change, zero_speed, drift_tau, drift_min_speed, drift_min_time,
-        drift_suspect, drift_exclude, drift_release, drift_step_tau, drift_step, probation}) {
-    if (!(std::isfinite(x) && x >= 0.0))
-      return "health: thresholds and times must be finite and not negative";
-  }
-  if (!(drift_tau > 0.0)) return "health.drift_tau: must be positive (s)";
-  if (!(drift_step_tau > 0.0)) return "health.drift_step_tau: must be positive (s)";
-  if (!(drift_release <= drift_suspect && drift_suspect <= drift_exclude))
-    return "health: drift_release <= drift_suspect <= drift_exclude";
-  return "";
-}
-
-const char* describe(Health health) {
-  switch (health) {
-    case Health::kTrusted:
-      return "trusted";
-    case Health::kSuspect:
-      return "suspect";
-    case Health::kExcluded:
-      return "excluded";
-    case Health::kProbation:
-      return "probation";
-  }
-  return "?";
+OptionCheck HealthOptions::validate() const {
+  OptionsCheck c;
+  c.at_least("frozen_run", frozen_run, 2)
+      .non_negative("frozen_min_counts", frozen_min_counts)
+      .non_negative("frozen_change", frozen_change)
+      .at_least("frozen_long_run", frozen_long_run, frozen_run)
+      .at_least("zero_run", zero_run, 1)
+      .non_negative("zero_speed", zero_speed)
+      .positive("drift_tau", drift_tau)
+      .non_negative("drift_min_speed", drift_min_speed)
+      .non_negative("drift_min_time", drift_min_time)
+      .non_negative("drift_release", drift_release)
+      .at_least_field("drift_suspect", drift_suspect, "drift_release", drift_release)
+      .at_least_field("drift_exclude", drift_exclude, "drift_suspect", drift_suspect)
+      .positive("drift_step_tau", drift_step_tau)
+      .non_negative("drift_step", drift_step)
+      .non_negative("probation", probation);
+  return c.result();
 }
 
 HealthMonitor::HealthMonitor(int sensors, HealthOptions options, real alpha)

@@ -5,12 +5,8 @@
 
 namespace moa {
 
-const char* RobotLimits::validate() const {
-  if (!(std::isfinite(accel) && accel > 0.0))
-    return "limits.accel: must be positive and finite (m/s^2)";
-  if (!(std::isfinite(angular_accel) && angular_accel > 0.0))
-    return "limits.angular_accel: must be positive and finite (rad/s^2)";
-  return "";
+OptionCheck RobotLimits::validate() const {
+  return OptionsCheck().positive("accel", accel).positive("angular_accel", angular_accel).result();
 }
 
 Mat3 MotionPrior::covariance(double t, real min_elapsed) const {

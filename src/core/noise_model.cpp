@@ -6,6 +6,17 @@
 
 namespace moa {
 
+OptionCheck NoiseModelOptions::validate() const {
+  return OptionsCheck()
+      .non_negative("relative", relative)
+      .positive("speed_onset", speed_onset)
+      .at_least("speed_cap", speed_cap, 1.0)
+      .closed("min_squal", min_squal, 0, 255)  // SQUAL is one byte
+      .at_least("low_squal_factor", low_squal_factor, 1.0)
+      .at_least("overflow_factor", overflow_factor, 1.0)
+      .result();
+}
+
 NoiseModel::NoiseModel(const SensorArray& array, NoiseModelOptions options)
     : n_(array.size()), options_(options) {
   for (int i = 0; i < n_ && i < kMaxSensors; ++i) {

@@ -5,30 +5,6 @@
 
 namespace moa {
 
-const char* describe(EstimatorKind kind) {
-  switch (kind) {
-    case EstimatorKind::kLs:
-      return "ls";
-    case EstimatorKind::kSekimori:
-      return "sekimori";
-    case EstimatorKind::kConsensus:
-      return "consensus";
-    case EstimatorKind::kWheels:
-      return "wheels";
-    case EstimatorKind::kOracle:
-      return "oracle";
-  }
-  return "?";
-}
-
-std::optional<EstimatorKind> estimator_from_name(std::string_view name) {
-  for (const auto kind : {EstimatorKind::kLs, EstimatorKind::kSekimori, EstimatorKind::kConsensus,
-                          EstimatorKind::kWheels, EstimatorKind::kOracle}) {
-    if (name == describe(kind)) return kind;
-  }
-  return std::nullopt;
-}
-
 const char* describe(OdometryError error) {
   switch (error) {
     case OdometryError::kRow:
@@ -47,80 +23,43 @@ const char* describe(OdometryError error) {
   return "?";
 }
 
-namespace {
-bool positive_finite(double x) { return std::isfinite(x) && x > 0.0; }
-
-// v.norm() > limit (limit > 0), without the square root when |v|^2 is clear
-// of limit^2 by far more than the rounding of either: the same answer.
-bool beyond(const Vec2& v, real limit) {
-#if defined(MOA_SCALAR_FLOAT)
-  constexpr real kTiny = 1e-30f, kHuge = 1e30f, kClear = 1e-5f;
-#else
-  constexpr real kTiny = 1e-200, kHuge = 1e200, kClear = 1e-9;
-#endif
-  const real n2 = v.squaredNorm(), l2 = limit * limit;
-  if (l2 > kTiny && l2 < kHuge) {
-    if (n2 < l2 * (1 - kClear)) return false;
-    if (n2 > l2 * (1 + kClear)) return true;
+OptionCheck OdometryOptions::validate() const {
+  InvalidOption names;  // "one of ls (0), sekimori (1), ..." from the name table
+  names.append("one of ");
+  for (const auto& entry : EnumNames<EstimatorKind>::kTable) {
+    if (entry.value != EnumNames<EstimatorKind>::kTable[0].value) names.append(", ");
+    names.append(entry.name);
+    names.append(" (");
+    names.append_integer(static_cast<long long>(entry.value));
+    names.append(")");
   }
-  return v.norm() > limit;
-}
-}  // namespace
-
-const char* OdometryOptions::validate() const {
-  if (!positive_finite(rate)) return "rate: must be positive and finite (Hz)";
-  if (sensors == 0) return "sensors: no sensor selected";
-  if (const char* e = synchroniser().validate(); *e) {
-    if (!positive_finite(max_row_interval))
-      return "max_row_interval: must be positive and finite (s)";
-    if (!(max_gap > 0.0)) return "max_gap: must be positive (s)";
-    return "max_row_interval: longer than 61 epochs (1/rate each); lower it or the rate";
+  OptionsCheck c;
+  c.require(is_named(estimator), "estimator", names.message(), static_cast<double>(estimator))
+      .require(sensors != 0, "sensors", "no sensor selected")
+      .positive("rate", rate);
+  // The synchroniser's own bounds, under the names of this struct's fields
+  // (its period is 1 / rate, checked above).
+  if (!c.failed()) c.nested("", synchroniser().validate());
+  if (initial) {
+    c.require(std::isfinite(initial->t.x()), "initial.x", "finite", initial->t.x())
+        .require(std::isfinite(initial->t.y()), "initial.y", "finite", initial->t.y())
+        .require(std::isfinite(initial->theta), "initial.theta", "finite", initial->theta);
   }
-  if (initial && !(std::isfinite(initial->t.x()) && std::isfinite(initial->t.y()) &&
-                   std::isfinite(initial->theta))) {
-    return "initial: pose must be finite";
-  }
-  if (!(std::isfinite(camera_latency) && camera_latency >= 0.0))
-    return "camera_latency: must be finite and not negative (s)";
-  if (!positive_finite(camera_sigma)) return "camera_sigma: must be positive and finite (m)";
-  if (!positive_finite(camera_heading_sigma))
-    return "camera_heading_sigma: must be positive and finite (rad)";
-  if (!positive_finite(sekimori.e_th)) return "sekimori.e_th: must be positive and finite (m^2)";
-  if (sekimori.r_th != -1 && (sekimori.r_th < 1 || sekimori.r_th > kMaxSensors))
-    return "sekimori.r_th: must be -1 (automatic) or 1 to 16";
-  if (const char* e = consensus.limits.validate(); *e) return e;
-  if (const char* e = consensus.health.validate(); *e) return e;
-  if (const char* e = self_calibration.validate(); *e) return e;
-  if (self_calibration.enabled &&
-      (estimator == EstimatorKind::kLs || estimator == EstimatorKind::kSekimori)) {
-    return "self_calibration: needs the consensus estimator (ls and sekimori use every sensor "
-           "as their papers define them, so a sensor whose calibration runs away could not be "
-           "left out)";
-  }
-  if (!(std::isfinite(consensus.alpha) && consensus.alpha > 0.0 && consensus.alpha < 0.5))
-    return "consensus.alpha: must be in (0, 0.5)";
-  if (!positive_finite(consensus.max_bridge)) return "consensus.max_bridge: must be > 0 (s)";
-  const NoiseModelOptions& n = consensus.noise;
-  if (!(std::isfinite(n.relative) && n.relative >= 0.0))
-    return "consensus.noise.relative: must be finite and not negative";
-  if (!positive_finite(n.speed_onset)) return "consensus.noise.speed_onset: must be positive";
-  if (!(std::isfinite(n.speed_cap) && n.speed_cap >= 1.0))
-    return "consensus.noise.speed_cap: must be finite and at least 1";
-  for (const WheelNoise* w : {&consensus.wheels, &sekimori.wheels}) {
-    if (!(positive_finite(w->base_v) && positive_finite(w->base_omega) &&
-          std::isfinite(w->relative) && w->relative >= 0.0)) {
-      return "wheels noise: base_v, base_omega must be positive, relative not negative";
-    }
-  }
-  if (!ekf.twist_noise_floor.allFinite() || (ekf.twist_noise_floor.array() < 0.0).any())
-    return "ekf.twist_noise_floor: must be finite and not negative";
-  if (!ekf.scale_sd.allFinite() || (ekf.scale_sd.array() <= 0.0).any())
-    return "ekf.scale_sd: must be positive and finite";
-  if (!ekf.scale_random_walk.allFinite() || (ekf.scale_random_walk.array() < 0.0).any())
-    return "ekf.scale_random_walk: must be finite and not negative (1/sqrt(s))";
-  if (ekf.estimate_scale && !fuse_camera)
-    return "ekf.estimate_scale: needs fuse_camera (the scales are estimated from camera fixes)";
-  return "";
+  c.non_negative("camera_latency", camera_latency)
+      .positive("camera_sigma", camera_sigma)
+      .positive("camera_heading_sigma", camera_heading_sigma)
+      .nested("sekimori", sekimori.validate())
+      .nested("consensus", consensus.validate())
+      .nested("ekf", ekf.validate())
+      .require(!ekf.estimate_scale || fuse_camera, "ekf.estimate_scale",
+               "needs fuse_camera (the scales are estimated from camera fixes)")
+      .nested("self_calibration", self_calibration.validate())
+      .require(!self_calibration.enabled || (estimator != EstimatorKind::kLs &&
+                                             estimator != EstimatorKind::kSekimori),
+               "self_calibration",
+               "needs the consensus estimator (ls and sekimori use every sensor, so one whose "
+               "calibration runs away could not be left out)");
+  return c.result();
 }
 
 Odometry::Odometry(const SensorArray& array, double t0, const OdometryOptions& options)
@@ -139,8 +78,7 @@ Odometry::Odometry(const SensorArray& array, double t0, const OdometryOptions& o
   for (int i = 0; i < n_; ++i) {
     const auto u = static_cast<std::size_t>(i);
     velocity_from_counts_[u] = array[i].robot_velocity_from_counts();
-    impossible_speed_[u] =
-        array[i].max_speed ? kImpossibleSpeedFactor * *array[i].max_speed : kImpossibleUnratedSpeed;
+    impossible_speed_[u] = impossible_speed(array[i]);
   }
   // The selected sensors as an array of their own: every estimator sees
   // exactly the sensors it may use.
@@ -155,7 +93,7 @@ Odometry::Odometry(const SensorArray& array, double t0, const OdometryOptions& o
       SensorArray(std::span<const SensorMount>(mounts.data(), static_cast<std::size_t>(m_)));
   noise_ = NoiseModel(sub_array_, options_.consensus.noise);
   if (options_.self_calibration.enabled) {
-    self_calibration_.emplace(sub_array_, options_.self_calibration);
+    self_calibration_.emplace(sub_array_, options_.self_calibration, options_.consensus.noise);
   }
   const double period = 1.0 / options_.rate;
   const auto take = [&](auto built) {
@@ -207,7 +145,7 @@ std::optional<OdometryError> Odometry::push(const SensorRow& row, StepSink sink)
     const auto i = static_cast<std::size_t>(row.sensor);
     const double begin = std::max(sync_.last_time(row.sensor), row.t - options_.max_row_interval);
     const real dt = static_cast<real>(std::max(row.t - begin, period_));
-    if (beyond(velocity_from_counts_[i] * row.counts, impossible_speed_[i] * dt)) {
+    if (counts_impossible(velocity_from_counts_[i], row.counts, impossible_speed_[i], dt)) {
       return OdometryError::kImpossibleCounts;
     }
   }

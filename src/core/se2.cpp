@@ -1,5 +1,6 @@
 #include "moa/core/se2.hpp"
 
+#include <cmath>
 #include <numbers>
 
 namespace moa {
@@ -10,22 +11,10 @@ real wrap_angle(real angle) {
   return a;
 }
 
-VTerms v_terms(real phi) {
-  if (std::abs(phi) < kSmallAngle) {
-    const real p2 = phi * phi;
-    return {1.0 - p2 / 6.0 + p2 * p2 / 120.0, phi / 2.0 - phi * p2 / 24.0 + phi * p2 * p2 / 720.0,
-            -phi / 3.0 + phi * p2 / 30.0, 0.5 - p2 / 8.0 + p2 * p2 / 144.0};
-  }
-  // 1 - cos(phi) = 2 sin^2(phi/2) avoids the cancellation that costs
-  // (1 - cos(phi)) / phi about 1e-12 of accuracy near phi = 1e-4.
-  const real sn = std::sin(phi), half = std::sin(phi / 2.0);
-  const real s = sn / phi, c = 2.0 * half * half / phi;
-  return {s, c, (std::cos(phi) - s) / phi, (sn - c) / phi};
-}
-
 namespace {
-// s and c of v_terms() alone, by the same operations: exp() has no use for
-// the derivatives, whose cos(phi) is a library call.
+// s = sin(phi)/phi and c = (1 - cos(phi))/phi, the one place of their
+// Taylor series: exp() has no use for the derivatives, whose cos(phi) is a
+// library call.
 void v_terms_sc(real phi, real& s, real& c) {
   if (std::abs(phi) < kSmallAngle) {
     const real p2 = phi * phi;
@@ -33,11 +22,28 @@ void v_terms_sc(real phi, real& s, real& c) {
     c = phi / 2.0 - phi * p2 / 24.0 + phi * p2 * p2 / 720.0;
     return;
   }
+  // 1 - cos(phi) = 2 sin^2(phi/2) avoids the cancellation that costs
+  // (1 - cos(phi)) / phi about 1e-12 of accuracy near phi = 1e-4.
   const real half = std::sin(phi / 2.0);
   s = std::sin(phi) / phi;
   c = 2.0 * half * half / phi;
 }
 }  // namespace
+
+VTerms v_terms(real phi) {
+  VTerms v{};
+  v_terms_sc(phi, v.s, v.c);
+  if (std::abs(phi) < kSmallAngle) {
+    // d/dphi of the series of s and c.
+    const real p2 = phi * phi;
+    v.ds = -phi / 3.0 + phi * p2 / 30.0;
+    v.dc = 0.5 - p2 / 8.0 + p2 * p2 / 144.0;
+    return v;
+  }
+  v.ds = (std::cos(phi) - v.s) / phi;
+  v.dc = (std::sin(phi) - v.c) / phi;
+  return v;
+}
 
 Pose2 exp(const Twist2& twist, real dt) {
   const real phi = twist.omega * dt;
@@ -57,6 +63,24 @@ Twist2 twist_between(const Pose2& from, const Pose2& to, real dt) {
 
 Pose2 integrate_exact(const Pose2& pose, const Twist2& twist, real dt) {
   return pose * exp(twist, dt);
+}
+
+Mat3 exact_step_pose_jacobian(const Pose2& pose, const Twist2& twist, real dt) {
+  const VTerms v = v_terms(twist.omega * dt);
+  const Vec2 d = v_matrix(v.s, v.c) * twist.v * dt;
+  Mat3 f = Mat3::Identity();
+  f.block<2, 1>(0, 2) = rotation(pose.theta) * skew_unit() * d;
+  return f;
+}
+
+Mat3 exact_step_twist_jacobian(const Pose2& pose, const Twist2& twist, real dt) {
+  const VTerms v = v_terms(twist.omega * dt);
+  const Mat2 r = rotation(pose.theta);
+  Mat3 g = Mat3::Zero();
+  g.block<2, 2>(0, 0) = r * v_matrix(v.s, v.c) * dt;
+  g.block<2, 1>(0, 2) = r * v_matrix(v.ds, v.dc) * twist.v * dt * dt;
+  g(2, 2) = dt;
+  return g;
 }
 
 Pose2 integrate_euler(const Pose2& pose, const Twist2& twist, real dt) {

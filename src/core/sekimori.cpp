@@ -7,6 +7,19 @@
 
 namespace moa {
 
+OptionCheck SekimoriOptions::validate() const {
+  InvalidOption bound;  // "-1 (automatic) or in [1, 16]"
+  bound.append("-1 (automatic) or in [1, ");
+  bound.append_integer(kMaxSensors);
+  bound.append("]");
+  return OptionsCheck()
+      .positive("e_th", e_th)
+      .require(r_th == -1 || (r_th >= 1 && r_th <= kMaxSensors), "r_th", bound.message(), r_th)
+      .nested("wheels", wheels.validate())
+      .nested("hold", hold.validate())
+      .result();
+}
+
 std::variant<SekimoriEstimator, GeometryError> SekimoriEstimator::create(const SensorArray& array,
                                                                          SekimoriOptions options) {
   const auto check = LsEstimator::create(array, all_sensors(array.size()), 0.01);

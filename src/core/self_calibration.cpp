@@ -9,63 +9,40 @@
 
 namespace moa {
 
-const char* describe(SelfCalibrationGauge gauge) {
-  switch (gauge) {
-    case SelfCalibrationGauge::kSensors:
-      return "sensors";
-    case SelfCalibrationGauge::kWheels:
-      return "wheels";
-  }
-  return "?";
+OptionCheck SelfCalibrationOptions::validate() const {
+  return OptionsCheck()
+      .require(is_named(gauge), "gauge", "sensors (0) or wheels (1)", static_cast<double>(gauge))
+      .positive("block", block)
+      .non_negative("min_speed", min_speed)
+      .non_negative("scale_walk", scale_walk)
+      .non_negative("yaw_walk", yaw_walk)
+      .positive("prior_scale_sd", prior_scale_sd)
+      .positive("prior_yaw_sd", prior_yaw_sd)
+      .non_negative("relative_noise", relative_noise)
+      .non_negative("deadband", deadband)
+      .non_negative("isotropic_deadband", isotropic_deadband)
+      .positive("gate", gate)
+      .open("predictor_alpha", predictor_alpha, 0.0, 1.0)
+      .open("runaway_scale", runaway_scale, 0.0, 1.0)
+      .positive("runaway_yaw", runaway_yaw)
+      .at_least("reacquire_blocks", reacquire_blocks, 2)
+      .positive("reacquire_spread", reacquire_spread)
+      .positive("settle_time", settle_time)
+      .positive("settle_threshold", settle_threshold)
+      .non_negative("apply_step", apply_step)
+      .non_negative("gauge_walk", gauge_walk)
+      .non_negative("wheel_noise", wheel_noise)
+      .result();
 }
 
-std::optional<SelfCalibrationGauge> self_calibration_gauge_from_name(std::string_view name) {
-  for (const auto g : {SelfCalibrationGauge::kSensors, SelfCalibrationGauge::kWheels}) {
-    if (name == describe(g)) return g;
-  }
-  return std::nullopt;
-}
-
-const char* SelfCalibrationOptions::validate() const {
-  if (gauge != SelfCalibrationGauge::kSensors && gauge != SelfCalibrationGauge::kWheels)
-    return "self_calibration.gauge: must be sensors or wheels";
-  const auto positive = [](real x) { return std::isfinite(x) && x > 0.0; };
-  if (!positive(block)) return "self_calibration.block: must be positive and finite (s)";
-  if (!(std::isfinite(min_speed) && min_speed >= 0.0))
-    return "self_calibration.min_speed: must be finite and not negative (m/s)";
-  if (!(std::isfinite(scale_walk) && scale_walk >= 0.0 && std::isfinite(yaw_walk) &&
-        yaw_walk >= 0.0))
-    return "self_calibration.scale_walk, yaw_walk: must be finite and not negative";
-  if (!positive(prior_scale_sd) || !positive(prior_yaw_sd))
-    return "self_calibration.prior_scale_sd, prior_yaw_sd: must be positive and finite";
-  if (!(std::isfinite(relative_noise) && relative_noise >= 0.0))
-    return "self_calibration.relative_noise: must be finite and not negative";
-  if (!positive(gate)) return "self_calibration.gate: must be positive and finite";
-  if (!(positive(predictor_alpha) && predictor_alpha < 1.0))
-    return "self_calibration.predictor_alpha: must be in (0, 1)";
-  if (!(positive(runaway_scale) && runaway_scale < 1.0))
-    return "self_calibration.runaway_scale: must be in (0, 1)";
-  if (!positive(runaway_yaw)) return "self_calibration.runaway_yaw: must be positive (rad)";
-  if (reacquire_blocks < 2) return "self_calibration.reacquire_blocks: must be at least 2";
-  if (!positive(settle_time) || !positive(settle_threshold))
-    return "self_calibration.settle_time, settle_threshold: must be positive and finite";
-  if (!positive(reacquire_spread))
-    return "self_calibration.reacquire_spread: must be positive and finite";
-  if (!(std::isfinite(deadband) && deadband >= 0.0))
-    return "self_calibration.deadband: must be finite and not negative";
-  if (!(std::isfinite(isotropic_deadband) && isotropic_deadband >= 0.0))
-    return "self_calibration.isotropic_deadband: must be finite and not negative";
-  if (!(std::isfinite(apply_step) && apply_step >= 0.0))
-    return "self_calibration.apply_step: must be finite and not negative";
-  if (!(std::isfinite(gauge_walk) && gauge_walk >= 0.0))
-    return "self_calibration.gauge_walk: must be finite and not negative (1/sqrt(s))";
-  if (!(std::isfinite(wheel_noise) && wheel_noise >= 0.0))
-    return "self_calibration.wheel_noise: must be finite and not negative";
-  return "";
-}
-
-SelfCalibration::SelfCalibration(const SensorArray& array, SelfCalibrationOptions options)
-    : options_(options), n_(std::min(array.size(), kMaxSensors)), array_(array), solver_(array) {
+SelfCalibration::SelfCalibration(const SensorArray& array, SelfCalibrationOptions options,
+                                 const NoiseModelOptions& noise)
+    : options_(options),
+      min_squal_(noise.min_squal),
+      speed_onset_(noise.speed_onset),
+      n_(std::min(array.size(), kMaxSensors)),
+      array_(array),
+      solver_(array) {
   const Vec3 prior(options_.prior_scale_sd, options_.prior_scale_sd, options_.prior_yaw_sd);
   for (int i = 0; i < n_; ++i) {
     const auto u = static_cast<std::size_t>(i);
@@ -195,7 +172,7 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
         continue;  // lift, frozen, zero, faulty, unselected, fallback
     }
     if (raw.flags[u] & (kFlagLift | kFlagOverflow)) continue;
-    if (raw.squal[u] < 16) continue;
+    if (raw.squal[u] < min_squal_) continue;
     if (raw.counts[u].isZero()) continue;
     const SensorMask others = used & ~(SensorMask{1} << i);
     if (count_sensors(others) < 2) continue;
@@ -210,7 +187,7 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
     if (options_.gauge == SelfCalibrationGauge::kWheels) p = to_gauge * p;
     // Over (or near) its rating a sensor under-reads by random fractions: a
     // fault, not a calibration.
-    if (array_[i].max_speed && p.norm() > 0.8 * *array_[i].max_speed) continue;
+    if (array_[i].max_speed && p.norm() > speed_onset_ * *array_[i].max_speed) continue;
     const Mat2 rt = rotation(array_[i].yaw).transpose();
     SensorState& s = state_[u];
     s.sum_pred += rt * p * dt;
@@ -244,7 +221,7 @@ void SelfCalibration::observe_wheels(const ArraySample& raw, SensorMask used,
     const SensorState& s = state_[u];
     const Vec2 u_raw = velocity_from_counts_[u] * raw.counts[u] / dt;
     // Over (or near) its rating a sensor under-reads by random fractions.
-    if (array_[k].max_speed && u_raw.norm() > 0.8 * *array_[k].max_speed) return;
+    if (array_[k].max_speed && u_raw.norm() > speed_onset_ * *array_[k].max_speed) return;
     const Mat2 r = rotation(array_[k].yaw);
     const Mat2 c_inv =
         rotation(s.theta.yaw_offset - common.yaw_offset) *

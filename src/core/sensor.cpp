@@ -16,6 +16,26 @@ Mat2 SensorMount::robot_velocity_from_counts() const {
   return rotation(yaw) * mirror(mirrored) * inv_scale.asDiagonal() / counts_per_metre();
 }
 
+real impossible_speed(const SensorMount& mount) {
+  return mount.max_speed ? kImpossibleSpeedFactor * *mount.max_speed : kImpossibleUnratedSpeed;
+}
+
+bool counts_impossible(const Mat2& velocity_from_counts, const Vec2& counts, real limit, real dt) {
+#if defined(MOA_SCALAR_FLOAT)
+  constexpr real kTiny = 1e-30f, kHuge = 1e30f, kClear = 1e-5f;
+#else
+  constexpr real kTiny = 1e-200, kHuge = 1e200, kClear = 1e-9;
+#endif
+  const Vec2 v = velocity_from_counts * counts;
+  const real bound = limit * dt;
+  const real n2 = v.squaredNorm(), l2 = bound * bound;
+  if (l2 > kTiny && l2 < kHuge) {
+    if (n2 < l2 * (1 - kClear)) return false;
+    if (n2 > l2 * (1 + kClear)) return true;
+  }
+  return v.norm() > bound;
+}
+
 Mat<2, 3> SensorMount::point_jacobian() const {
   Mat<2, 3> a;
   a.leftCols<2>().setIdentity();

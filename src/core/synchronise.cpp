@@ -27,14 +27,18 @@ const char* describe(RowError error) {
   return "invalid row";
 }
 
-const char* SynchroniserOptions::validate() const {
-  if (!(std::isfinite(period) && period > 0.0)) return "period must be positive and finite";
-  if (!(std::isfinite(max_row_interval) && max_row_interval > 0.0))
-    return "max_row_interval must be positive and finite";
-  if (max_row_interval / period > static_cast<double>(kMaxPendingEpochs - 3))
-    return "max_row_interval spans more epochs than the synchroniser holds (61 periods)";
-  if (!(max_gap > 0.0)) return "max_gap must be positive";
-  return "";
+OptionCheck SynchroniserOptions::validate() const {
+  constexpr auto kSpan = static_cast<long long>(kMaxPendingEpochs - 3);  // periods one row covers
+  InvalidOption span;  // the bound's name: "61 periods"
+  span.append_integer(kSpan);
+  span.append(" periods");
+  OptionsCheck c;
+  c.positive("period", period)
+      .positive("max_row_interval", max_row_interval)
+      .at_most_named("max_row_interval", max_row_interval, span.message(),
+                     static_cast<double>(kSpan) * period);
+  c.positive_or_infinite("max_gap", max_gap);
+  return c.result();
 }
 
 Synchroniser::Synchroniser(int n_sensors, double t0, SynchroniserOptions options)

@@ -70,7 +70,7 @@ SensorArray true_array(const SensorArray& nominal) {
   for (int i = 0; i < 4; ++i) {
     const auto u = static_cast<std::size_t>(i);
     t[i].position += dp[u];
-    t[i].yaw += dyaw_deg[u] * std::numbers::pi / 180.0;
+    t[i].yaw += to_radians(dyaw_deg[u]);
     t[i].scale = scale[u];
   }
   t[2].mirrored = true;

@@ -11,9 +11,9 @@
 #include "moa/formats/error.hpp"
 #include "moa/formats/log.hpp"
 #include "moa/runs/odometry_run.hpp"
-#include "moa/web/report.hpp"
 #include "moa/sim/log_writer.hpp"
 #include "moa/sim/scenario.hpp"
+#include "moa/web/report.hpp"
 
 namespace moa::experiments {
 namespace {
@@ -37,7 +37,7 @@ void write_odometry(const fs::path& log, const ExperimentReportRecipe& recipe,
   const fs::path config_path = log / "robot.yaml";
   const io::RobotConfig config = io::read_config(config_path);
   OdometryOptions options;
-  options.estimator = *estimator_from_name(recipe.estimator);
+  options.estimator = *from_name<EstimatorKind>(recipe.estimator);
   options.fuse_camera = recipe.fuse_camera;
   options.camera_latency = camera_latency;
   options.self_calibration.enabled = recipe.self_calibrate;

@@ -19,8 +19,6 @@
 namespace moa::experiments {
 namespace {
 
-constexpr double kDeg = 180.0 / std::numbers::pi;
-
 struct FaultCase {
   const char* name;
   const char* scenario;
@@ -103,7 +101,7 @@ Result robust_faults(const Options& options) {
     for (std::size_t m = 0; m < kMethodCount; ++m) {
       const MeanError e = mean_error(records[c][m]);
       text += fmt::format(" | {:>8.1f} {:>5.2f} deg", 1e3 * e.max_translation.mean,
-                          kDeg * e.max_heading.mean);
+                          to_degrees(e.max_heading.mean));
     }
     text += "\n";
   }

@@ -17,8 +17,6 @@
 namespace moa::experiments {
 namespace {
 
-constexpr double kDeg = 180.0 / std::numbers::pi;
-
 struct Table4Method {
   const char* name;
   EstimatorKind estimator;
@@ -87,7 +85,7 @@ Result sekimori_table4(const Options& options) {
       json.key("paper_max_translation_m");
       p.paper_mm[s] ? json.value(*p.paper_mm[s] / 1e3) : json.null();
       json.key("paper_max_heading_rad");
-      p.paper_deg[s] ? json.value(*p.paper_deg[s] / kDeg) : json.null();
+      p.paper_deg[s] ? json.value(to_radians(*p.paper_deg[s])) : json.null();
       json.member("simulator_fitted_to_paper", p.fitted);
       write_runs(json, records[s][m]);
       json.end_object();
@@ -113,7 +111,7 @@ Result sekimori_table4(const Options& options) {
       text += fmt::format(
           "({})    {:<27} | {:>7.1f} +- {:>5.1f} {:>9} | {:>5.2f} +- {:>4.2f} {:>9} | {}\n",
           speeds[s], p.name, 1e3 * e.max_translation.mean, 1e3 * e.max_translation.sd,
-          figure(p.paper_mm[s]), kDeg * e.max_heading.mean, kDeg * e.max_heading.sd,
+          figure(p.paper_mm[s]), to_degrees(e.max_heading.mean), to_degrees(e.max_heading.sd),
           figure(p.paper_deg[s]), p.fitted ? "fitted" : "");
     }
   }
@@ -211,7 +209,7 @@ Result sekimori_fig6(const Options& options) {
     e[m] = mean_error(records[m]);
     text += fmt::format("{:<34} | {:>9.1f} {:>9.1f} | {:>9.2f} {:>9.2f}\n", rows[m].name,
                         1e3 * e[m].max_translation.mean, 1e3 * e[m].rms_translation.mean,
-                        kDeg * e[m].max_heading.mean, kDeg * e[m].rms_heading.mean);
+                        to_degrees(e[m].max_heading.mean), to_degrees(e[m].rms_heading.mean));
   }
   const double fused = e[3].rms_translation.mean;
   text += fmt::format(

@@ -31,8 +31,6 @@
 namespace moa::experiments {
 namespace {
 
-constexpr double kDeg = 180.0 / std::numbers::pi;
-
 struct ScaleCase {
   const char* scenario;
   const char* describes;
@@ -218,7 +216,7 @@ Result self_calibration(const Options& options) {
       text += fmt::format("{:<30} | {:>6.1f} +- {:>5.1f} | {:>6.1f} +- {:>5.1f} | {:>7.2f}\n",
                           kMethods[m].name, 1e3 * e.max_translation.mean,
                           1e3 * e.max_translation.sd, 1e3 * e.final_translation.mean,
-                          1e3 * e.final_translation.sd, kDeg * e.max_heading.mean);
+                          1e3 * e.final_translation.sd, to_degrees(e.max_heading.mean));
     }
     // The scale table, every 5th sample (about every 5 s) and the last.
     const Series& first = series[c].front();

@@ -6,9 +6,9 @@
 #include <random>
 #include <stdexcept>
 
+#include "moa/formats/self_calibration_csv.hpp"
 #include "moa/runs/evaluate.hpp"
 #include "moa/runs/odometry_run.hpp"
-#include "moa/formats/self_calibration_csv.hpp"
 #include "moa/sim/log_writer.hpp"
 #include "moa/sim/scenario.hpp"
 
@@ -18,7 +18,7 @@ namespace fs = std::filesystem;
 std::vector<std::string> odometry_flags(const OdometryOptions& o, const io::RobotConfig& config) {
   const OdometryOptions d;
   std::vector<std::string> flags;
-  if (o.estimator != d.estimator) flags.insert(flags.end(), {"--estimator", describe(o.estimator)});
+  if (o.estimator != d.estimator) flags.insert(flags.end(), {"--estimator", to_name(o.estimator)});
   const SensorMask all = all_sensors(config.array.size());
   if ((o.sensors & all) != all) {
     std::string names;
@@ -151,15 +151,9 @@ void write_runs(io::JsonWriter& json, const std::vector<RunRecord>& runs) {
       .member("sd_max_heading_rad", m.max_heading.sd);
   json.key("runs").begin_array();
   for (const auto& r : runs) {
-    json.begin_object()
-        .member("seed", r.seed)
-        .member("max_translation_m", r.error.max_translation)
-        .member("rms_translation_m", r.error.rms_translation)
-        .member("max_heading_rad", r.error.max_heading)
-        .member("rms_heading_rad", r.error.rms_heading)
-        .member("final_translation_m", r.error.final_translation)
-        .member("final_heading_rad", r.error.final_heading)
-        .member("samples", r.error.samples);
+    json.begin_object().member("seed", r.seed);
+    for_each_member(r.error,
+                    [&json](const char* name, const auto& value) { json.member(name, value); });
     json.key("reproduce").begin_array();
     for (const auto& call : r.reproduce) json.value(call);
     json.end_array().end_object();

@@ -167,7 +167,10 @@ RobotLimits parse_limits(const YamlSource& source, const YAML::Node& node) {
   RobotLimits limits;
   limits.accel = f.positive("accel", limits.accel);
   limits.angular_accel = f.positive("angular_accel", limits.angular_accel);
-  if (const char* e = limits.validate(); *e) source.fail(node, e);
+  if (auto e = limits.validate()) {
+    e->prefix("limits");
+    source.fail(node, e->message());
+  }
   return limits;
 }
 
@@ -264,7 +267,10 @@ std::string format_config(const RobotConfig& config) {
     if (m.noise) out += fmt::format("    noise: {}\n", *m.noise);
   }
   if (config.limits) {
-    if (const char* e = config.limits->validate(); *e) context.fail(e);
+    if (auto e = config.limits->validate()) {
+      e->prefix("limits");
+      context.fail(e->message());
+    }
     out += fmt::format("limits:\n  accel: {}\n  angular_accel: {}\n", config.limits->accel,
                        config.limits->angular_accel);
   }

@@ -40,7 +40,7 @@ void DiagnosticsCsvWriter::write(const OdometryStep& step) {
     if (!contains(impl_->selected, static_cast<int>(i))) continue;
     const bool used = contains(e.estimate.used, static_cast<int>(i));
     impl_->row(t, impl_->names[i], e.tests.sensor[i], used,
-               used ? std::string_view{} : std::string_view{describe(e.excluded[i])});
+               used ? std::string_view{} : std::string_view{to_name(e.excluded[i])});
   }
   impl_->row(t, "wheels", e.tests.wheels, e.source == Source::kWheels, {});
   impl_->row(t, "prior", e.tests.prior, e.source == Source::kHold, {});

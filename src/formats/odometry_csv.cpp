@@ -20,7 +20,7 @@ constexpr std::array<std::pair<std::uint8_t, std::string_view>, 3> kNoiseFlagNam
 }};
 
 void append_exclusion(std::string& out, Exclusion reason, std::uint8_t noise_flags) {
-  out += describe(reason);
+  out += to_name(reason);
   for (const auto& [bit, name] : kNoiseFlagNames) {
     if (noise_flags & bit) {
       out += '/';
@@ -114,7 +114,7 @@ struct OdometryCsvWriter::Impl {
     selection = now;
     // fmt, not operator+= of a const char*: GCC 12 at -O3 misreads the
     // latter's length (-Wstringop-overflow, a false positive).
-    text = fmt::format(",{},", describe(e.source));
+    text = fmt::format(",{},", to_name(e.source));
     bool first = true;
     for (std::size_t i = 0; i < names.size(); ++i) {
       if (!contains(now.used, static_cast<int>(i))) continue;
@@ -173,7 +173,7 @@ void OdometryCsvWriter::write(double t, const OdometryStep& step) {
     for (int i = 0; i < 3; ++i) {
       fields.push_back(number(std::sqrt(std::max(e.estimate.covariance(i, i), 0.0))));
     }
-    fields.emplace_back(describe(e.source));
+    fields.emplace_back(to_name(e.source));
     fields.emplace_back();
     fields.emplace_back();
     for (std::size_t i = 0; i < s.names.size(); ++i) {
@@ -290,18 +290,10 @@ struct OdometryCsvReader::Impl {
       const std::size_t slash = std::min(rest.find('/'), rest.size());
       const std::string_view reason = rest.substr(0, slash);
       const auto u = static_cast<std::size_t>(i);
-      bool known = false;
-      for (const auto x :
-           {Exclusion::kLift, Exclusion::kInconsistent, Exclusion::kUnreliable,
-            Exclusion::kFallback, Exclusion::kUnselected, Exclusion::kFaulty, Exclusion::kFrozen,
-            Exclusion::kZero, Exclusion::kDrift, Exclusion::kProbation, Exclusion::kCalibration,
-            Exclusion::kCommonMode}) {
-        if (reason == describe(x)) {
-          r.excluded[u] = x;
-          known = true;
-        }
-      }
-      if (!known) {
+      // A reason, not "used" (a used sensor is in the `used` column).
+      const auto x = from_name<Exclusion>(reason);
+      if (x && *x != Exclusion::kNone) r.excluded[u] = *x;
+      if (!x || *x == Exclusion::kNone) {
         csv.fail_field(
             column, fmt::format("'{}': unknown reason '{}'", printable(entry), printable(reason)));
       }
@@ -367,9 +359,7 @@ std::optional<OdometryRow> OdometryCsvReader::next() {
   }
   if (s.source) {
     const std::string_view text = s.csv.field(*s.source);
-    for (const auto x : {Source::kMice, Source::kWheels, Source::kHold}) {
-      if (text == describe(x)) r.source = x;
-    }
+    r.source = from_name<Source>(text);
     if (!r.source) {
       s.csv.fail_field(*s.source,
                        fmt::format("unknown source '{}' (mice, wheels, hold)", printable(text)));

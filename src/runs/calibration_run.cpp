@@ -25,8 +25,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr double kRadToDeg = 180.0 / std::numbers::pi;
-
 std::string yes_no(bool b) { return b ? "yes" : "no"; }
 
 std::string list_kept(const std::array<bool, kMountParameters>& estimated) {
@@ -42,7 +40,7 @@ std::string list_kept(const std::array<bool, kMountParameters>& estimated) {
 
 // A row whose counts imply a speed far beyond what its sensor can track is
 // a corrupt value (2e9 counts), refused as `moa odometry` refuses it
-// (core/odometry.hpp: 10 x max_speed, 50 m/s unrated). The row's interval
+// (core/sensor.hpp: impossible_speed, counts_impossible). The row's interval
 // is taken as at least max_row_interval (odometry: one epoch, shorter), so
 // nothing odometry accepts is refused here.
 class CountsCheck {
@@ -52,15 +50,14 @@ class CountsCheck {
         last_(static_cast<std::size_t>(config.array.size()), t0) {
     for (int i = 0; i < config.array.size(); ++i) {
       to_velocity_.push_back(config.array[i].robot_velocity_from_counts());
-      const auto& rated = config.array[i].max_speed;
-      limit_.push_back(rated ? kImpossibleSpeedFactor * *rated : kImpossibleUnratedSpeed);
+      limit_.push_back(impossible_speed(config.array[i]));
     }
   }
   void check(const SensorRow& row, const MiceReader& reader) {
     const auto i = static_cast<std::size_t>(row.sensor);
     const double dt = std::max(row.t - last_[i], max_row_interval_);  // s
     last_[i] = std::max(last_[i], row.t);
-    if (!((to_velocity_[i] * row.counts).norm() <= limit_[i] * dt)) {
+    if (counts_impossible(to_velocity_[i], row.counts, limit_[i], dt)) {
       throw Error(fmt::format("{}:{}: row at t = {} s: {}", reader.file(), reader.line(), row.t,
                               describe(OdometryError::kImpossibleCounts)));
     }
@@ -107,7 +104,7 @@ ReferenceData read_reference(const RobotConfig& config, const fs::path& log,
   if (!files.wheels) {
     throw OptionError(fmt::format(
         "{}: not found: {{method}} {} needs the reference twists (t,vx,vy,omega) of the robot",
-        OptionError::literal(ref.wheels.string()), describe(method)));
+        OptionError::literal(ref.wheels.string()), to_name(method)));
   }
   const auto rows = read_all<WheelRow>(ref.wheels);
   ref.wheel_rows = rows.size();
@@ -205,7 +202,7 @@ void check_sample_count(const ReferenceData& ref, CalibrationMethod method) {
     throw OptionError(fmt::format(
         "{}: {} usable reference interval(s) within the time span of mice.csv; {{method}} {} "
         "needs at least {}",
-        OptionError::literal(ref.wheels.string()), ref.samples.size(), describe(method), need));
+        OptionError::literal(ref.wheels.string()), ref.samples.size(), to_name(method), need));
   }
 }
 
@@ -214,7 +211,7 @@ Result solved(std::variant<Result, CalibrationError>&& result, const std::string
               CalibrationMethod method) {
   if (const auto* e = std::get_if<CalibrationError>(&result)) {
     throw OptionError(fmt::format("{}: {{method}} {}: {}", OptionError::literal(where),
-                                  describe(method), describe(*e)));
+                                  to_name(method), describe(*e)));
   }
   return std::get<Result>(std::move(result));
 }
@@ -258,6 +255,8 @@ void run_kimlee(CalibrationSummary& r, const RobotConfig& config, const fs::path
     s.residual_rms = cal.residual_rms[static_cast<std::size_t>(i)];
     r.sensors.push_back(s);
   }
+  if (cal.too_few_measurements()) r.termination = CalibrationTermination::kTooFewMeasurements;
+  if (cal.rank_deficient()) r.termination = CalibrationTermination::kUnderdetermined;
   if (cal.rank_deficient()) {
     r.warnings.push_back(fmt::format(
         "S is rank deficient ({} < {}): the motion determines only {} combinations of the {} "
@@ -386,7 +385,11 @@ void run_exact(CalibrationSummary& r, const RobotConfig& config, const fs::path&
     r.warnings.push_back(fmt::format(
         "{} samples skipped: a sensor reported lift or counter overflow", cal.samples_unusable));
   }
-  if (!cal.converged) r.warnings.push_back("the optimiser did not converge: the result is rough");
+  if (!cal.converged) {
+    r.termination = CalibrationTermination::kNotConverged;
+    r.warnings.push_back("the optimiser did not converge: the result is rough");
+  }
+  if (cal.model_misfit || cal.check.misfit()) r.termination = CalibrationTermination::kModelMisfit;
   model_check(r, cal.check, config, log, options.force);
   if (ref.samples.size() < 30) {
     r.warnings.push_back(fmt::format(
@@ -488,29 +491,22 @@ void json_array(JsonWriter& json, const Vector& xs) {
 
 }  // namespace
 
-const char* describe(CalibrationMethod method) {
-  switch (method) {
-    case CalibrationMethod::kKimLee:
-      return "kimlee";
-    case CalibrationMethod::kExact:
-      return "exact";
-    case CalibrationMethod::kGuided:
-      return "guided";
+OptionCheck CalibrationOptions::validate() const {
+  OptionsCheck c;
+  c.positive("max_row_interval", max_row_interval);
+  if (min_interval) c.non_negative("min_interval", *min_interval);
+  if (measurements) c.at_least("measurements", *measurements, 0);
+  if (distance) c.positive("distance", *distance);
+  if (turns) {
+    c.require(std::isfinite(*turns), "turns", "finite", *turns)
+        .require(*turns != 0.0, "turns", "!= 0", *turns);
   }
-  return "calibration method";
-}
-
-std::optional<CalibrationMethod> calibration_method_from_name(std::string_view name) {
-  for (const auto m :
-       {CalibrationMethod::kKimLee, CalibrationMethod::kExact, CalibrationMethod::kGuided}) {
-    if (name == describe(m)) return m;
-  }
-  return std::nullopt;
+  return c.nested("tolerances", tolerances.validate()).result();
 }
 
 void check_calibration_options(CalibrationMethod method, const fs::path& log,
                                const CalibrationOptions& o) {
-  const char* name = describe(method);
+  const char* name = to_name(method);
   // Messages name the options as {field}: the CLI renders its flags.
   const auto need = [&](bool present, const char* what) {
     if (!present) throw OptionError(fmt::format("{{method}} {} needs {}", name, what));
@@ -545,6 +541,7 @@ void check_calibration_options(CalibrationMethod method, const fs::path& log,
     refuse(o.distance.has_value(), "distance", why);
     refuse(o.turns.has_value(), "turns", why);
   }
+  if (const auto e = o.validate()) throw Error(fmt::format("invalid option: {}", e->message()));
 }
 
 CalibrationSummary calibrate_log(const RobotConfig& config, const std::string& config_path,
@@ -575,12 +572,13 @@ CalibrationSummary calibrate_log(const RobotConfig& config, const std::string& c
           "{:.4g} rad, scale ({:.4g}, {:.4g}): not a sensor mount (a scale must be positive); the "
           "data do not fit the model. Nothing written",
           OptionError::literal(method == CalibrationMethod::kGuided ? config_path : log.string()),
-          describe(method), OptionError::literal(s.name), p(0), p(1), p(2), p(3), p(4)));
+          to_name(method), OptionError::literal(s.name), p(0), p(1), p(2), p(3), p(4)));
     }
     for (auto& w : plausibility_warnings(s.name, s.nominal, s.calibrated)) {
       r.warnings.push_back(std::move(w));
     }
   }
+  r.usable = r.termination == CalibrationTermination::kConverged;
   return r;
 }
 
@@ -594,14 +592,15 @@ std::string CalibrationSummary::brief_report() const {
   return fmt::format(
       "moa calibrate --method {}: {} sensors; largest 1-sigma: position {:.3f} mm, yaw {:.3f} "
       "deg, scale {:.2f} %; {} warning{}",
-      describe(method), sensors.size(), position * 1e3, yaw * kRadToDeg, scale * 100.0,
+      to_name(method), sensors.size(), position * 1e3, to_degrees(yaw), scale * 100.0,
       warnings.size(), warnings.size() == 1 ? "" : "s");
 }
 
 std::string CalibrationSummary::full_report() const {
   std::string text;
   auto out = std::back_inserter(text);
-  fmt::format_to(out, "moa calibrate --method {}\n", describe(method));
+  fmt::format_to(out, "moa calibrate --method {}: {} ({})\n", to_name(method),
+                 usable ? "usable" : "not usable", to_name(termination));
   for (const auto& line : facts) fmt::format_to(out, "  {}\n", line);
   for (const auto& s : sensors) {
     fmt::format_to(out, "\nsensor {}\n", s.name);
@@ -612,7 +611,7 @@ std::string CalibrationSummary::full_report() const {
     const std::array<const char*, kMountParameters> labels{"position x m", "position y m",
                                                            "yaw deg", "scale x", "scale y"};
     for (int p = 0; p < kMountParameters; ++p) {
-      const double unit = p == 2 ? kRadToDeg : 1.0;
+      const double unit = p == 2 ? to_degrees(1.0) : 1.0;
       const int digits = p < 2 ? 5 : 4;
       const std::string sigma = s.estimated[static_cast<std::size_t>(p)]
                                     ? fmt::format("{:.{}f}", s.sigma(p) * unit, p < 2 ? 6 : 5)
@@ -646,7 +645,10 @@ std::string CalibrationSummary::full_report() const {
 
 std::string CalibrationSummary::to_json(std::string_view out) const {
   JsonWriter json;
-  json.begin_object().member("method", describe(method));
+  json.begin_object()
+      .member("method", to_name(method))
+      .member("usable", usable)
+      .member("termination", to_name(termination));
   if (!out.empty()) json.member("out", out);
   if (const auto* k = std::get_if<KimLeeCalibration>(&result)) {
     json.member("samples", k->measurements)

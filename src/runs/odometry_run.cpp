@@ -24,7 +24,7 @@ OdometryOptions resolve_odometry_options(OdometryOptions o, std::string_view est
                                          const std::vector<std::string>& sensors, bool no_wheels,
                                          const RobotConfig& config,
                                          const std::string& config_path) {
-  const auto kind = estimator_from_name(estimator);
+  const auto kind = from_name<EstimatorKind>(estimator);
   if (!kind) {
     throw OptionError(fmt::format("{{estimator}}: unknown estimator '{}'",
                                   OptionError::literal(printable(estimator))));
@@ -56,7 +56,7 @@ OdometryOptions resolve_odometry_options(OdometryOptions o, std::string_view est
       o.sensors |= SensorMask{1} << *i;
     }
   }
-  if (const char* e = o.validate(); *e) throw Error(fmt::format("invalid option: {}", e));
+  if (const auto e = o.validate()) throw Error(fmt::format("invalid option: {}", e->message()));
   return o;
 }
 
@@ -116,7 +116,9 @@ std::unique_ptr<Odometry> make_odometry(const RobotConfig& config, const std::st
   // The robot's limits, when its config gives them, for the motion prior.
   OdometryOptions options = given;
   if (config.limits) options.consensus.limits = *config.limits;
-  if (const char* e = options.validate(); *e) throw Error(fmt::format("invalid option: {}", e));
+  if (const auto e = options.validate()) {
+    throw Error(fmt::format("invalid option: {}", e->message()));
+  }
   const SensorMask beyond = options.sensors & ~all_sensors(config.array.size());
   if (beyond != 0 && options.sensors != ~SensorMask{0}) {
     throw Error(fmt::format("sensors: selection names a sensor beyond the {} of {}",
@@ -125,7 +127,7 @@ std::unique_ptr<Odometry> make_odometry(const RobotConfig& config, const std::st
   auto odometry = std::make_unique<Odometry>(config.array, t0, options);
   if (const auto e = odometry->geometry_error()) {
     throw Error(fmt::format("{}: {} (estimator {})", config_path, describe(*e),
-                            describe(options.estimator)));
+                            to_name(options.estimator)));
   }
   return odometry;
 }

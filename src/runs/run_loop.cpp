@@ -21,7 +21,7 @@ OdometryRun run_loop(const RobotConfig& config, const std::string& config_path,
 
   const auto warn = [&](std::string text) {
     if (callbacks.warn) callbacks.warn(text);
-    run.warnings.push_back(std::move(text));
+    run.summary.warnings.push_back(std::move(text));
   };
   // A sensor whose self-calibration ran away is excluded as 'calibration'
   // while beyond the bounds: said once per sensor.
@@ -42,6 +42,7 @@ OdometryRun run_loop(const RobotConfig& config, const std::string& config_path,
             options.self_calibration.runaway_scale, options.self_calibration.runaway_yaw));
       }
     }
+    run.summary.add(step, config.array.size());
     if (callbacks.on_step) callbacks.on_step(step);
   };
   const auto fail = [&](double t, OdometryError e) {
@@ -96,7 +97,7 @@ OdometryRun run_loop(const RobotConfig& config, const std::string& config_path,
   }
   odometry->finish(run.t_end, sink);
   run.steps = odometry->steps();
-  run.fixes = odometry->fixes();
+  run.summary.fixes = odometry->fixes();
   return run;
 }
 

@@ -29,8 +29,6 @@ using Source = io::YamlSource;
 using Fields = io::YamlFields;
 using io::describe_kind;
 
-constexpr double kDegree = std::numbers::pi / 180.0;
-
 // Physical bounds on a scenario's numbers (docs/simulator.md). Real sensors
 // run at 1 500 to 12 000 frames/s and 400 to 25 600 cpi; the bounds are
 // wide around that, and narrow enough that every count, frame number and
@@ -132,8 +130,8 @@ io::RobotConfig parse_sensors(const Source& source, const YAML::Node& node,
       for (const double a : angles) {
         // Sekimori & Miyazaki: position d (cos phi, sin phi), x axis radial.
         SensorMount m = prototype;
-        m.position = d * Eigen::Vector2d(std::cos(a * kDegree), std::sin(a * kDegree));
-        m.yaw = a * kDegree;
+        m.position = d * Eigen::Vector2d(std::cos(to_radians(a)), std::sin(to_radians(a)));
+        m.yaw = to_radians(a);
         mounts.push_back(m);
       }
     } else {
@@ -279,7 +277,7 @@ DriveModel parse_drive(const Source& source, const YAML::Node& node, const Senso
   if (d.type == DriveType::kOmni3) {
     const auto angles = probe.has("wheel_angles_deg") ? probe.numbers("wheel_angles_deg", 3)
                                                       : std::vector<double>{90.0, 210.0, 330.0};
-    for (const double a : angles) d.wheel_angles.push_back(a * kDegree);
+    for (const double a : angles) d.wheel_angles.push_back(to_radians(a));
     Eigen::Matrix3d w;
     for (int j = 0; j < 3; ++j) {
       const double a = d.wheel_angles[static_cast<std::size_t>(j)];

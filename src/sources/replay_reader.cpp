@@ -10,14 +10,13 @@
 
 namespace moa::io {
 
-const char* ReplayOptions::validate() const {
-  if (!(std::isfinite(speed) && speed > 0.0)) return "speed: must be positive and finite";
-  return "";
+OptionCheck ReplayOptions::validate() const {
+  return OptionsCheck().positive("speed", speed).result();
 }
 
 namespace {
 const ReplayOptions& checked(const ReplayOptions& options) {
-  if (const char* why = options.validate(); *why) throw Error(fmt::format("replay: {}", why));
+  if (const auto e = options.validate()) throw Error(fmt::format("replay: {}", e->message()));
   return options;
 }
 }  // namespace

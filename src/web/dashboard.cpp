@@ -30,17 +30,17 @@ constexpr long kRequestReadTimeoutUs = 500000;
 
 }  // namespace
 
-const char* DashboardOptions::validate() const {
-  if (host.empty()) return "host: must not be empty";
-  if (port < 0 || port > 65535) return "port: must be 0..65535";
-  if (max_clients < 1 || max_clients > 64) return "max_clients: must be 1..64";
-  if (client_queue < 1 || client_queue > 4096) return "client_queue: must be 1..4096";
-  if (!(std::isfinite(max_rate) && max_rate > 0.0 && max_rate <= 100.0)) {
-    return "max_rate: must be in (0, 100] events/s";
-  }
-  if (send_buffer < 1024 || send_buffer > (1 << 24)) return "send_buffer: must be 1 kB..16 MB";
-  if (history_points > 1000000) return "history_points: at most 1000000";
-  return "";
+OptionCheck DashboardOptions::validate() const {
+  return OptionsCheck()
+      .require(!host.empty(), "host", "must not be empty")
+      .closed("port", port, 0, 65535)
+      .closed("max_clients", max_clients, 1, 64)
+      .closed("client_queue", static_cast<double>(client_queue), 1, 4096)
+      .positive("max_rate", max_rate)
+      .at_most("max_rate", max_rate, 100.0)  // events/s
+      .closed("send_buffer", send_buffer, 1024, 1 << 24)
+      .at_most("history_points", static_cast<double>(history_points), 1e6)
+      .result();
 }
 
 void parse_listen_address(std::string_view text, std::string_view flag, DashboardOptions& options) {
@@ -195,7 +195,7 @@ std::string Dashboard::Impl::event_json(const OdometryStep& step,
       .member("vx", v.v.x())
       .member("vy", v.v.y())
       .member("omega", v.omega)
-      .member("source", describe(step.estimate.source))
+      .member("source", to_name(step.estimate.source))
       .member("epochs", pending.epochs)
       .key("sensors")
       .begin_array();
@@ -295,7 +295,7 @@ bool Dashboard::Impl::serve(const std::shared_ptr<Client>& client, httplib::Data
 Dashboard::Dashboard(const RobotConfig& config, const DashboardOptions& options)
     : impl_(std::make_unique<Impl>()) {
   Impl& s = *impl_;
-  if (const char* why = options.validate(); *why) throw Error(fmt::format("dashboard: {}", why));
+  if (const auto e = options.validate()) throw Error(fmt::format("dashboard: {}", e->message()));
   s.config = config;
   s.options = options;
   s.page = dashboard_page(config, options.title);

@@ -86,7 +86,7 @@ class OdometryFile {
         r_.state[u] = states_.intern(describe_exclusion(row->excluded[u], row->noise_flags[u]));
       }
     }
-    r_.source = row->source ? states_.intern(describe(*row->source)) : -1;
+    r_.source = row->source ? states_.intern(to_name(*row->source)) : -1;
     return true;
   }
   const OdometryRecord& record() const { return r_; }

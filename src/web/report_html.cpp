@@ -14,8 +14,6 @@
 namespace moa::io {
 namespace {
 
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
-
 /// Builds JSON text. Strings are escaped so that they cannot end the
 /// <script> element they sit in ('<', '>' and '&' as \u escapes).
 class Json {
@@ -260,8 +258,8 @@ std::string summary_table(const ReportModel& m) {
   if (m.errors) {
     const TrajectoryError& e = *m.errors;
     row("translation error", describe_translation(e));
-    row("heading error", fmt::format("max {:.3g} deg, rms {:.3g} deg", e.max_heading * kDegPerRad,
-                                     e.rms_heading * kDegPerRad));
+    row("heading error", fmt::format("max {:.3g} deg, rms {:.3g} deg", to_degrees(e.max_heading),
+                                     to_degrees(e.rms_heading)));
     if (m.floor) {
       t +=
           fmt::format("<tr class=\"verdict\"><th>verdict</th><td>{}</td></tr>\n",

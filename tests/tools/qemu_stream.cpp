@@ -218,7 +218,7 @@ int pack(int argc, char** argv) {
     return 1;
   }
   std::cout << "qemu_stream: packed " << counts[0] << " mice rows, " << counts[1] << " wheel rows, "
-            << counts[2] << " camera fixes (" << describe(o.estimator) << ", " << o.rate
+            << counts[2] << " camera fixes (" << to_name(o.estimator) << ", " << o.rate
             << " Hz) into " << argv[4] << "\n";
   return 0;
 }

@@ -45,6 +45,24 @@ struct TrajectoryError {
   double distance = 0.0;  ///< m, truth's path length from its start to the last estimate compared
 };
 
+/// Calls f(name, value) for each member of `e` under the names of `moa
+/// evaluate --json` (units in the names): samples, outside_truth_span,
+/// distance_m, max_translation_m, rms_translation_m, max_heading_rad,
+/// rms_heading_rad, final_translation_m, final_heading_rad. The one list of
+/// them: the JSON of `moa evaluate` and of the experiments, and Python's dict.
+template <class F>
+void for_each_member(const TrajectoryError& e, F&& f) {
+  f("samples", e.samples);
+  f("outside_truth_span", e.outside);
+  f("distance_m", e.distance);
+  f("max_translation_m", e.max_translation);
+  f("rms_translation_m", e.rms_translation);
+  f("max_heading_rad", e.max_heading);
+  f("rms_heading_rad", e.rms_heading);
+  f("final_translation_m", e.final_translation);
+  f("final_heading_rad", e.final_heading);
+}
+
 /// Accumulates errors estimate by estimate (the estimates need not be kept).
 class TrajectoryErrorAccumulator {
  public:

@@ -38,6 +38,7 @@
 #include <vector>
 
 #include "moa/calibration/exact.hpp"
+#include "moa/core/options_check.hpp"
 
 namespace moa {
 
@@ -56,6 +57,9 @@ struct GuidedTolerances {
   double centre_sd = 0.001;     ///< m, per axis, of the spin centre
   double heading_sd = 0.0044;   ///< rad, rotation of the robot during a push (0.25 deg)
   double anisotropy_sd = 0.02;  ///< without push-y: of sy / sx - 1 (assumed 0)
+  /// nullopt when usable (every sd positive and finite), else the first
+  /// field out of its bounds (core/options_check.hpp).
+  OptionCheck validate() const;
 };
 
 struct GuidedCalibration {

@@ -65,8 +65,9 @@ struct MotionLimits {
   double still_speed = 0.005;       ///< m/s
   double still_rate = 0.05;         ///< rad/s
   double still_time = 0.5;          ///< s of stillness that ends a motion
-  /// Empty when usable, else what is wrong, naming the field.
-  const char* validate() const;
+  /// nullopt when usable, else the first field out of its bounds, the bound
+  /// and the value (core/options_check.hpp).
+  OptionCheck validate() const;
 };
 
 enum class MotionProblem : std::uint8_t {

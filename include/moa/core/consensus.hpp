@@ -54,6 +54,7 @@
 #include "moa/core/health.hpp"
 #include "moa/core/motion_prior.hpp"
 #include "moa/core/noise_model.hpp"
+#include "moa/core/options_check.hpp"
 
 namespace moa {
 
@@ -72,6 +73,9 @@ struct ConsensusOptions {
   /// The common-mode test of step 3 (needs motion_prior).
   bool common_mode = true;
   real max_bridge = 1.0;  ///< s, longest bridge over a common-mode rejection
+  /// nullopt when usable, else the first field out of its bounds, its path
+  /// relative to this struct (options_check.hpp).
+  OptionCheck validate() const;
 };
 
 class ConsensusEstimator {

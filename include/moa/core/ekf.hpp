@@ -71,15 +71,12 @@
 #include <cstddef>
 #include <optional>
 
+#include "moa/core/options_check.hpp"
 #include "moa/core/ring.hpp"
 #include "moa/core/se2.hpp"
 
 namespace moa {
 
-/// d pose' / d pose (3x3) of integrate_exact(pose, twist, dt).
-Mat3 exact_step_pose_jacobian(const Pose2& pose, const Twist2& twist, real dt);
-/// d pose' / d twist (3x3) of integrate_exact(pose, twist, dt).
-Mat3 exact_step_twist_jacobian(const Pose2& pose, const Twist2& twist, real dt);
 /// The twist (s_v vx, s_v vy, s_w omega).
 Twist2 scaled_twist(const Twist2& twist, const Vec2& scale);
 /// d pose' / d (s_v, s_w) (3x2) of integrate_exact(pose, scaled_twist(twist, scale), dt):
@@ -115,6 +112,9 @@ struct EkfOptions {
   real gate_position = 13.815510557964274;
   /// With heading: chi-square 3 dof at 1 - 1e-3.
   real gate_pose = 16.26623619623813;
+  /// nullopt when usable, else the first field out of its bounds, its path
+  /// relative to this struct (options_check.hpp).
+  OptionCheck validate() const;
 };
 
 enum class FixResult {

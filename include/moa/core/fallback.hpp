@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <optional>
 
+#include "moa/core/options_check.hpp"
 #include "moa/core/robust_estimate.hpp"
 #include "moa/core/se2.hpp"
 
@@ -17,6 +18,9 @@ struct WheelNoise {
   real base_omega = 0.05;  ///< rad/s
   real relative = 0.1;
   Mat3 covariance(const Twist2& wheels) const;
+  /// nullopt when usable, else the first field out of its bounds, its path
+  /// relative to this struct (options_check.hpp).
+  OptionCheck validate() const;
 };
 
 /// The twist to use when nothing can be trusted and there are no wheels:
@@ -26,6 +30,9 @@ struct HoldModel {
   real accel = 1.0;
   real angular_accel = 5.0;
   Mat3 grown(const Mat3& covariance, real elapsed) const;
+  /// nullopt when usable, else the first field out of its bounds, its path
+  /// relative to this struct (options_check.hpp).
+  OptionCheck validate() const;
 };
 
 /// What both robust estimators do when no set of sensors can be trusted:

@@ -49,6 +49,8 @@
 #include <cstdint>
 
 #include "moa/core/array.hpp"
+#include "moa/core/names.hpp"
+#include "moa/core/options_check.hpp"
 #include "moa/core/robust_estimate.hpp"
 #include "moa/core/subset.hpp"
 
@@ -73,14 +75,22 @@ struct HealthOptions {
   /// window has drift_step_tau of samples.
   real drift_step_tau = 0.2;
   real drift_step = 0.06;
-  /// s; 0.5 s cost 1.1 mm on robust-faults' liftoff, seeds 1-5 (four sensors beat three).
-  real probation = 0.1;
-  /// Empty when usable, else what is wrong, naming the field.
-  const char* validate() const;
+  real probation = 0.1;  ///< s an excluded sensor must behave before it is used again
+  /// nullopt when usable, else the first field out of its bounds, its path
+  /// relative to this struct (options_check.hpp).
+  OptionCheck validate() const;
 };
 
 enum class Health : std::uint8_t { kTrusted, kSuspect, kExcluded, kProbation };
-const char* describe(Health health);
+template <>
+struct EnumNames<Health> {
+  static constexpr std::array<NameEntry<Health>, 4> kTable{{
+      {Health::kTrusted, "trusted"},
+      {Health::kSuspect, "suspect"},
+      {Health::kExcluded, "excluded"},
+      {Health::kProbation, "probation"},
+  }};
+};
 
 class HealthMonitor {
  public:

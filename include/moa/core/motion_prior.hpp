@@ -14,6 +14,7 @@
 
 #include <Eigen/Core>
 
+#include "moa/core/options_check.hpp"
 #include "moa/core/se2.hpp"
 
 namespace moa {
@@ -22,8 +23,9 @@ namespace moa {
 struct RobotLimits {
   real accel = 2.0;           ///< m/s^2, linear acceleration
   real angular_accel = 20.0;  ///< rad/s^2, angular acceleration
-  /// Empty when usable, else what is wrong, naming the field.
-  const char* validate() const;
+  /// nullopt when usable, else the first field out of its bounds, its path
+  /// relative to this struct (options_check.hpp).
+  OptionCheck validate() const;
 };
 
 class MotionPrior {

@@ -8,6 +8,7 @@
 #include <cstdint>
 
 #include "moa/core/array.hpp"
+#include "moa/core/options_check.hpp"
 #include "moa/core/robust_estimate.hpp"
 #include "moa/core/subset.hpp"
 
@@ -21,11 +22,8 @@ struct NoiseModelOptions {
   /// for the predicted point speed s: a sensor near or over its rating weighs
   /// less than one well under it. The cap matters: over its rating a sensor
   /// fails by losing counts (a gross error, not a wider Gaussian), which the
-  /// consistency test must still see. Uncapped (~90 at 1.4 times the rating)
-  /// the test let lost sensors in. Chosen on `moa experiment sekimori-table4
-  /// --runs 5 --seed 1` (seeds 1-5; tests use 101 on, docs 201 on),
-  /// speed (b), consensus 151.9 mm uncapped, 26.7 mm with a cap of 4, 23.1 mm
-  /// with 2, oracle selection 21.3 mm.
+  /// consistency test must still see (docs/experiments.md, sekimori-table4,
+  /// gives the measurements behind the cap).
   real speed_onset = 0.8;
   real speed_cap = 2.0;
   /// SQUAL below this inflates the variance by low_squal_factor.
@@ -33,6 +31,9 @@ struct NoiseModelOptions {
   real low_squal_factor = 100.0;
   /// Counter overflow inflates the variance by this (the counts are clipped).
   real overflow_factor = 1e4;
+  /// nullopt when usable, else the first field out of its bounds, its path
+  /// relative to this struct (options_check.hpp).
+  OptionCheck validate() const;
 };
 
 /// Per-sensor covariance of the point velocity u_i (robot frame, m^2/s^2):

@@ -42,6 +42,7 @@
 #include "moa/core/ekf.hpp"
 #include "moa/core/estimate.hpp"
 #include "moa/core/fallback.hpp"
+#include "moa/core/names.hpp"
 #include "moa/core/noise_model.hpp"
 #include "moa/core/ring.hpp"
 #include "moa/core/robust_estimate.hpp"
@@ -62,9 +63,16 @@ enum class EstimatorKind : std::uint8_t {
   kWheels,     ///< wheel odometry alone (the mice are not used)
   kOracle,     ///< least squares over the sensors with no simulated fault in the epoch
 };
-const char* describe(EstimatorKind kind);
-/// "ls", "sekimori", "consensus", "wheels", "oracle"; nullopt otherwise.
-std::optional<EstimatorKind> estimator_from_name(std::string_view name);
+template <>
+struct EnumNames<EstimatorKind> {
+  static constexpr std::array<NameEntry<EstimatorKind>, 5> kTable{{
+      {EstimatorKind::kLs, "ls"},
+      {EstimatorKind::kSekimori, "sekimori"},
+      {EstimatorKind::kConsensus, "consensus"},
+      {EstimatorKind::kWheels, "wheels"},
+      {EstimatorKind::kOracle, "oracle"},
+  }};
+};
 
 struct OdometryOptions {
   EstimatorKind estimator = EstimatorKind::kConsensus;
@@ -90,10 +98,12 @@ struct OdometryOptions {
   /// estimator, for every estimator.
   SelfCalibrationOptions self_calibration;
 
-  /// Empty when the options can be used, else what is wrong, naming the
-  /// field ("rate: must be positive and finite (Hz)"), in the manner of
-  /// Ceres' Options::IsValid. Thresholds of the estimators included.
-  const char* validate() const;
+  /// nullopt when the options can be used, else the first field out of its
+  /// bounds with its full path, the bound and the value
+  /// ("consensus.health.frozen_run: must be >= 2, is 1"), in the manner of
+  /// Ceres' Options::IsValid (options_check.hpp). Every nested struct
+  /// included.
+  OptionCheck validate() const;
   SynchroniserOptions synchroniser() const { return {1.0 / rate, max_row_interval, max_gap}; }
 };
 
@@ -140,11 +150,6 @@ enum class OdometryError : std::uint8_t {
   kImpossibleCounts,  ///< counts implying a speed far beyond what the sensor can track
 };
 
-/// A row whose counts imply a sensor-point speed above this is refused: ten
-/// times the rated max_speed, or 50 m/s for an unrated sensor (optical mouse
-/// sensors track at most a few m/s; a count far beyond is a corrupt value).
-inline constexpr real kImpossibleSpeedFactor = 10.0;
-inline constexpr real kImpossibleUnratedSpeed = 50.0;  ///< m/s
 const char* describe(OdometryError error);
 
 /// A non-owning reference to a callable, as std::function without the heap:

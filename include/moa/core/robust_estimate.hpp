@@ -9,6 +9,7 @@
 
 #include "moa/core/array.hpp"
 #include "moa/core/estimate.hpp"
+#include "moa/core/names.hpp"
 
 namespace moa {
 
@@ -18,7 +19,15 @@ enum class Source : std::uint8_t {
   kWheels,  ///< wheel odometry (too few sensors could be trusted)
   kHold,    ///< the last good twist, covariance grown (no sensor, no wheels)
 };
-const char* describe(Source source);
+/// The `source` column of odometry.csv.
+template <>
+struct EnumNames<Source> {
+  static constexpr std::array<NameEntry<Source>, 3> kTable{{
+      {Source::kMice, "mice"},
+      {Source::kWheels, "wheels"},
+      {Source::kHold, "hold"},
+  }};
+};
 
 /// Why a sensor was not used in a sample.
 enum class Exclusion : std::uint8_t {
@@ -36,7 +45,25 @@ enum class Exclusion : std::uint8_t {
   kCalibration,   ///< self-calibration: its estimate ran away from 1 (self_calibration.hpp)
   kCommonMode,    ///< the whole array at once contradicts the motion prior and the wheels
 };
-const char* describe(Exclusion exclusion);
+/// The reasons of the `excluded` column of odometry.csv ("used": not excluded).
+template <>
+struct EnumNames<Exclusion> {
+  static constexpr std::array<NameEntry<Exclusion>, 13> kTable{{
+      {Exclusion::kNone, "used"},
+      {Exclusion::kLift, "lift"},
+      {Exclusion::kInconsistent, "inconsistent"},
+      {Exclusion::kUnreliable, "unreliable"},
+      {Exclusion::kFallback, "fallback"},
+      {Exclusion::kUnselected, "unselected"},
+      {Exclusion::kFaulty, "faulty"},
+      {Exclusion::kFrozen, "frozen"},
+      {Exclusion::kZero, "zero"},
+      {Exclusion::kDrift, "drift"},
+      {Exclusion::kProbation, "probation"},
+      {Exclusion::kCalibration, "calibration"},
+      {Exclusion::kCommonMode, "common-mode"},
+  }};
+};
 
 /// Conditions that inflated a sensor's noise in a sample (bit set).
 enum NoiseFlag : std::uint8_t {

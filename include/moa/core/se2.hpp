@@ -11,6 +11,7 @@
 
 #include <Eigen/Core>
 #include <cmath>
+#include <numbers>
 
 #include "moa/core/real.hpp"
 
@@ -34,6 +35,11 @@ inline Mat2 rotation(real angle) {
 
 /// Wraps an angle to (-pi, pi].
 real wrap_angle(real angle);
+
+/// Degrees of an angle in radians (x 180/pi), and radians of one in degrees:
+/// the one conversion of every display and input in degrees.
+constexpr double to_degrees(double radians) { return radians * (180.0 / std::numbers::pi); }
+constexpr double to_radians(double degrees) { return degrees * (std::numbers::pi / 180.0); }
 
 /// Robot velocity in the robot frame.
 struct Twist2 {
@@ -93,6 +99,16 @@ Twist2 twist_between(const Pose2& from, const Pose2& to, real dt);
 /// world_T_robot after dt of constant twist, integrated exactly:
 /// pose * exp(twist, dt).
 Pose2 integrate_exact(const Pose2& pose, const Twist2& twist, real dt);
+
+/// d pose' / d pose (3x3) of pose' = integrate_exact(pose, twist, dt), pose
+/// as (x, y, theta) with theta additive:
+///   [[I, R(theta) J d], [0, 1]],  d = V(phi) v dt,  J = [[0, -1], [1, 0]].
+Mat3 exact_step_pose_jacobian(const Pose2& pose, const Twist2& twist, real dt);
+/// d pose' / d twist (3x3) of integrate_exact(pose, twist, dt), twist as
+/// (vx, vy, omega):
+///   [[R(theta) V(phi) dt, R(theta) V'(phi) v dt^2], [0, 0, dt]],
+///   V' = [[ds, -dc], [dc, ds]] (v_terms()).
+Mat3 exact_step_twist_jacobian(const Pose2& pose, const Twist2& twist, real dt);
 
 /// The first-order step of Sekimori & Miyazaki eq. (6): the displacement
 /// (v dt) is rotated by the heading at the start of the step,

@@ -24,6 +24,7 @@
 
 #include "moa/core/fallback.hpp"
 #include "moa/core/noise_model.hpp"
+#include "moa/core/options_check.hpp"
 
 namespace moa {
 
@@ -32,6 +33,9 @@ struct SekimoriOptions {
   int r_th = -1;      ///< votes needed; -1 means max(1, N - 2)
   WheelNoise wheels;  ///< only for the covariance reported on wheel samples
   HoldModel hold;
+  /// nullopt when usable, else the first field out of its bounds, its path
+  /// relative to this struct (options_check.hpp).
+  OptionCheck validate() const;
 };
 
 class SekimoriEstimator {

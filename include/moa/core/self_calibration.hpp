@@ -65,15 +65,14 @@
 //   b (scale and yaw), rotation alone a = G cos D, i.e. the scale (D only to
 //   second order: b keeps its estimate and its variance grows). Not used:
 //   epochs without a wheel twist or a mice estimate (a fallback to the
-//   wheels), with a used sensor over 0.8 times its rated speed, blocks with
+//   wheels), with a used sensor over speed_onset (0.8) times its rated speed, blocks with
 //   d under min_speed times their length, and blocks whose residual exceeds
 //   `gate` times d (the wheels slipped grossly). The measurement w of each
 //   sensor's update (above) is predicted from the others' corrections, which
 //   carry the applied common part (Gc, Dc) (see Deadband), and is taken into
 //   theta's gauge: times (Gc / G) R(D - Dc). The wheels' bias is the
-//   gauge's: the simulator's systematic slip (4.4-6.2 % per wheel plus 11 %
-//   per m/s, about 8 % on its scenarios) becomes the array's scale, hence
-//   not the default.
+//   gauge's: their systematic slip becomes the array's scale, hence not the
+//   default (docs/self-calibration.md).
 //
 // A sensor whose estimate runs away (|s - 1| > runaway_scale on an axis or
 // |delta| > runaway_yaw) is reported by runaway() and left out of the
@@ -89,15 +88,13 @@
 // away from the configured value, or, for the scales, once their isotropic
 // part g = sqrt(s_x s_y) is isotropic_deadband (1.25 %) away from 1 (then g
 // is applied to both axes); once an axis is beyond the wide band both axes
-// take their own estimates (a sensor plainly off). The estimates of
-// good sensors deviate by up to 1 % on an axis on a path that drives
-// forward only (sekimori-a, cruise): such a translation leaves one
-// direction of (s_x, s_y, delta) to rotation, where a mount position error
-// of 0.14 mm at 0.1 m reads as 0.14 % of tangential scale, which the
-// three-parameter model cannot tell apart; applying every estimate cost 349
-// mm on average on cruise (seeds 1-10, about 130 mm without). That scatter
-// is mostly one axis against the other, while a drift (dust) dims both
-// alike: hence the narrower isotropic band (docs/self-calibration.md).
+// take their own estimates (a sensor plainly off). On a path that drives
+// forward only, translation leaves one direction of (s_x, s_y, delta) to
+// rotation, where a mount position error reads as tangential scale (0.14 mm
+// at 0.1 m: 0.14 %), which the three-parameter model cannot tell apart: the
+// estimates of good sensors scatter, mostly one axis against the other,
+// while a drift (dust) dims both alike; hence the narrower isotropic band
+// (docs/self-calibration.md, "Deadband", with the measurements).
 // Within the bands the counts are used as configured, so a clean log gives
 // the same odometry. The bands judge the relative calibration theta_i / (G,
 // D); the gauge's common part is applied apart, G once it is
@@ -114,6 +111,9 @@
 #include <string_view>
 
 #include "moa/core/array.hpp"
+#include "moa/core/names.hpp"
+#include "moa/core/noise_model.hpp"
+#include "moa/core/options_check.hpp"
 #include "moa/core/robust_estimate.hpp"
 #include "moa/core/subset.hpp"
 
@@ -124,20 +124,21 @@ enum class SelfCalibrationGauge {
   kSensors,  ///< the sensors' median keeps the configured values
   kWheels,   ///< the wheels' twist, when the epochs have one
 };
-/// "sensors", "wheels".
-const char* describe(SelfCalibrationGauge gauge);
-/// The gauge named by describe(); nullopt for any other name.
-std::optional<SelfCalibrationGauge> self_calibration_gauge_from_name(std::string_view name);
+template <>
+struct EnumNames<SelfCalibrationGauge> {
+  static constexpr std::array<NameEntry<SelfCalibrationGauge>, 2> kTable{{
+      {SelfCalibrationGauge::kSensors, "sensors"},
+      {SelfCalibrationGauge::kWheels, "wheels"},
+  }};
+};
 
 struct SelfCalibrationOptions {
   bool enabled = false;
   SelfCalibrationGauge gauge = SelfCalibrationGauge::kSensors;
   real block = 0.1;       ///< s of epochs summed per update
   real min_speed = 0.05;  ///< m/s, mean predicted point speed of a block
-  /// 1/sqrt(s), random walk of a scale (forgetting). Tuned on faults-drift
-  /// and sekimori-a seeds 1-2: 0.003 lagged a 10 % drift over 6 s enough to
-  /// cost 30-57 mm (the health monitor no longer excludes the corrected
-  /// sensor); 0.01 gave 9.2 / 11.6 mm against 9.1 / 6.6 mm without.
+  /// 1/sqrt(s), random walk of a scale (forgetting): the variance of s grows
+  /// by scale_walk^2 per second (docs/self-calibration.md says how it was chosen).
   real scale_walk = 0.01;
   real yaw_walk = 0.0003;       ///< rad/sqrt(s), random walk of the yaw offset
   real prior_scale_sd = 0.05;   ///< sd of the initial scale; the covariance cap
@@ -175,8 +176,9 @@ struct SelfCalibrationOptions {
   /// simulator's noisy wheels: random slip 0.05 per wheel, correlated over
   /// 0.3 s).
   real wheel_noise = 0.05;
-  /// Empty when usable, else what is wrong, naming the field.
-  const char* validate() const;
+  /// nullopt when usable, else the first field out of its bounds, its path
+  /// relative to this struct (options_check.hpp).
+  OptionCheck validate() const;
 };
 
 /// One sensor's calibration relative to its configured mount.
@@ -187,7 +189,10 @@ struct SelfCalibrationEstimate {
 
 class SelfCalibration {
  public:
-  SelfCalibration(const SensorArray& array, SelfCalibrationOptions options);
+  /// `noise`: the estimator's noise model, whose min_squal and speed_onset
+  /// also mark the epochs not learnt from (low SQUAL, near the rating).
+  SelfCalibration(const SensorArray& array, SelfCalibrationOptions options,
+                  const NoiseModelOptions& noise = {});
 
   /// Applies each sensor's correction to the counts of `sample` (in place).
   /// The applied correction changes only when an estimate moved by
@@ -225,8 +230,7 @@ class SelfCalibration {
   /// inside the bands (an estimate moving inside them is noise or the
   /// start: not held). A sensor
   /// that changed enough to be excluded is not trusted back on a correction
-  /// whose own error (0.3-0.7 %, the filter's scatter) would bias the
-  /// rotation (on selfcal-step it cost 7 mm).
+  /// whose own error (the filter's scatter) would bias the rotation.
   bool held_as_drift(int i) const;
   int size() const { return n_; }
   /// The common part (G, G, D) the gauge sets the median over the sensors
@@ -285,6 +289,8 @@ class SelfCalibration {
   SelfCalibrationEstimate applied_gauge() const;
 
   SelfCalibrationOptions options_;
+  int min_squal_;     ///< NoiseModelOptions::min_squal
+  real speed_onset_;  ///< NoiseModelOptions::speed_onset, of a sensor's max_speed
   int n_;
   SensorArray array_;
   SubsetSolver solver_;

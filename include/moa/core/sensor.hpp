@@ -54,6 +54,19 @@ struct SensorMount {
 };
 
 /// A sensor's rated figures (from the manufacturers' datasheets).
+/// Counts implying a sensor-point speed above impossible_speed(mount) are a
+/// corrupt value, refused (kImpossibleCounts): ten times the rated max_speed,
+/// or 50 m/s for an unrated sensor (optical mouse sensors track at most a few
+/// m/s). `moa odometry` and the calibrations refuse the same rows.
+inline constexpr real kImpossibleSpeedFactor = 10.0;
+inline constexpr real kImpossibleUnratedSpeed = 50.0;  ///< m/s
+real impossible_speed(const SensorMount& mount);       ///< m/s
+/// |velocity_from_counts * counts| > limit * dt: the counts over dt (s)
+/// imply a speed above `limit` (m/s, > 0). Decided without the square root
+/// where |.|^2 is clear of (limit dt)^2 by far more than the rounding of
+/// either: the same answer as the norm's.
+bool counts_impossible(const Mat2& velocity_from_counts, const Vec2& counts, real limit, real dt);
+
 struct SensorPreset {
   const char* name;
   real cpi;         ///< counts per inch (the default setting)

@@ -26,6 +26,7 @@
 #include <optional>
 
 #include "moa/core/array.hpp"
+#include "moa/core/options_check.hpp"
 #include "moa/core/ring.hpp"
 
 namespace moa {
@@ -89,10 +90,11 @@ struct SynchroniserOptions {
   /// would emit (and a writer write) millions of still epochs: refused.
   double max_gap = 3600.0;
 
-  /// Empty when usable, else what is wrong, naming the field: period and
-  /// max_row_interval positive and finite, max_row_interval / period at most
-  /// kMaxPendingEpochs - 3, max_gap positive.
-  const char* validate() const;
+  /// nullopt when usable, else the first field out of its bounds
+  /// (options_check.hpp): period and max_row_interval positive and finite,
+  /// max_row_interval at most kMaxPendingEpochs - 3 periods, max_gap
+  /// positive (infinite: no limit).
+  OptionCheck validate() const;
 };
 
 class Synchroniser {

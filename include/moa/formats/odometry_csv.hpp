@@ -5,7 +5,7 @@
 //     [,scale_v,scale_omega,sd_scale_v,sd_scale_omega]
 //
 // used:     the sensors of the estimate, names joined by '+'
-// excluded: name:reason[/flag...] joined by ';', reason a describe(Exclusion)
+// excluded: name:reason[/flag...] joined by ';', reason a to_name(Exclusion)
 //           word, flags the noise inflations (over-speed, low-squal, overflow)
 // pxx..ptt: the EKF's pose covariance (m^2, m^2, m^2, rad^2) with camera fusion
 // scale_*:  the EKF's dead-reckoning scales s_v, s_w and their sd (unit 1),

@@ -33,15 +33,25 @@
 #include "moa/calibration/exact.hpp"
 #include "moa/calibration/guided.hpp"
 #include "moa/calibration/kimlee.hpp"
+#include "moa/core/names.hpp"
 #include "moa/formats/config.hpp"
 
 namespace moa::io {
 
 enum class CalibrationMethod { kKimLee, kExact, kGuided };
-/// "kimlee", "exact", "guided".
-const char* describe(CalibrationMethod method);
-/// The method of that name; nullopt otherwise.
-std::optional<CalibrationMethod> calibration_method_from_name(std::string_view name);
+
+}  // namespace moa::io
+
+template <>
+struct moa::EnumNames<moa::io::CalibrationMethod> {
+  static constexpr std::array<NameEntry<io::CalibrationMethod>, 3> kTable{{
+      {io::CalibrationMethod::kKimLee, "kimlee"},
+      {io::CalibrationMethod::kExact, "exact"},
+      {io::CalibrationMethod::kGuided, "guided"},
+  }};
+};
+
+namespace moa::io {
 
 struct CalibrationOptions {
   /// kimlee, exact: longest interval one mice.csv row may cover, s.
@@ -64,6 +74,12 @@ struct CalibrationOptions {
   /// exact: return a calibration whose model does not explain the data
   /// (ExactModelCheck::misfit()) with a warning instead of refusing it.
   bool force = false;
+  /// nullopt when the numbers can be used, else the first field out of its
+  /// bounds (core/options_check.hpp): max_row_interval positive,
+  /// min_interval and measurements not negative, distance positive, turns
+  /// finite and not 0, every tolerance positive. Which options a method
+  /// needs is check_calibration_options'.
+  OptionCheck validate() const;
 };
 
 /// Checks that the options fit the method (`log` empty: none given); throws
@@ -84,9 +100,42 @@ struct SensorCalibrationReport {
   std::optional<MountVector> information_eigenvalues;  ///< exact: observability.hpp
 };
 
+/// How a calibration's solve ended, as Ceres' Summary::termination_type.
+enum class CalibrationTermination {
+  kConverged,           ///< solved; the data determined what the method estimates
+  kNotConverged,        ///< exact: the optimiser stopped before converging (rough)
+  kModelMisfit,         ///< exact: the model does not explain the data (kept with --force)
+  kUnderdetermined,     ///< kimlee: S rank deficient, a minimum-norm correction
+  kTooFewMeasurements,  ///< kimlee: M < 2N - 2 (Kim & Lee eq. (49))
+};
+
+}  // namespace moa::io
+
+template <>
+struct moa::EnumNames<moa::io::CalibrationTermination> {
+  static constexpr std::array<NameEntry<io::CalibrationTermination>, 5> kTable{{
+      {io::CalibrationTermination::kConverged, "converged"},
+      {io::CalibrationTermination::kNotConverged, "not-converged"},
+      {io::CalibrationTermination::kModelMisfit, "model-misfit"},
+      {io::CalibrationTermination::kUnderdetermined, "underdetermined"},
+      {io::CalibrationTermination::kTooFewMeasurements, "too-few-measurements"},
+  }};
+};
+
+namespace moa::io {
+
 /// A calibration's result and report, as Ceres' Solver::Summary.
 struct CalibrationSummary {
   CalibrationMethod method = CalibrationMethod::kExact;
+  /// The first that applies, in the order of CalibrationTermination's values
+  /// after kConverged: misfit before non-convergence (exact), rank before
+  /// the count of measurements (kimlee).
+  CalibrationTermination termination = CalibrationTermination::kConverged;
+  /// The rule, as Ceres' IsSolutionUsable: termination is kConverged. A
+  /// usable calibration may still carry warnings (parameters kept at
+  /// nominal, implausible values): they say what to check, not that the
+  /// solve failed.
+  bool usable = false;
   /// The nominal config with the calibrated mounts: what `moa calibrate --out` writes.
   RobotConfig calibrated;
   std::vector<SensorCalibrationReport> sensors;

@@ -17,6 +17,8 @@
 #include "moa/formats/config.hpp"
 #include "moa/formats/log.hpp"
 
+#include "moa/runs/run_summary.hpp"
+
 namespace moa::io {
 
 /// One row of a run's input: a mice row, a wheel twist (robot frame, m/s
@@ -71,13 +73,12 @@ struct OdometryRun {
   std::size_t fix_rows = 0;      ///< camera fixes fed
   std::size_t steps = 0;         ///< epochs written
   double t0 = 0.0, t_end = 0.0;  ///< s, first epoch's start, last mice row's time
-  FixCounts fixes;
   /// Mice rows per sensor of the config (index as in the config).
   std::array<std::size_t, kMaxSensors> rows_per_sensor{};
-  /// What the caller should tell the user (a configured sensor that never
-  /// reported, used as still by a robust estimator; a self-calibration that
-  /// ran away).
-  std::vector<std::string> warnings;
+  /// Epochs by source, exclusions by reason, camera fixes, warnings (a
+  /// configured sensor that never reported, used as still by a robust
+  /// estimator; a self-calibration that ran away) and the verdict.
+  RunSummary summary;
 };
 
 /// Runs the pipeline over `source` until it ends, then ends the stream at

@@ -16,17 +16,18 @@
 #include <memory>
 #include <optional>
 
+#include "moa/core/options_check.hpp"
 #include "moa/formats/config.hpp"
-#include "moa/sources/live.hpp"
 #include "moa/formats/log.hpp"
+#include "moa/sources/live.hpp"
 
 namespace moa::io {
 
 struct ReplayOptions {
   /// Playback speed: 1 is real time, 2 twice as fast. Positive and finite.
   double speed = 1.0;
-  /// Empty when usable, else what is wrong, naming the field.
-  const char* validate() const;
+  /// nullopt when usable, else "speed: must be ..., is ..." (core/options_check.hpp).
+  OptionCheck validate() const;
 };
 
 class ReplayReader : public FrameSource {

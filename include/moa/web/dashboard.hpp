@@ -38,6 +38,7 @@
 #include <string_view>
 
 #include "moa/core/odometry.hpp"
+#include "moa/core/options_check.hpp"
 #include "moa/formats/config.hpp"
 
 namespace moa::io {
@@ -53,8 +54,9 @@ struct DashboardOptions {
   double max_rate = 20.0;             ///< events per second of wall time, at most
   std::size_t history_points = 4000;  ///< trajectory points kept for new clients
   std::string title = "moa live";
-  /// Empty when usable, else what is wrong, naming the field.
-  const char* validate() const;
+  /// nullopt when usable, else the first field out of its bounds, the bound
+  /// and the value (core/options_check.hpp).
+  OptionCheck validate() const;
 };
 
 /// "[HOST:]PORT" (host defaults to 127.0.0.1; "[::1]:PORT" for IPv6) into

@@ -1,0 +1,55 @@
+// What an odometry run did, in counts a user can check against odometry.csv:
+// epochs by the source of their twist, sensor-epochs by the reason a sensor
+// was left out, the camera fixes, the warnings, and a verdict. Filled step by
+// step by io::run_odometry (and so by `moa odometry`, the experiments and
+// Python); `moa odometry` prints it with text().
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "moa/core/odometry.hpp"
+#include "moa/core/robust_estimate.hpp"
+
+namespace moa::io {
+
+/// Values of Source and of Exclusion (kNone, "used", included).
+inline constexpr std::size_t kSourceCount = static_cast<std::size_t>(Source::kHold) + 1;
+inline constexpr std::size_t kExclusionCount =
+    static_cast<std::size_t>(Exclusion::kCommonMode) + 1;
+
+struct RunSummary {
+  /// Epochs written (rows of odometry.csv).
+  std::size_t epochs = 0;
+  /// Epochs by the source of their twist, indexed by Source: the `source`
+  /// column of odometry.csv.
+  std::array<std::size_t, kSourceCount> epochs_by_source{};
+  /// Sensor-epochs by what happened to the sensor, indexed by Exclusion
+  /// (kNone: used), over the configured sensors: the `used` and `excluded`
+  /// columns of odometry.csv.
+  std::array<std::size_t, kExclusionCount> sensor_epochs{};
+  FixCounts fixes;
+  /// What the caller should tell the user (a selected sensor that never
+  /// reported, a self-calibration that ran away), one sentence each.
+  std::vector<std::string> warnings;
+
+  /// The rule: usable when at least one epoch was written and at most
+  /// kMaxHeldFraction of them were held (Source::kHold: neither a sensor nor
+  /// the wheels measured the motion; the twist is the last one, its
+  /// covariance grown, so the pose of such an epoch is a guess). Warnings do
+  /// not change the verdict: they say where to look.
+  static constexpr double kMaxHeldFraction = 0.01;
+  bool usable() const;
+  /// Why usable() is what it is, one sentence.
+  std::string verdict() const;
+
+  /// Counts one step over the `sensors` configured sensors.
+  void add(const OdometryStep& step, int sensors);
+  /// Lines (each ending in '\n'): epochs by source, exclusions by reason
+  /// (the reasons that occurred), fixes when any, the verdict.
+  std::string text() const;
+};
+
+}  // namespace moa::io

@@ -1,0 +1,57 @@
+#include "moa/runs/run_summary.hpp"
+
+#include <fmt/core.h>
+
+namespace moa::io {
+
+void RunSummary::add(const OdometryStep& step, int sensors) {
+  ++epochs;
+  ++epochs_by_source[static_cast<std::size_t>(step.estimate.source)];
+  for (int i = 0; i < sensors && i < kMaxSensors; ++i) {
+    ++sensor_epochs[static_cast<std::size_t>(step.estimate.excluded[static_cast<std::size_t>(i)])];
+  }
+}
+
+bool RunSummary::usable() const {
+  const auto held = static_cast<double>(epochs_by_source[static_cast<std::size_t>(Source::kHold)]);
+  return epochs > 0 && held <= kMaxHeldFraction * static_cast<double>(epochs);
+}
+
+std::string RunSummary::verdict() const {
+  const std::size_t held = epochs_by_source[static_cast<std::size_t>(Source::kHold)];
+  if (epochs == 0) return "not usable: no epoch was written";
+  const double percent = 100.0 * static_cast<double>(held) / static_cast<double>(epochs);
+  if (!usable()) {
+    return fmt::format(
+        "not usable: {} of {} epochs ({:.1f} %) held the last twist (no sensor and no wheels "
+        "measured the motion; at most {:g} % may)",
+        held, epochs, percent, 100.0 * kMaxHeldFraction);
+  }
+  return fmt::format("usable: {} of {} epochs held the last twist (at most {:g} % may)", held,
+                     epochs, 100.0 * kMaxHeldFraction);
+}
+
+std::string RunSummary::text() const {
+  std::string out = fmt::format("epochs: {}", epochs);
+  for (std::size_t s = 0; s < kSourceCount; ++s) {
+    out += fmt::format("{}{} {}", s == 0 ? " (" : ", ", epochs_by_source[s],
+                       to_name(static_cast<Source>(s)));
+  }
+  out += ")\nsensor-epochs:";
+  for (std::size_t e = 0; e < kExclusionCount; ++e) {
+    if (sensor_epochs[e] == 0 && e != 0) continue;
+    out += fmt::format("{}{} {}", e == 0 ? " " : ", ", sensor_epochs[e],
+                       to_name(static_cast<Exclusion>(e)));
+  }
+  out += "\n";
+  if (fixes.applied + fixes.rejected + fixes.too_old + fixes.invalid > 0) {
+    out += fmt::format(
+        "camera fixes: {} applied, {} rejected as outliers, {} older than the filter's history, "
+        "{} invalid\n",
+        fixes.applied, fixes.rejected, fixes.too_old, fixes.invalid);
+  }
+  out += verdict() + "\n";
+  return out;
+}
+
+}  // namespace moa::io
