@@ -140,7 +140,7 @@ bool ConsensusEstimator::common_mode(const Candidate& best, const References& re
   if (!options_.common_mode || !options_.motion_prior || refs.size == 0) return false;
   // A minority was judged against each reference already (consider()).
   if (2 * count_sensors(best.mask) <= n_) return false;
-  if (t - last_mice_t_ > static_cast<double>(options_.max_bridge)) return false;
+  if (!last_mice_t_ || t - *last_mice_t_ > static_cast<double>(options_.max_bridge)) return false;
   // Every reference there is rejects (a NaN ratio is a reference not there).
   return !(tests.wheels <= 1.0) && !(tests.prior <= 1.0);
 }

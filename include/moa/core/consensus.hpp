@@ -135,7 +135,8 @@ class ConsensusEstimator {
   Fallback fallback_;
   MotionPrior prior_;
   HealthMonitor health_;
-  double last_mice_t_ = -1e300;  ///< s, the last epoch whose twist came from the mice
+  /// s, the last epoch whose twist came from the mice (none yet: nullopt)
+  std::optional<double> last_mice_t_;
 };
 
 }  // namespace moa
