@@ -134,6 +134,29 @@ TEST(RunSummary, MoaOdometryPrintsItsSummary) {
   fs::remove_all(dir);
 }
 
+// The report counts odometry.csv into the same RunSummary: its page shows
+// the verdict `moa odometry` printed, word for word.
+TEST(RunSummary, TheReportShowsTheVerdictMoaOdometryPrinted) {
+  const fs::path dir = test::scratch_dir("run_summary_report");
+  ASSERT_EQ(
+      test::run_moa("simulate --scenario faults-bump --seed 2 --out " + dir.string()).exit_code, 0);
+  const fs::path out = dir / "odometry.csv", page = dir / "report.html";
+  const auto r = test::run_moa("odometry --config " + (dir / "robot.yaml").string() + " --log " +
+                               dir.string() + " --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // The verdict is the summary's last line ("usable: ..." or "not usable: ...").
+  const std::size_t at = r.out.find("usable: ");
+  ASSERT_NE(at, std::string::npos) << r.out;
+  const std::size_t start = r.out.rfind('\n', at) + 1;
+  const std::string verdict = r.out.substr(start, r.out.find('\n', at) - start);
+  const auto page_run =
+      test::run_moa("report --config " + (dir / "robot.yaml").string() + " --log " + dir.string() +
+                    " --odometry " + out.string() + " --out " + page.string());
+  ASSERT_EQ(page_run.exit_code, 0) << page_run.err;
+  EXPECT_NE(test::read_text(page).find(verdict), std::string::npos) << verdict;
+  fs::remove_all(dir);
+}
+
 TEST(RunSummary, MoaLivePrintsItsSummaryAtTheEnd) {
   const fs::path dir = test::scratch_dir("run_summary_live");
   ASSERT_EQ(

@@ -47,8 +47,8 @@
 #include "moa/runs/odometry_run.hpp"
 #include "moa/runs/output_path.hpp"
 #include "moa/runs/run_loop.hpp"
-#include "moa/sources/stream_lines.hpp"
 #include "moa/runs/run_summary.hpp"
+#include "moa/sources/stream_lines.hpp"
 #include "moa/web/dashboard.hpp"
 #include "odometry_options.hpp"
 
@@ -353,8 +353,10 @@ int run_live(LiveArgs args) {
     std::FILE* report = to_stdout ? stderr : stdout;
     fmt::print(
         report,
-        "moa live: {} rows, {} samples over {:.3f} s; final pose x {} m, y {} m, theta {} rad\n",
-        run.rows, run.steps, run.t_end - run.t0, pose.t.x(), pose.t.y(), pose.theta);
+        "moa live: {} rows, {} samples over {:.3f} s; final pose x {:.4f} m, y {:.4f} m, theta "
+        "{:.2f} deg\n",
+        run.rows, run.steps, run.t_end - run.t0, pose.t.x(), pose.t.y(),
+        to_degrees(wrap_angle(pose.theta)));
     fmt::print(report, "{}", run.summary.text());
     if (live.evdev) {
       for (std::size_t i = 0; i < spec.mice.size(); ++i) {

@@ -56,8 +56,11 @@ io::LiveSourceSpec source_spec(const SourceFlags& f, const io::RobotConfig& conf
   spec.serial_options.start_timeout = f.start_timeout;
   spec.replay = f.replay;
   spec.replay_options.speed = f.speed;
-  if (!f.replay.empty() && *spec.replay_options.validate()) {
-    throw io::Error(fmt::format("--speed {}: must be positive and finite", f.speed));
+  if (!f.replay.empty()) {
+    // The option's name is the flag's: "--speed: must be > 0, is -1".
+    if (const auto e = spec.replay_options.validate()) {
+      throw io::Error(fmt::format("--{}", e->message()));
+    }
   }
   return spec;
 }

@@ -87,12 +87,12 @@ OdometryRun run_loop(const RobotConfig& config, const std::string& config_path,
       throw Error(fmt::format(
           "{}: sensor '{}' of {} never reports: {} would take it as still; leave it out of the "
           "selected sensors or use a robust estimator (consensus, sekimori)",
-          source_name, name, config_path, describe(options.estimator)));
+          source_name, name, config_path, to_name(options.estimator)));
     }
     if (options.estimator != EstimatorKind::kWheels) {
       warn(fmt::format(
           "{}: sensor '{}' of {} never reports: the {} estimator saw it as a still sensor",
-          source_name, name, config_path, describe(options.estimator)));
+          source_name, name, config_path, to_name(options.estimator)));
     }
   }
   odometry->finish(run.t_end, sink);

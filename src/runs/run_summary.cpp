@@ -12,6 +12,15 @@ void RunSummary::add(const OdometryStep& step, int sensors) {
   }
 }
 
+void RunSummary::add(const OdometryRow& row, int sensors) {
+  ++epochs;
+  if (row.source) ++epochs_by_source[static_cast<std::size_t>(*row.source)];
+  if (row.listed == 0) return;  // no selection columns
+  for (int i = 0; i < sensors && i < kMaxSensors; ++i) {
+    ++sensor_epochs[static_cast<std::size_t>(row.excluded[static_cast<std::size_t>(i)])];
+  }
+}
+
 bool RunSummary::usable() const {
   const auto held = static_cast<double>(epochs_by_source[static_cast<std::size_t>(Source::kHold)]);
   return epochs > 0 && held <= kMaxHeldFraction * static_cast<double>(epochs);

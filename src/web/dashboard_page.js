@@ -183,8 +183,10 @@
     while (arrivals.length > 0 && arrivals[0] < now - 3000) arrivals.shift();
     const span = now - arrivals[0];
     const rate = span >= 500 ? (1000 * (arrivals.length - 1)) / span : null;
+    // The heading wrapped into (-180, 180] deg: the pose's theta accumulates turns.
+    const heading = (Math.atan2(Math.sin(e.theta), Math.cos(e.theta)) * 180) / Math.PI;
     status.textContent = 't ' + e.t.toFixed(2) + ' s   x ' + e.x.toFixed(3) + ' m   y ' +
-      e.y.toFixed(3) + ' m   theta ' + ((e.theta * 180) / Math.PI).toFixed(1) + ' deg   ' +
+      e.y.toFixed(3) + ' m   theta ' + heading.toFixed(1) + ' deg   ' +
       'twist from ' + e.source + '   ' + (rate === null ? '-' : rate.toFixed(1)) + ' events/s   ' +
       state;
   }

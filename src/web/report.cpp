@@ -87,15 +87,18 @@ class OdometryFile {
       }
     }
     r_.source = row->source ? states_.intern(to_name(*row->source)) : -1;
+    row_ = *row;
     return true;
   }
   const OdometryRecord& record() const { return r_; }
+  const OdometryRow& row() const { return row_; }
 
  private:
   OdometryCsvReader reader_;
   int n_;
   StateTable& states_;
   OdometryRecord r_;
+  OdometryRow row_;
 };
 
 /// The calibrated config's sensors in the nominal config's order; the two
@@ -285,6 +288,7 @@ ReportModel build_report(const ReportInputs& inputs, const ReportOptions& option
       if (m.epochs == 0) m.t_first = r.t;
       m.t_last = r.t;
       ++m.epochs;
+      m.summary.add(odometry.row(), n);
       for (int i = 0; i < n && m.has_selection; ++i) {
         if (r.state[static_cast<std::size_t>(i)] == -1) states.intern("absent");
       }

@@ -254,6 +254,7 @@ std::string summary_table(const ReportModel& m) {
                            percent(m.sources[s], m.epochs));
   }
   if (!sources.empty()) row("twist source", sources);
+  if (m.has_selection) row("run", html(m.summary.verdict()));
   if (m.camera_rows > 0) row("camera fixes", fmt::format("{}", m.camera_rows));
   if (m.errors) {
     const TrajectoryError& e = *m.errors;

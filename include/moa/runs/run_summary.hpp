@@ -12,13 +12,13 @@
 
 #include "moa/core/odometry.hpp"
 #include "moa/core/robust_estimate.hpp"
+#include "moa/formats/odometry_csv.hpp"
 
 namespace moa::io {
 
 /// Values of Source and of Exclusion (kNone, "used", included).
 inline constexpr std::size_t kSourceCount = static_cast<std::size_t>(Source::kHold) + 1;
-inline constexpr std::size_t kExclusionCount =
-    static_cast<std::size_t>(Exclusion::kCommonMode) + 1;
+inline constexpr std::size_t kExclusionCount = static_cast<std::size_t>(Exclusion::kCommonMode) + 1;
 
 struct RunSummary {
   /// Epochs written (rows of odometry.csv).
@@ -47,6 +47,10 @@ struct RunSummary {
 
   /// Counts one step over the `sensors` configured sensors.
   void add(const OdometryStep& step, int sensors);
+  /// Counts one row of odometry.csv as written from such a step (the report
+  /// reads the file): the same counts as add(step) gave, for the columns the
+  /// file has (no `source` column: no epoch by source).
+  void add(const OdometryRow& row, int sensors);
   /// Lines (each ending in '\n'): epochs by source, exclusions by reason
   /// (the reasons that occurred), fixes when any, the verdict.
   std::string text() const;

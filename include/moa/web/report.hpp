@@ -30,6 +30,7 @@
 #include "moa/analysis/evaluate.hpp"
 #include "moa/core/array.hpp"
 #include "moa/formats/config.hpp"
+#include "moa/runs/run_summary.hpp"
 
 namespace moa::io {
 
@@ -98,6 +99,9 @@ struct ReportModel {
   std::optional<RobotConfig> calibrated;  ///< in the config's sensor order
 
   std::size_t epochs = 0;  ///< odometry rows
+  /// The run's summary counted from odometry.csv: the same object and verdict
+  /// that `moa odometry` printed (runs/run_summary.hpp).
+  RunSummary summary;
   double t_first = 0.0, t_last = 0.0;
   double distance = 0.0;  ///< m, path length of the estimate
   Pose2 final_pose;
