@@ -6,8 +6,8 @@
 #include <fstream>
 #include <limits>
 
-#include "moa/formats/diagnostics_csv.hpp"
 #include "moa/formats/config.hpp"
+#include "moa/formats/diagnostics_csv.hpp"
 #include "moa/formats/error.hpp"
 #include "moa/formats/odometry_csv.hpp"
 #include "support/run.hpp"
@@ -98,8 +98,8 @@ TEST(DiagnosticsCli, AgreesWithOdometryAndShowsTheCommonModeTest) {
   const std::string log = (dir / "log").string();
   ASSERT_EQ(test::run_moa("simulate --scenario faults-bump --seed 101 --out " + log).exit_code, 0);
   const fs::path out = dir / "o.csv", diag = dir / "d.csv";
-  const auto r = test::run_moa("odometry --config " + log + "/robot.yaml --log " + log +
-                               " --out " + out.string() + " --diagnostics " + diag.string());
+  const auto r = test::run_moa("odometry --config " + log + "/robot.yaml --log " + log + " --out " +
+                               out.string() + " --diagnostics " + diag.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const RobotConfig config = read_config(log + "/robot.yaml");
   const auto rows = read_diagnostics_csv(diag);
@@ -138,8 +138,8 @@ TEST(DiagnosticsCli, RefusesAnOutputThatIsAnInput) {
   const fs::path dir = test::scratch_dir("diagnostics-careless");
   const std::string log = (dir / "log").string();
   ASSERT_EQ(test::run_moa("simulate --scenario sekimori-a --seed 101 --out " + log).exit_code, 0);
-  const std::string odometry = "odometry --config " + log + "/robot.yaml --log " + log +
-                               " --out " + (dir / "o.csv").string() + " --diagnostics ";
+  const std::string odometry = "odometry --config " + log + "/robot.yaml --log " + log + " --out " +
+                               (dir / "o.csv").string() + " --diagnostics ";
   for (const std::string& target : {log + "/mice.csv", (dir / "o.csv").string()}) {
     const auto r = test::run_moa(odometry + target);
     EXPECT_EQ(r.exit_code, 1) << target;

@@ -170,8 +170,8 @@ TEST(RunLoop, ASilentSensorIsRefusedForLeastSquaresAndAWarningForConsensus) {
   options.estimator = EstimatorKind::kLs;
   options.sensors = 0b0111;
   VectorSource selected_rows(0.0, rows);
-  EXPECT_TRUE(
-      run_loop(config, "robot.yaml", options, selected_rows, "the rows", {}).summary.warnings.empty());
+  EXPECT_TRUE(run_loop(config, "robot.yaml", options, selected_rows, "the rows", {})
+                  .summary.warnings.empty());
 }
 
 TEST(OptionError, NamesTheOptionsAsTheLibraryDoesAndAsTheCallerRendersThem) {

@@ -13,14 +13,13 @@
 
 #include "calibrate_wizard.hpp"
 #include "commands.hpp"
-#include "option_flags.hpp"
-#include "moa/runs/calibration_run.hpp"
 #include "moa/formats/config.hpp"
 #include "moa/formats/error.hpp"
 #include "moa/runs/calibration_run.hpp"
 #include "moa/runs/odometry_run.hpp"
 #include "moa/runs/output_path.hpp"
 #include "odometry_options.hpp"
+#include "option_flags.hpp"
 
 namespace moa::cli {
 namespace {

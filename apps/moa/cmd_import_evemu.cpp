@@ -13,9 +13,9 @@
 
 #include "commands.hpp"
 #include "moa/formats/error.hpp"
-#include "moa/sources/evemu.hpp"
 #include "moa/formats/mice_writer.hpp"
 #include "moa/runs/output_path.hpp"
+#include "moa/sources/evemu.hpp"
 #include "sensor_binding.hpp"
 
 namespace moa::cli {

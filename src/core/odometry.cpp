@@ -54,8 +54,8 @@ OptionCheck OdometryOptions::validate() const {
       .require(!ekf.estimate_scale || fuse_camera, "ekf.estimate_scale",
                "needs fuse_camera (the scales are estimated from camera fixes)")
       .nested("self_calibration", self_calibration.validate())
-      .require(!self_calibration.enabled || (estimator != EstimatorKind::kLs &&
-                                             estimator != EstimatorKind::kSekimori),
+      .require(!self_calibration.enabled ||
+                   (estimator != EstimatorKind::kLs && estimator != EstimatorKind::kSekimori),
                "self_calibration",
                "needs the consensus estimator (ls and sekimori use every sensor, so one whose "
                "calibration runs away could not be left out)");

@@ -34,8 +34,8 @@
 #include <string>
 #include <vector>
 
-#include "moa/sources/live.hpp"
 #include "moa/formats/log.hpp"
+#include "moa/sources/live.hpp"
 
 namespace moa::io {
 
