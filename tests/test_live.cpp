@@ -163,6 +163,35 @@ void play_device(const PseudoTerminal& pty, const SynthLog& log, const fs::path&
   done = true;
 }
 
+/// The recording in `record` replays with `moa odometry` to `odometry`, byte for byte.
+void expect_replays_identically(const Scene& scene, const fs::path& record,
+                                const fs::path& odometry) {
+  const fs::path replay = scene.dir / "replay.csv";
+  const auto r = run_moa("odometry --config " + (record / "robot.yaml").string() + " --log " +
+                         record.string() + " --estimator ls --quiet --out " + replay.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(read_text(replay), read_text(odometry));
+}
+
+/// odometry.csv's last row at the run's end (within t_tolerance s) and at the
+/// truth's last pose within 1 mm and 5e-4 rad (the bounds derived below).
+void expect_ends_at_truth(const Scene& scene, const fs::path& odometry, double t_tolerance) {
+  std::istringstream lines(read_text(odometry));
+  std::string line, last;
+  while (std::getline(lines, line)) last = line;
+  std::istringstream fields(last);
+  std::string t, x, y, theta;
+  std::getline(fields, t, ',');
+  std::getline(fields, x, ',');
+  std::getline(fields, y, ',');
+  std::getline(fields, theta, ',');
+  const auto& truth = scene.log.truth.back();
+  EXPECT_NEAR(std::stod(t), kDuration, t_tolerance);
+  EXPECT_NEAR(std::stod(x), truth.pose.t.x(), 1e-3);
+  EXPECT_NEAR(std::stod(y), truth.pose.t.y(), 1e-3);
+  EXPECT_NEAR(std::stod(theta), truth.pose.theta, 5e-4);
+}
+
 TEST(Live, SerialRunStopsCleanlyOnCtrlCAndItsRecordingReplaysToTheSameOdometry) {
   Scene scene;
   PseudoTerminal pty;
@@ -188,11 +217,7 @@ TEST(Live, SerialRunStopsCleanlyOnCtrlCAndItsRecordingReplaysToTheSameOdometry) 
   EXPECT_NE(moa.out().find("recorded to " + (record / "mice.csv").string()), std::string::npos);
 
   // Replay: byte-identical odometry.
-  const fs::path replay = scene.dir / "replay.csv";
-  const auto r = run_moa("odometry --config " + (record / "robot.yaml").string() + " --log " +
-                         record.string() + " --estimator ls --quiet --out " + replay.string());
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(read_text(replay), read_text(odometry));
+  expect_replays_identically(scene, record, odometry);
 
   // And the odometry is right. The counts are noise-free and quantised with
   // the fraction carried: a frame's error is r_k - r_(k-1), |r| <= 0.5
@@ -201,20 +226,7 @@ TEST(Live, SerialRunStopsCleanlyOnCtrlCAndItsRecordingReplaysToTheSameOdometry) 
   // baseline. Position sums them rotated by the heading: by summation by
   // parts the bound is |B r| (2 + total turn, <= 3 rad), under 0.2 mm. The
   // tolerances below leave a factor of five over both.
-  std::istringstream lines(read_text(odometry));
-  std::string line, last;
-  while (std::getline(lines, line)) last = line;
-  std::istringstream fields(last);
-  std::string t, x, y, theta;
-  std::getline(fields, t, ',');
-  std::getline(fields, x, ',');
-  std::getline(fields, y, ',');
-  std::getline(fields, theta, ',');
-  const auto& truth = scene.log.truth.back();
-  EXPECT_NEAR(std::stod(t), kDuration, 1e-9);
-  EXPECT_NEAR(std::stod(x), truth.pose.t.x(), 1e-3);
-  EXPECT_NEAR(std::stod(y), truth.pose.t.y(), 1e-3);
-  EXPECT_NEAR(std::stod(theta), truth.pose.theta, 5e-4);
+  expect_ends_at_truth(scene, odometry, 1e-9);
 }
 
 // A device that misbehaves as real ones do (issue #28): a DATA frame sent
@@ -282,28 +294,11 @@ TEST(Live, MisbehavingDeviceIsRecordedSoThatItReplays) {
   EXPECT_NE(moa.err().find("device clock steps"), std::string::npos);
   EXPECT_EQ(data_lines(record / "mice.csv"), scene.log.rows.size());
 
-  const fs::path replay = scene.dir / "replay.csv";
-  const auto r = run_moa("odometry --config " + (record / "robot.yaml").string() + " --log " +
-                         record.string() + " --estimator ls --quiet --out " + replay.string());
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(read_text(replay), read_text(odometry));
+  expect_replays_identically(scene, record, odometry);
 
   // Every kept frame one window after the last: the run as the device
   // meant it, so the pose follows the truth as in the orderly run above.
-  std::istringstream lines(read_text(odometry));
-  std::string line, last;
-  while (std::getline(lines, line)) last = line;
-  std::istringstream fields(last);
-  std::string t, x, y, theta;
-  std::getline(fields, t, ',');
-  std::getline(fields, x, ',');
-  std::getline(fields, y, ',');
-  std::getline(fields, theta, ',');
-  const auto& truth = scene.log.truth.back();
-  EXPECT_NEAR(std::stod(t), kDuration, 1e-6);
-  EXPECT_NEAR(std::stod(x), truth.pose.t.x(), 1e-3);
-  EXPECT_NEAR(std::stod(y), truth.pose.t.y(), 1e-3);
-  EXPECT_NEAR(std::stod(theta), truth.pose.theta, 5e-4);
+  expect_ends_at_truth(scene, odometry, 1e-6);
 }
 
 TEST(Live, DeviceHangUpEndsTheRunWithEverythingWritten) {
