@@ -242,7 +242,7 @@ TEST(ConfigErrors, UnknownSensorKeyIsRejected) {
 
 TEST(ConfigErrors, UnknownTopLevelKeyIsRejected) {
   EXPECT_EQ(parse_error(two_sensors() + "sensorz: []\n"),
-            "robot.yaml:11: unknown key 'sensorz' (known here: version, sensors, limits)");
+            "robot.yaml:11: unknown key 'sensorz' (known here: version, sensors, limits, imu)");
 }
 
 TEST(ConfigErrors, DuplicateKeyIsRejected) {
@@ -533,6 +533,43 @@ TEST(ConfigFormat, InvalidConfigIsNotWritten) {
   const TempDir dir;
   EXPECT_THROW(write_config(c, dir.path() / "robot.yaml"), Error);
   EXPECT_TRUE(std::filesystem::is_empty(dir.path()));
+}
+
+}  // namespace
+}  // namespace moa::io
+
+namespace moa::io {
+namespace {
+
+TEST(ConfigImu, ReadsWritesAndRefusesTheGyroBlock) {
+  const std::string base =
+      "version: 1\nsensors:\n  - {name: m1, position: [0.1, 0], yaw: 0, cpi: 800}\n"
+      "  - {name: m2, position: [-0.1, 0], yaw: 0, cpi: 800}\n";
+  EXPECT_FALSE(parse_config(base, "robot.yaml").imu);
+  const RobotConfig c =
+      parse_config(base + "imu:\n  scale: 1.02\n  bias: -0.01\n  latency: 0.005\n", "robot.yaml");
+  ASSERT_TRUE(c.imu);
+  EXPECT_EQ(c.imu->scale, 1.02);
+  EXPECT_EQ(c.imu->bias, -0.01);
+  EXPECT_EQ(c.imu->latency, 0.005);
+  EXPECT_EQ(c.imu->noise_density, GyroOptions{}.noise_density);  // a key left out: the default
+  const RobotConfig back = parse_config(format_config(c), "again.yaml");
+  ASSERT_TRUE(back.imu);
+  EXPECT_EQ(back.imu->scale, 1.02);
+  EXPECT_EQ(back.imu->bias, -0.01);
+  EXPECT_EQ(back.imu->max_rate, c.imu->max_rate);
+  const auto error = [&](const std::string& text) {
+    try {
+      (void)parse_config(base + text, "robot.yaml");
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(error("imu:\n  scale: 0\n").find("scale"), std::string::npos);
+  EXPECT_NE(error("imu:\n  bias: .nan\n").find("bias"), std::string::npos);
+  EXPECT_NE(error("imu:\n  latency: 5\n").find("latency"), std::string::npos);
+  EXPECT_NE(error("imu:\n  gain: 1\n").find("unknown key 'imu.gain'"), std::string::npos);
 }
 
 }  // namespace

@@ -174,7 +174,7 @@ TEST(SimCli, UnknownScenarioIsAnErrorAndWritesNothing) {
   EXPECT_THAT(r.err, HasSubstr("scenario 'sekimori-c': not a built-in scenario (calibration, "
                                "cruise, differential, faults-bump, faults-cruise, faults-dirty, "
                                "faults-drift, faults-floor, faults-liftoff, faults-spikes, "
-                               "faults-stuck, faults-zero, guided, kimlee, sekimori-a, sekimori-b, "
+                               "faults-stuck, faults-zero, guided, gyro-bump, kimlee, sekimori-a, sekimori-b, "
                                "selfcal-ramp, selfcal-step) and no "
                                "such file"));
   EXPECT_FALSE(fs::exists(dir));

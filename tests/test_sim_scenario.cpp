@@ -143,7 +143,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"unknown top key", with("colour: red\n"),
                 "s.yaml:6: unknown key 'colour' (known here: version, name, description, "
                 "duration, truth_rate, sensor_model, sensors, true_sensors, drive, motion, "
-                "faults, camera)"},
+                "faults, camera, imu)"},
         BadCase{"unknown nested key",
                 "version: 1\nname: t\nsensor_model: {preset: HDNS-2051, fps: 100}\n",
                 "s.yaml:3: unknown key 'sensor_model.fps' (known here: preset, cpi, frame_rate, "
@@ -336,7 +336,7 @@ TEST(SimScenario, UnknownNameListsTheBuiltins) {
         "scenario 'sekimori-c': not a built-in scenario (calibration, cruise, differential, "
         "faults-bump, faults-cruise, faults-dirty, faults-drift, faults-floor, faults-liftoff, "
         "faults-spikes, "
-        "faults-stuck, faults-zero, guided, kimlee, sekimori-a, sekimori-b, selfcal-ramp, "
+        "faults-stuck, faults-zero, guided, gyro-bump, kimlee, sekimori-a, sekimori-b, selfcal-ramp, "
         "selfcal-step) and no such file");
   }
 }

@@ -1,6 +1,7 @@
 #include "moa/core/consensus.hpp"
 
 #include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
 
 #include "moa/core/chi2.hpp"
@@ -35,7 +36,7 @@ ConsensusEstimator::ConsensusEstimator(const SensorArray& array, ConsensusOption
       noise_(array, options.noise),
       prior_(options.limits),
       health_(array.size(), options.health, options.alpha),
-      gyro_(options.gyro) {
+      gyro_(options.gyro, array.rms_radius()) {
   for (int dof = 1; dof < 2 * kMaxSensors; ++dof) {
     threshold_[static_cast<std::size_t>(dof)] =
         static_cast<real>(chi2_quantile(1.0 - options_.alpha, dof));
@@ -141,12 +142,14 @@ void ConsensusEstimator::test_references(const Candidate& best, const References
 bool ConsensusEstimator::common_mode(const Candidate& best, const References& refs,
                                      const SourceTests& tests, double t) const {
   if (!options_.common_mode || !options_.motion_prior) return false;
-  // A minority was judged against each reference already (consider()).
-  if (2 * count_sensors(best.mask) <= n_) return false;
   if (!last_mice_t_ || t - *last_mice_t_ > static_cast<double>(options_.max_bridge)) return false;
-  // The gyro rejects the rotation, or every translation reference there is
-  // rejects the twist (a NaN ratio is a reference not there).
+  // The gyro rejects the rotation (of any subset: consider() judged a
+  // minority against the translation references only).
   if (tests.gyro > 1.0) return true;
+  // A minority was judged against each translation reference already.
+  if (2 * count_sensors(best.mask) <= n_) return false;
+  // Every translation reference there is rejects the twist (a NaN ratio is
+  // a reference not there).
   return refs.size > 0 && !(tests.wheels <= 1.0) && !(tests.prior <= 1.0);
 }
 
@@ -164,6 +167,33 @@ void ConsensusEstimator::fuse_gyro(const GyroRate& rate, bool gated, RobustEstim
   }
   out.estimate.twist = Twist2::from_vector(x);
   out.estimate.covariance = p;
+}
+
+void ConsensusEstimator::teach_gyro(real g, const ArraySample& sample, const RobustEstimate& out) {
+  const SensorMask used = out.estimate.used;
+  for (int i = 0; i < n_; ++i) {
+    // Low SQUAL or an overflow: counts that may be lost (near the rated speed
+    // the variance is grown, the counts are still whole).
+    if (contains(used, i) &&
+        (out.noise_flags[static_cast<std::size_t>(i)] & (kNoiseLowSqual | kNoiseOverflow)) != 0) {
+      (void)gyro_.close(gyro_threshold_);  // not a clean window
+      return;
+    }
+  }
+  if (used != gyro_mask_) {
+    (void)gyro_.close(gyro_threshold_);
+    gyro_mask_ = used;
+    Mat3 q = Mat3::Zero();
+    for (int i = 0; i < n_; ++i) {
+      if (contains(used, i)) q += noise_.quantisation_information(i);
+    }
+    gyro_q_ = q.determinant() > 0 ? q.inverse()(2, 2) : real(0);
+  }
+  // The epoch's rotation variance less its quantisation (which the window
+  // counts once): the sensors' noise and the resolution's variation.
+  const real n =
+      std::max(real(0), out.estimate.covariance(2, 2) - gyro_q_ / (sample.dt * sample.dt));
+  (void)gyro_.teach(g, sample.dt, out.estimate.twist.vector(), gyro_q_, n, gyro_threshold_);
 }
 
 void ConsensusEstimator::test_sensors(const Twist2& x, SourceTests& tests) const {
@@ -234,9 +264,13 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
     }
     if (rate) {
       // The array's own rotation teaches the gyro, then the gyro's joins it.
-      gyro_.calibrate(*gyro, sample.dt, out.estimate.twist.omega, out.estimate.covariance(2, 2),
-                      gyro_threshold_);
-      if (const auto taught = gyro_.rate(*gyro, sample.dt)) fuse_gyro(*taught, true, out);
+      teach_gyro(*gyro, sample, out);
+      if (const auto taught = gyro_.rate(*gyro, sample.dt)) {
+        Vec3 x = out.estimate.twist.vector();
+        gyro_.decouple(x, out.estimate.covariance);
+        out.estimate.twist = Twist2::from_vector(x);
+        fuse_gyro(*taught, true, out);
+      }
     }
     fallback_.good(out.estimate.twist, out.estimate.covariance, sample.t);
     prior_.trust(out.estimate.twist, out.estimate.covariance, sample.t);
@@ -252,6 +286,7 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
     }
   }
   fallback_.apply(out, wheels, options_.wheels, options_.hold, sample.t);
+  if (gyro) (void)gyro_.close(gyro_threshold_);
   if (rate) fuse_gyro(*rate, false, out);
   if (out.source == Source::kWheels) {
     prior_.trust(out.estimate.twist, out.estimate.covariance, sample.t);

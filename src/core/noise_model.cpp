@@ -29,6 +29,11 @@ NoiseModel::NoiseModel(const SensorArray& array, NoiseModelOptions options)
   }
 }
 
+Mat3 NoiseModel::quantisation_information(int i) const {
+  const auto s = static_cast<std::size_t>(i);
+  return a_[s].transpose() * quant_[s].inverse() * a_[s];
+}
+
 void NoiseModel::measure(const ArraySample& sample, const Twist2& predicted, PointMeasurements& out,
                          std::array<std::uint8_t, kMaxSensors>& flags) const {
   out.size = n_;

@@ -188,7 +188,8 @@ std::optional<OdometryError> Odometry::push_gyro(double t, double gz, StepSink s
   const double at = t - options_.consensus.gyro.latency;  // the true end of its interval
   if (!std::isfinite(at) || (gyro_seen_ && at < last_gyro_t_)) return OdometryError::kImuBackwards;
   if (gyro_.full()) {
-    if (!ready_.empty()) (void)gyro_.average(ready_.front().t - ready_.front().dt, ready_.front().t);
+    if (!ready_.empty())
+      (void)gyro_.average(ready_.front().t - ready_.front().dt, ready_.front().t);
     if (gyro_.full()) return OdometryError::kImuFull;
   }
   gyro_.push(at, IntervalAverager<1>::Value(gz));
@@ -409,7 +410,8 @@ void Odometry::process(const ArraySample& sample, StepSink sink) {
                                            : std::nullopt;
   std::optional<real> gyro;
   if (options_.use_imu && gyro_seen_) {
-    if (const auto g = gyro_.average(sample.t - sample.dt, sample.t)) gyro = static_cast<real>((*g)(0));
+    if (const auto g = gyro_.average(sample.t - sample.dt, sample.t))
+      gyro = static_cast<real>((*g)(0));
   }
   OdometryStep step;
   step.sample = &sample;

@@ -179,7 +179,7 @@ RobotLimits parse_limits(const YamlSource& source, const YAML::Node& node) {
 GyroOptions parse_imu(const YamlSource& source, const YAML::Node& node) {
   const YamlFields f(source, node, "imu",
                      {"scale", "bias", "noise_density", "bias_random_walk", "bias_sigma",
-                      "scale_sigma", "max_rate", "latency"});
+                      "scale_sigma", "mount_yaw_sigma", "max_rate", "latency"});
   GyroOptions imu;
   imu.scale = static_cast<real>(f.positive("scale", imu.scale));
   imu.bias = static_cast<real>(f.number("bias", imu.bias));
@@ -188,6 +188,7 @@ GyroOptions parse_imu(const YamlSource& source, const YAML::Node& node) {
       static_cast<real>(f.non_negative("bias_random_walk", imu.bias_random_walk));
   imu.bias_sigma = static_cast<real>(f.positive("bias_sigma", imu.bias_sigma));
   imu.scale_sigma = static_cast<real>(f.positive("scale_sigma", imu.scale_sigma));
+  imu.mount_yaw_sigma = static_cast<real>(f.positive("mount_yaw_sigma", imu.mount_yaw_sigma));
   imu.max_rate = static_cast<real>(f.positive("max_rate", imu.max_rate));
   imu.latency = f.bounded("latency", -1.0, 1.0, imu.latency);
   if (auto e = imu.validate()) {
@@ -306,9 +307,10 @@ std::string format_config(const RobotConfig& config) {
     }
     out += fmt::format(
         "imu:\n  scale: {}\n  bias: {}\n  noise_density: {}\n  bias_random_walk: {}\n"
-        "  bias_sigma: {}\n  scale_sigma: {}\n  max_rate: {}\n  latency: {}\n",
+        "  bias_sigma: {}\n  scale_sigma: {}\n  mount_yaw_sigma: {}\n  max_rate: {}\n"
+        "  latency: {}\n",
         g.scale, num(g.bias), g.noise_density, g.bias_random_walk, g.bias_sigma, g.scale_sigma,
-        g.max_rate, num(g.latency));
+        g.mount_yaw_sigma, g.max_rate, num(g.latency));
   }
   return out;
 }

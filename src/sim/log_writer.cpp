@@ -73,6 +73,7 @@ class FileSink : public LogSink {
     if (s.drive.type != DriveType::kNone) {
       wheels_.emplace(dir / "wheels.csv", comment_, "t,vx,vy,omega");
     }
+    if (s.imu.enabled) imu_.emplace(dir / "imu.csv", comment_, "t,gz");
     if (s.camera.enabled) {
       camera_.emplace(dir / "camera.csv",
                       comment_ + "; t is the capture time, t_arrival when the fix arrived",
@@ -92,6 +93,7 @@ class FileSink : public LogSink {
     wheels_->line("{},{:.9g},{:.9g},{:.9g}", r.t, tidy(r.twist.v.x()), tidy(r.twist.v.y()),
                   tidy(r.twist.omega));
   }
+  void imu(const ImuRecord& r) override { imu_->line("{},{:.9g}", r.t, tidy(r.gz)); }
   void camera(const CameraFix& f) override {
     camera_->line("{},{:.9g},{:.9g},{},{},{:.9g},{}", f.t, tidy(f.position.x()),
                   tidy(f.position.y()), f.sigma, f.sigma, f.t_arrival, f.outlier ? 1 : 0);
@@ -106,6 +108,7 @@ class FileSink : public LogSink {
     faults_.commit();
     truth_.commit();
     if (wheels_) wheels_->commit();
+    if (imu_) imu_->commit();
     if (camera_) camera_->commit();
     LogSummary s;
     s.mice_rows = mice_.rows();
@@ -123,15 +126,16 @@ class FileSink : public LogSink {
   CsvOut faults_;
   CsvOut truth_;
   std::optional<CsvOut> wheels_;
+  std::optional<CsvOut> imu_;
   std::optional<CsvOut> camera_;
   std::int64_t faulty_rows_ = 0;
 };
 
 // The files a run writes; a directory holding only these, with a mice.csv
 // that says it was simulated, is a previous run that may be replaced.
-constexpr std::array<std::string_view, 7> kLogFiles{"mice.csv",       "wheels.csv", "camera.csv",
-                                                    "truth.csv",      "faults.csv", "robot.yaml",
-                                                    "robot.true.yaml"};
+constexpr std::array<std::string_view, 8> kLogFiles{"mice.csv",   "wheels.csv",     "imu.csv",
+                                                    "camera.csv", "truth.csv",      "faults.csv",
+                                                    "robot.yaml", "robot.true.yaml"};
 
 bool is_previous_run(const std::filesystem::path& dir, std::string& foreign) {
   std::error_code ec;

@@ -551,6 +551,34 @@ CameraModel parse_camera(const Source& source, const YAML::Node& node) {
   return c;
 }
 
+// `imu: {rate, scale, bias, bias_walk, noise_density, max_rate, latency}`:
+// the gyro as built. robot.yaml gets what its user knows (the noise, the
+// full scale and the latency, from the part's datasheet and the firmware;
+// scale 1 and bias 0), robot.true.yaml the true scale and bias.
+GyroSpec parse_imu(const Source& source, const YAML::Node& node) {
+  const Fields f(source, node, "imu",
+                 {"rate", "scale", "bias", "bias_walk", "noise_density", "max_rate", "latency"});
+  GyroSpec g;
+  g.enabled = true;
+  g.rate = f.bounded("rate", kMinRate, kMaxFrameRate, g.rate);
+  g.scale = f.bounded("scale", 0.5, 2.0, g.scale);
+  g.bias = f.bounded("bias", -1.0, 1.0, g.bias);
+  g.bias_walk = f.non_negative("bias_walk", g.bias_walk);
+  g.noise_density = f.positive("noise_density", g.noise_density);
+  g.max_rate = f.positive("max_rate", g.max_rate);
+  g.latency = f.bounded("latency", 0.0, 1.0, g.latency);
+  return g;
+}
+
+GyroOptions believed_gyro(const GyroSpec& g) {
+  GyroOptions o;
+  o.noise_density = static_cast<real>(g.noise_density);
+  o.max_rate = static_cast<real>(g.max_rate);
+  o.latency = g.latency;
+  if (g.bias_walk > 0.0) o.bias_random_walk = static_cast<real>(g.bias_walk);
+  return o;
+}
+
 }  // namespace
 
 std::int64_t Scenario::frame_count() const {
@@ -586,7 +614,7 @@ Scenario parse_scenario(std::string_view yaml, std::string_view source_name) {
   }
   const Fields top(source, root, "",
                    {"version", "name", "description", "duration", "truth_rate", "sensor_model",
-                    "sensors", "true_sensors", "drive", "motion", "faults", "camera"});
+                    "sensors", "true_sensors", "drive", "motion", "faults", "camera", "imu"});
   top.required("version");
 
   Scenario s;
@@ -604,6 +632,13 @@ Scenario parse_scenario(std::string_view yaml, std::string_view source_name) {
   if (const auto t = top.get("true_sensors")) s.truth = parse_true_sensors(source, *t, s.nominal);
   if (const auto d = top.get("drive")) s.drive = parse_drive(source, *d, s.sensor_model);
   if (const auto c = top.get("camera")) s.camera = parse_camera(source, *c);
+  if (const auto g = top.get("imu")) {
+    s.imu = parse_imu(source, *g);
+    s.nominal.imu = believed_gyro(s.imu);
+    s.truth.imu = s.nominal.imu;
+    s.truth.imu->scale = static_cast<real>(s.imu.scale);
+    s.truth.imu->bias = static_cast<real>(s.imu.bias);
+  }
   s.motion = parse_motion(source, top.required("motion"), s.drive.type == DriveType::kDifferential);
   s.truth_rate = top.bounded("truth_rate", kMinRate, kMaxFrameRate, 100.0);
   const double motion_time = sim::duration(s.motion);

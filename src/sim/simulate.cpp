@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "moa/sim/gyro.hpp"
 #include "moa/sim/wheels.hpp"
 
 namespace moa::sim {
@@ -13,6 +14,7 @@ class MemorySink : public LogSink {
   explicit MemorySink(SimLog& log) : log_(log) {}
   void mice(const MiceRecord& r) override { log_.mice.push_back(r); }
   void wheels(const WheelRecord& r) override { log_.wheels.push_back(r); }
+  void imu(const ImuRecord& r) override { log_.imu.push_back(r); }
   void camera(const CameraFix& f) override { log_.camera.push_back(f); }
   void truth(const TruthRecord& r) override { log_.truth.push_back(r); }
 
@@ -36,6 +38,7 @@ void simulate(const Scenario& scenario, std::uint64_t seed, LogSink& sink,
   const auto truth_every = std::max<std::int64_t>(
       1, static_cast<std::int64_t>(std::floor(fps / scenario.truth_rate + 1e-9)));
   const std::int64_t wheel_every = frames_per(fps, scenario.drive.rate);
+  const std::int64_t imu_every = frames_per(fps, scenario.imu.rate);
   const std::int64_t camera_every = frames_per(fps, scenario.camera.rate);
   const auto time = [fps](std::int64_t frame) { return static_cast<double>(frame) / fps; };
 
@@ -49,6 +52,8 @@ void simulate(const Scenario& scenario, std::uint64_t seed, LogSink& sink,
   const bool has_wheels = scenario.drive.type != DriveType::kNone;
   WheelOdometry wheels(scenario.drive, seed);
   Camera camera(scenario.camera, seed);
+  SimGyro gyro(scenario.imu, seed);
+  std::int64_t last_imu_frame = 0;
   MotionStepper stepper(scenario.motion);
 
   for (int i = 0; i < n; ++i)
@@ -73,6 +78,13 @@ void simulate(const Scenario& scenario, std::uint64_t seed, LogSink& sink,
       if ((k + 1) % wheel_every == 0 || k + 1 == frames) {
         sink.wheels({t1, wheels.take_row(t1 - time(last_wheel_frame))});
         last_wheel_frame = k + 1;
+      }
+    }
+    if (scenario.imu.enabled) {
+      gyro.frame(step.twist.omega, h);
+      if ((k + 1) % imu_every == 0 || k + 1 == frames) {
+        sink.imu({t1 + scenario.imu.latency, gyro.take_row(t1 - time(last_imu_frame))});
+        last_imu_frame = k + 1;
       }
     }
     if ((k + 1) % truth_every == 0 || k + 1 == frames) {

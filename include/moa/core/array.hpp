@@ -4,6 +4,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <initializer_list>
 #include <span>
@@ -70,6 +71,12 @@ class SensorArray {
   int size() const { return n_; }
   const SensorMount& operator[](int i) const { return mounts_[static_cast<std::size_t>(i)]; }
   SensorMount& operator[](int i) { return mounts_[static_cast<std::size_t>(i)]; }
+  /// The sensors' rms distance from the robot's centre (m), sqrt(mean |p_i|^2).
+  real rms_radius() const {
+    real sum = 0;
+    for (const auto& m : mounts()) sum += m.position.squaredNorm();
+    return n_ > 0 ? std::sqrt(sum / static_cast<real>(n_)) : real(0);
+  }
   std::span<const SensorMount> mounts() const {
     return std::span<const SensorMount>(mounts_).first(
         static_cast<std::size_t>(std::min(n_, kMaxSensors)));

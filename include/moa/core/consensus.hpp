@@ -137,6 +137,8 @@ class ConsensusEstimator {
                    double t) const;
   /// The gyro's rate into out's twist: gated (an accepted array) or not (a bridge).
   void fuse_gyro(const GyroRate& rate, bool gated, RobustEstimate& out) const;
+  /// An accepted epoch into the gyro's calibration window (gyro.hpp).
+  void teach_gyro(real g, const ArraySample& sample, const RobustEstimate& out);
   /// Each sensor's residual against the epoch's twist x: tests.sensor.
   void test_sensors(const Twist2& x, SourceTests& tests) const;
 
@@ -153,6 +155,10 @@ class ConsensusEstimator {
   MotionPrior prior_;
   HealthMonitor health_;
   GyroModel gyro_;
+  /// The sensors of the gyro's calibration window and the angle variance of
+  /// their counts' quantisation (rad^2, once per window).
+  SensorMask gyro_mask_ = 0;
+  real gyro_q_ = 0;
   /// s, the last epoch whose twist came from the mice (none yet: nullopt)
   std::optional<double> last_mice_t_;
 };

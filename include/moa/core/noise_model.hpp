@@ -49,6 +49,10 @@ class NoiseModel {
   void measure(const ArraySample& sample, const Twist2& predicted, PointMeasurements& out,
                std::array<std::uint8_t, kMaxSensors>& flags) const;
   const NoiseModelOptions& options() const { return options_; }
+  /// Sensor i's information about the twist, A_i^T W^-1 A_i, from the
+  /// quantisation of its counts alone: W = C_i C_i^T / 6 (m^2), the two end
+  /// residuals of a sum of counts, whatever its length.
+  Mat3 quantisation_information(int i) const;
 
  private:
   int n_;

@@ -25,5 +25,6 @@ using Vec3 = Mat<3, 1>;
 using Vec4 = Mat<4, 1>;
 using Mat2 = Mat<2, 2>;
 using Mat3 = Mat<3, 3>;
+using Mat4 = Mat<4, 4>;
 
 }  // namespace moa

@@ -20,6 +20,7 @@
 //     bias_random_walk: 0.0001   # rad/s/sqrt(s)
 //     bias_sigma: 0.05           # rad/s, sd of the bias left
 //     scale_sigma: 0.03          # sd of the scale error left
+//     mount_yaw_sigma: 0.0035    # rad, sd of a sensor's yaw mount error
 //     max_rate: 8.7              # rad/s, full scale
 //     latency: 0.0               # s, a row's t minus the true end of its interval
 //

@@ -31,6 +31,7 @@ enum class Stream : std::uint64_t {
   kSensorSqual = 3,
   kWheels = 4,
   kCamera = 5,
+  kGyro = 6,
 };
 inline constexpr std::uint64_t kStreamStride = 16;
 

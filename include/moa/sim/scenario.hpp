@@ -14,6 +14,7 @@
 
 #include "moa/formats/config.hpp"
 #include "moa/sim/camera.hpp"
+#include "moa/sim/gyro.hpp"
 #include "moa/sim/optical.hpp"
 #include "moa/sim/trajectory.hpp"
 #include "moa/sim/wheels.hpp"
@@ -37,6 +38,7 @@ struct Scenario {
   double truth_rate = 100.0;  ///< truth.csv rows per second, at least
   DriveModel drive;
   CameraModel camera;
+  GyroSpec imu;
   std::vector<SensorFaults> faults;  ///< one per sensor, config order
 
   /// Frames simulated: the duration in whole rows of K frames, rounded up.

@@ -7,8 +7,8 @@
 // rounded value (0.01, not 0.010000000000000002). Each sensor reports a zero
 // row at t = 0 and then one row every K frames; truth.csv has a row at t = 0,
 // one every max(1, floor(frame_rate / truth_rate)) frames and one at the end;
-// wheels.csv one every round(frame_rate / rate) frames (the last interval may
-// be shorter); the camera one fix every round(frame_rate / rate) frames from
+// wheels.csv and imu.csv one every round(frame_rate / rate) frames (the last
+// interval may be shorter); the camera one fix every round(frame_rate / rate) frames from
 // t = 0.
 #pragma once
 
@@ -34,6 +34,10 @@ struct WheelRecord {
   double t = 0.0;
   Twist2 twist;
 };
+struct ImuRecord {
+  double t = 0.0;   ///< s, stamped (the interval's end plus the gyro's latency)
+  double gz = 0.0;  ///< rad/s
+};
 struct TruthRecord {
   double t = 0.0;
   Pose2 pose;
@@ -45,6 +49,7 @@ class LogSink {
   virtual ~LogSink() = default;
   virtual void mice(const MiceRecord& record) = 0;
   virtual void wheels(const WheelRecord& record) = 0;
+  virtual void imu(const ImuRecord& record) = 0;
   virtual void camera(const CameraFix& fix) = 0;
   virtual void truth(const TruthRecord& record) = 0;
 };
@@ -53,6 +58,7 @@ class LogSink {
 struct SimLog {
   std::vector<MiceRecord> mice;  ///< time order, sensors in config order within a time
   std::vector<WheelRecord> wheels;
+  std::vector<ImuRecord> imu;
   std::vector<CameraFix> camera;
   std::vector<TruthRecord> truth;
 };

@@ -1,0 +1,255 @@
+// The gyro as a source of the consensus estimator (core/gyro.hpp,
+// core/kalman.hpp): the shared Kalman update against the information form,
+// the gyro's calibration states against their closed forms, the bridge of a
+// common-mode dropout, and imu.csv.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <random>
+
+#include "moa/core/chi2.hpp"
+#include "moa/core/consensus.hpp"
+#include "moa/core/gyro.hpp"
+#include "moa/core/kalman.hpp"
+#include "moa/formats/error.hpp"
+#include "moa/formats/log.hpp"
+
+namespace moa {
+namespace {
+
+constexpr double kDt = 0.01;
+
+TEST(Kalman, JosephUpdateEqualsTheInformationForm) {
+  // Posterior by the information form: P+^-1 = P^-1 + H^T R^-1 H,
+  // x+ = P+ (P^-1 x + H^T R^-1 z): an independent computation.
+  std::mt19937 rng(7);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    Mat<3, 3> a;
+    for (int i = 0; i < 9; ++i) a(i / 3, i % 3) = n(rng);
+    const Mat3 p = a * a.transpose() + Mat3::Identity() * 0.1;
+    const Vec3 x(n(rng), n(rng), n(rng));
+    Mat<2, 3> h;
+    for (int i = 0; i < 6; ++i) h(i / 3, i % 3) = n(rng);
+    const Mat2 r = Vec2(0.3, 0.7).asDiagonal();
+    const Vec2 z(n(rng), n(rng));
+    Vec3 xj = x;
+    Mat3 pj = p;
+    joseph_update<3, 2>(xj, pj, Vec2(z - h * x), h, r);
+    const Mat3 info = p.inverse() + h.transpose() * r.inverse() * h;
+    const Mat3 pi = info.inverse();
+    const Vec3 xi = pi * (p.inverse() * x + h.transpose() * r.inverse() * z);
+    EXPECT_LT((pj - pi).norm(), 1e-9 * pi.norm()) << trial;
+    EXPECT_LT((xj - xi).norm(), 1e-9 * (1.0 + xi.norm())) << trial;
+  }
+}
+
+TEST(Kalman, GateAtTheChiSquareQuantile) {
+  // A 1-D innovation of exactly sqrt(q) standard deviations sits on the gate.
+  const real gate = static_cast<real>(chi2_quantile(1.0 - 1e-3, 1));
+  Mat<1, 1> x(0.0), p(1.0);
+  const Mat<1, 1> h(1.0), r(1.0);
+  const real sd = std::sqrt(2.0);  // S = P + R
+  const AidStatus in = gated_update<1, 1>(x, p, Mat<1, 1>(0.99 * sd * std::sqrt(gate)), h, r, gate);
+  EXPECT_TRUE(in.fused);
+  EXPECT_NEAR(in.test_ratio, 0.99 * 0.99, 1e-12);
+  Mat<1, 1> x2(0.0), p2(1.0);
+  const AidStatus out =
+      gated_update<1, 1>(x2, p2, Mat<1, 1>(1.01 * sd * std::sqrt(gate)), h, r, gate);
+  EXPECT_FALSE(out.fused);
+  EXPECT_EQ(x2(0), 0.0);
+  EXPECT_EQ(p2(0), 1.0);
+}
+
+TEST(Gyro, AtRestTheBiasIsTheMeanReadingWithItsClosedFormVariance) {
+  // At rest with an exact array (zero twist, zero covariance) and no bias
+  // walk, each reading is the bias plus noise of variance d^2/dt: the
+  // posterior of b is the conjugate normal's, 1/P = 1/P0 + N dt/d^2 (a
+  // window's angle is a sufficient statistic of its readings).
+  GyroOptions o;
+  o.bias_random_walk = 0.0;
+  GyroModel gyro(o, 0.1);
+  const real gate = static_cast<real>(chi2_quantile(1.0 - 1e-3, 1));
+  std::mt19937 rng(11);
+  const double bias = 0.013, sd = o.noise_density / std::sqrt(kDt);
+  std::normal_distribution<double> noise(0.0, sd);
+  const int n = 2000;
+  double sum = 0.0;
+  for (int k = 0; k < n; ++k) {
+    const double g = bias + noise(rng);
+    sum += g;
+    gyro.predict(kDt);
+    gyro.teach(g, kDt, Vec3::Zero(), 0.0, 0.0, gate);
+  }
+  ASSERT_FALSE(gyro.close(gate));  // 2000 epochs: whole windows of 0.5 s
+  const double p0 = o.bias_sigma * o.bias_sigma;
+  const double expected_var = 1.0 / (1.0 / p0 + n / (sd * sd));
+  EXPECT_NEAR(gyro.covariance()(0, 0), expected_var, 1e-6 * expected_var);
+  // The posterior mean: the prior (0) and the sample mean, weighed.
+  const double expected_mean = expected_var * (sum / (sd * sd));
+  EXPECT_NEAR(gyro.bias(), expected_mean, 1e-6);
+  EXPECT_NEAR(gyro.bias(), bias, 4.0 * std::sqrt(expected_var));
+}
+
+TEST(Gyro, TurningInPlaceTeachesTheScale) {
+  // The array turning in place at known rates (exact, v = 0): g = k w + c.
+  GyroOptions o;
+  o.bias_random_walk = 0.0;
+  GyroModel gyro(o, 0.1);
+  const real gate = static_cast<real>(chi2_quantile(1.0 - 1e-3, 1));
+  std::mt19937 rng(12);
+  std::normal_distribution<double> noise(0.0, o.noise_density / std::sqrt(kDt));
+  const double k = 1.021, c = -0.02;
+  for (int i = 0; i < 3000; ++i) {
+    const double w = 2.0 * std::sin(0.01 * i);
+    gyro.predict(kDt);
+    gyro.teach(k * w + c + noise(rng), kDt, Vec3(0, 0, w), 0.0, 0.0, gate);
+  }
+  EXPECT_NEAR(gyro.scale(), k, 4.0 * std::sqrt(gyro.covariance()(1, 1)));
+  EXPECT_NEAR(gyro.bias(), c, 4.0 * std::sqrt(gyro.covariance()(0, 0)));
+  EXPECT_LT(std::sqrt(gyro.covariance()(1, 1)), 1e-3);  // from 3 % to under 0.1 %
+}
+
+TEST(Gyro, DrivingTeachesTheArraysRotationCouplingToItsVelocity) {
+  // An array whose rotation reads a . v on top of the truth (a sensor's yaw
+  // mount error on a compact array), a calibrated gyro: a is learnt along
+  // the direction driven, and decouple() removes it from the array's twist.
+  GyroOptions o;
+  o.bias_random_walk = 0.0;
+  o.bias_sigma = 1e-4;
+  o.scale_sigma = 1e-4;
+  GyroModel gyro(o, 0.015);
+  const real gate = static_cast<real>(chi2_quantile(1.0 - 1e-3, 1));
+  std::mt19937 rng(13);
+  std::normal_distribution<double> noise(0.0, o.noise_density / std::sqrt(kDt));
+  const double ax = 0.05;  // rad/m
+  for (int i = 0; i < 2000; ++i) {
+    const double vx = 0.3 * (1.0 + std::sin(0.003 * i)), w = 0.2 * std::sin(0.02 * i);
+    gyro.predict(kDt);
+    gyro.teach(w + noise(rng), kDt, Vec3(vx, 0, w + ax * vx), 1e-8, 1e-6, gate);
+  }
+  EXPECT_NEAR(gyro.coupling().x(), ax, 4.0 * std::sqrt(gyro.covariance()(2, 2)));
+  Vec3 x(0.4, 0.0, 0.1 + ax * 0.4);
+  Mat3 cov = Mat3::Zero();
+  gyro.decouple(x, cov);
+  EXPECT_NEAR(x(2), 0.1, 4.0 * 0.4 * std::sqrt(gyro.covariance()(2, 2)));
+  EXPECT_NEAR(cov(2, 2), 0.16 * gyro.covariance()(2, 2), 1e-15);
+}
+
+TEST(Gyro, RateVarianceIsTheNoiseAndTheStatesPropagated) {
+  GyroOptions o;
+  o.scale = 1.1;
+  o.bias = 0.02;
+  const GyroModel gyro(o, 0.1);
+  const real g = 1.0;
+  const auto r = gyro.rate(g, kDt);
+  ASSERT_TRUE(r);
+  const double w = (g - 0.02) / 1.1;
+  EXPECT_NEAR(r->omega, w, 1e-12);
+  // d w / d b = -1/k, d w / d s = -w (at s = 0), independent states.
+  const double var = o.noise_density * o.noise_density / (kDt * 1.1 * 1.1) +
+                     o.bias_sigma * o.bias_sigma / (1.1 * 1.1) +
+                     w * w * o.scale_sigma * o.scale_sigma;
+  EXPECT_NEAR(r->variance, var, 1e-12);
+}
+
+TEST(Gyro, ASaturatedOrNonFiniteReadingIsNotARate) {
+  GyroOptions o;
+  o.max_rate = 4.0;
+  const GyroModel gyro(o, 0.1);
+  EXPECT_TRUE(gyro.rate(0.97 * 4.0, kDt));
+  EXPECT_FALSE(gyro.rate(0.99 * 4.0, kDt));
+  EXPECT_FALSE(gyro.rate(-4.0, kDt));
+  EXPECT_FALSE(gyro.rate(std::nan(""), kDt));
+}
+
+SensorArray compact_array() {
+  std::vector<SensorMount> m(4);
+  for (int k = 0; k < 4; ++k) {
+    const double phi = std::numbers::pi / 4.0 + k * std::numbers::pi / 2.0;
+    m[static_cast<std::size_t>(k)].position = 0.015 * Eigen::Vector2d(std::cos(phi), std::sin(phi));
+    m[static_cast<std::size_t>(k)].yaw = phi;
+  }
+  return SensorArray(m);
+}
+
+TEST(Gyro, ACommonModeDropoutWhileTurningTakesTheGyrosRotation) {
+  // Turning in place at 1.5 rad/s; every sensor reads zero for 0.3 s; no
+  // wheels. Without the gyro the hold keeps the last twist; with it the
+  // bridge's rotation is the gyro's (here a true one: 1.2 rad/s from the
+  // dropout on, which the hold cannot know).
+  const SensorArray a = compact_array();
+  auto made = ConsensusEstimator::create(a);
+  ASSERT_TRUE(std::holds_alternative<ConsensusEstimator>(made));
+  auto& est = std::get<ConsensusEstimator>(made);
+  double t = 0.0;
+  // Counts with a little noise (identical counts epoch after epoch are a
+  // frozen register to the health monitor).
+  std::mt19937 rng(14);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  const auto sample = [&](const Twist2& x) {
+    ArraySample s;
+    t += kDt;
+    s.t = t;
+    s.dt = kDt;
+    s.size = a.size();
+    for (int i = 0; i < a.size(); ++i) {
+      s.counts[static_cast<std::size_t>(i)] = a[i].counts(x, kDt) + Vec2(noise(rng), noise(rng));
+      s.squal[static_cast<std::size_t>(i)] = 90;
+    }
+    return s;
+  };
+  const Twist2 turn{{0.0, 0.0}, 1.5};
+  for (int k = 0; k < 300; ++k) {
+    const auto e = est.estimate(sample(turn), std::nullopt, real(1.5));
+    ASSERT_TRUE(e);
+    ASSERT_EQ(e->source, Source::kMice) << k;
+  }
+  int bridged = 0;
+  for (int k = 0; k < 30; ++k) {
+    const auto e = est.estimate(sample(Twist2{}), std::nullopt, real(1.2));
+    ASSERT_TRUE(e);
+    if (e->source != Source::kMice) {
+      ++bridged;
+      EXPECT_TRUE(e->tests.gyro_fused);
+      // The gyro rejected the array's standstill, or the health monitor had
+      // left no sensor to test (NaN).
+      EXPECT_FALSE(e->tests.gyro <= 1.0) << k;
+
+      EXPECT_NEAR(e->estimate.twist.omega, 1.2, 4.0 * std::sqrt(e->estimate.covariance(2, 2)));
+    }
+  }
+  EXPECT_EQ(bridged, 30);
+}
+
+TEST(ImuCsv, ReadsRowsAndRefusesBadOnes) {
+  const auto dir = std::filesystem::temp_directory_path() / "moa_test_imu_csv";
+  std::filesystem::create_directories(dir);
+  const auto write = [&](const std::string& text) {
+    std::ofstream(dir / "imu.csv") << text;
+    return dir / "imu.csv";
+  };
+  const auto rows = io::read_all<io::ImuRow>(write("# c\nt,gz\n0,0.5\n0.01,-0.25\n"));
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[1].t, 0.01);
+  EXPECT_EQ(rows[1].gz, -0.25);
+  const auto error = [&](const std::string& text) {
+    try {
+      (void)io::read_all<io::ImuRow>(write(text));
+    } catch (const io::Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(error("t,wz\n0,1\n").find("missing column 'gz'"), std::string::npos);
+  EXPECT_NE(error("t,gz\n0,nan\n").find("imu.csv:2"), std::string::npos);
+  EXPECT_NE(error("t,gz\n1,0\n0.5,0\n").find("imu.csv:3"), std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace moa
