@@ -131,6 +131,8 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
       ->expected(3)
       ->delimiter(',')
       ->check(kFinite);
+  cmd->add_flag("--no-imu", f.no_imu,
+                "Ignore the gyro (imu.csv; by default the consensus fuses it, config key imu)");
   if (live) return;
   cmd->add_flag("--no-wheels", f.no_wheels,
                 "Ignore wheels.csv (by default it is the fallback and plausibility check)");
@@ -172,6 +174,7 @@ OdometryOptions resolve_odometry_flags(const OdometryFlags& f, const io::RobotCo
                                        const std::string& config_path) {
   OdometryOptions o = f.options;
   o.consensus.motion_prior = !f.no_motion_prior;
+  o.use_imu = !f.no_imu;
   o.self_calibration.enabled =
       f.self_calibrate || !f.self_calibration_out.empty() || !f.self_calibration_gauge.empty();
   if (!f.self_calibration_gauge.empty()) {

@@ -29,6 +29,7 @@ struct OdometryFlags {
   std::vector<std::string> sensors;  ///< names; empty: all
   std::vector<double> initial_pose;  ///< x, y, theta
   bool no_wheels = false;
+  bool no_imu = false;
   bool no_motion_prior = false;
   bool self_calibrate = false;
   std::string self_calibration_out;  ///< --self-calibration FILE.csv

@@ -16,6 +16,7 @@ OptionCheck ConsensusOptions::validate() const {
       .nested("hold", hold.validate())
       .nested("limits", limits.validate())
       .nested("health", health.validate())
+      .nested("gyro", gyro.validate())
       .result();
 }
 
@@ -33,12 +34,14 @@ ConsensusEstimator::ConsensusEstimator(const SensorArray& array, ConsensusOption
       solver_(array),
       noise_(array, options.noise),
       prior_(options.limits),
-      health_(array.size(), options.health, options.alpha) {
+      health_(array.size(), options.health, options.alpha),
+      gyro_(options.gyro) {
   for (int dof = 1; dof < 2 * kMaxSensors; ++dof) {
     threshold_[static_cast<std::size_t>(dof)] =
         static_cast<real>(chi2_quantile(1.0 - options_.alpha, dof));
   }
   wheel_threshold_ = static_cast<real>(chi2_quantile(1.0 - options_.alpha, 3));
+  gyro_threshold_ = static_cast<real>(chi2_quantile(1.0 - options_.alpha, 1));
 }
 
 namespace {
@@ -137,12 +140,30 @@ void ConsensusEstimator::test_references(const Candidate& best, const References
 
 bool ConsensusEstimator::common_mode(const Candidate& best, const References& refs,
                                      const SourceTests& tests, double t) const {
-  if (!options_.common_mode || !options_.motion_prior || refs.size == 0) return false;
+  if (!options_.common_mode || !options_.motion_prior) return false;
   // A minority was judged against each reference already (consider()).
   if (2 * count_sensors(best.mask) <= n_) return false;
   if (!last_mice_t_ || t - *last_mice_t_ > static_cast<double>(options_.max_bridge)) return false;
-  // Every reference there is rejects (a NaN ratio is a reference not there).
-  return !(tests.wheels <= 1.0) && !(tests.prior <= 1.0);
+  // The gyro rejects the rotation, or every translation reference there is
+  // rejects the twist (a NaN ratio is a reference not there).
+  if (tests.gyro > 1.0) return true;
+  return refs.size > 0 && !(tests.wheels <= 1.0) && !(tests.prior <= 1.0);
+}
+
+void ConsensusEstimator::fuse_gyro(const GyroRate& rate, bool gated, RobustEstimate& out) const {
+  Vec3 x = out.estimate.twist.vector();
+  Mat3 p = out.estimate.covariance;
+  const Mat<1, 1> y(rate.omega - x(2));
+  const Mat<1, 3> h(real(0), real(0), real(1));
+  const Mat<1, 1> r(rate.variance);
+  if (gated) {
+    out.tests.gyro_fused = gated_update<3, 1>(x, p, y, h, r, gyro_threshold_).fused;
+  } else {
+    joseph_update<3, 1>(x, p, y, h, r);
+    out.tests.gyro_fused = true;
+  }
+  out.estimate.twist = Twist2::from_vector(x);
+  out.estimate.covariance = p;
 }
 
 void ConsensusEstimator::test_sensors(const Twist2& x, SourceTests& tests) const {
@@ -155,9 +176,16 @@ void ConsensusEstimator::test_sensors(const Twist2& x, SourceTests& tests) const
 }
 
 std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sample,
-                                                           const std::optional<Twist2>& wheels) {
+                                                           const std::optional<Twist2>& wheels,
+                                                           const std::optional<real>& gyro) {
   if (!(std::isfinite(sample.dt) && sample.dt > 0.0) || sample.size != n_) return std::nullopt;
   RobustEstimate out;
+  std::optional<GyroRate> rate;
+  if (gyro) {
+    gyro_.predict(sample.dt);
+    rate = gyro_.rate(*gyro, sample.dt);
+    out.tests.gyro_saturated = !rate;
+  }
   noise_.measure(sample, fallback_.last_twist(), measurements_, out.noise_flags);
   // The subsets below (and the health monitor's leave-one-out fits) sum
   // these terms instead of recomputing them.
@@ -188,6 +216,10 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
       health_.screen(solver_, sample, fallback_.last_twist(), candidates, out.excluded);
   const auto best = search(screened, refs);
   if (best) test_references(*best, refs, out.tests);
+  if (best && rate) {
+    const real d = best->fit.twist.omega - rate->omega;
+    out.tests.gyro = d * d / (best->fit.covariance(2, 2) + rate->variance) / gyro_threshold_;
+  }
   const bool common = best && common_mode(*best, refs, out.tests, sample.t);
   if (best && !common) {
     last_mice_t_ = sample.t;
@@ -199,6 +231,12 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
       if (contains(screened, i) && !contains(best->mask, i)) {
         out.excluded[static_cast<std::size_t>(i)] = Exclusion::kInconsistent;
       }
+    }
+    if (rate) {
+      // The array's own rotation teaches the gyro, then the gyro's joins it.
+      gyro_.calibrate(*gyro, sample.dt, out.estimate.twist.omega, out.estimate.covariance(2, 2),
+                      gyro_threshold_);
+      if (const auto taught = gyro_.rate(*gyro, sample.dt)) fuse_gyro(*taught, true, out);
     }
     fallback_.good(out.estimate.twist, out.estimate.covariance, sample.t);
     prior_.trust(out.estimate.twist, out.estimate.covariance, sample.t);
@@ -214,6 +252,7 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
     }
   }
   fallback_.apply(out, wheels, options_.wheels, options_.hold, sample.t);
+  if (rate) fuse_gyro(*rate, false, out);
   if (out.source == Source::kWheels) {
     prior_.trust(out.estimate.twist, out.estimate.covariance, sample.t);
   }

@@ -17,6 +17,10 @@ const char* describe(OdometryError error) {
       return "camera fixes fed too far ahead of the mice rows";
     case OdometryError::kWheelsBackwards:
       return "wheel row time not finite or earlier than the previous one";
+    case OdometryError::kImuFull:
+      return "gyro rows fed too far ahead of the mice rows";
+    case OdometryError::kImuBackwards:
+      return "gyro row time not finite or earlier than the previous one";
     case OdometryError::kImpossibleCounts:
       return "counts imply a speed far beyond what the sensor can track (a corrupt value?)";
   }
@@ -179,6 +183,23 @@ std::optional<OdometryError> Odometry::push_wheels(double t, const Twist2& twist
   return deferred_error_;
 }
 
+std::optional<OdometryError> Odometry::push_gyro(double t, double gz, StepSink sink) {
+  if (!options_.use_imu) return std::nullopt;
+  const double at = t - options_.consensus.gyro.latency;  // the true end of its interval
+  if (!std::isfinite(at) || (gyro_seen_ && at < last_gyro_t_)) return OdometryError::kImuBackwards;
+  if (gyro_.full()) {
+    if (!ready_.empty()) (void)gyro_.average(ready_.front().t - ready_.front().dt, ready_.front().t);
+    if (gyro_.full()) return OdometryError::kImuFull;
+  }
+  gyro_.push(at, IntervalAverager<1>::Value(gz));
+  gyro_seen_ = true;
+  last_gyro_t_ = at;
+  deferred_error_.reset();
+  drain(false, sink);
+  sync_.advance(at, [&](const ArraySample& s) { on_epoch(s, sink); });
+  return deferred_error_;
+}
+
 std::optional<OdometryError> Odometry::push_fix(const CameraFix& fix) {
   if (!options_.fuse_camera) return std::nullopt;
   if (pending_fixes_.full()) return OdometryError::kFixesFull;
@@ -194,8 +215,13 @@ void Odometry::finish(double t_end, StepSink sink) {
   drain(true, sink);
 }
 
+bool Odometry::covered(double t) const {
+  return (!(options_.use_wheels && wheels_seen_) || wheels_.covers(t)) &&
+         (!(options_.use_imu && gyro_seen_) || gyro_.covers(t));
+}
+
 void Odometry::on_epoch(const ArraySample& sample, StepSink sink) {
-  const bool wait = options_.use_wheels && wheels_seen_;
+  const bool wait = (options_.use_wheels && wheels_seen_) || (options_.use_imu && gyro_seen_);
   if (!wait && ready_.empty()) {
     process(sample, sink);
     return;
@@ -210,7 +236,7 @@ void Odometry::on_epoch(const ArraySample& sample, StepSink sink) {
 }
 
 void Odometry::drain(bool all, StepSink sink) {
-  while (!ready_.empty() && (all || wheels_.covers(ready_.front().t))) {
+  while (!ready_.empty() && (all || covered(ready_.front().t))) {
     process(ready_.front(), sink);
     ready_.pop_front();
   }
@@ -250,7 +276,7 @@ void Odometry::apply_fixes(double t) {
 }
 
 bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& wheels,
-                        RobustEstimate& out) {
+                        const std::optional<real>& gyro, RobustEstimate& out) {
   // All sensors selected and no self-calibration (the usual case): the
   // epoch and the estimate are the estimator's own, with no copy into the
   // selection's indices and back.
@@ -294,7 +320,7 @@ bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& 
     ok = x.has_value();
     if (ok) e = *x;
   } else if (auto* c = std::get_if<ConsensusEstimator>(&estimator_)) {
-    const auto x = c->estimate(in, wheels);
+    const auto x = c->estimate(in, wheels, gyro);
     ok = x.has_value();
     if (ok) e = *x;
   } else if (auto* solver = std::get_if<SubsetSolver>(&estimator_)) {
@@ -362,6 +388,9 @@ bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& 
   out.source = e.source;
   out.tests.wheels = e.tests.wheels;
   out.tests.prior = e.tests.prior;
+  out.tests.gyro = e.tests.gyro;
+  out.tests.gyro_fused = e.tests.gyro_fused;
+  out.tests.gyro_saturated = e.tests.gyro_saturated;
   for (int i = 0; i < n_; ++i) out.excluded[static_cast<std::size_t>(i)] = Exclusion::kUnselected;
   for (int k = 0; k < m_; ++k) {
     const int i = selected_[static_cast<std::size_t>(k)];
@@ -378,13 +407,17 @@ void Odometry::process(const ArraySample& sample, StepSink sink) {
   const std::optional<Twist2> wheels = options_.use_wheels && wheels_seen_
                                            ? wheels_.average(sample.t - sample.dt, sample.t)
                                            : std::nullopt;
+  std::optional<real> gyro;
+  if (options_.use_imu && gyro_seen_) {
+    if (const auto g = gyro_.average(sample.t - sample.dt, sample.t)) gyro = static_cast<real>((*g)(0));
+  }
   OdometryStep step;
   step.sample = &sample;
   if (self_calibration_) {
     step.calibration = &calibration_;
     step.calibration_filter = &calibration_filter_;
   }
-  if (!estimate(sample, wheels, step.estimate)) {
+  if (!estimate(sample, wheels, gyro, step.estimate)) {
     deferred_error_ = OdometryError::kNoInterval;
     return;
   }

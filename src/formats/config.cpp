@@ -174,6 +174,29 @@ RobotLimits parse_limits(const YamlSource& source, const YAML::Node& node) {
   return limits;
 }
 
+// `imu: {scale, bias, noise_density, ...}`, each optional (GyroOptions'
+// defaults).
+GyroOptions parse_imu(const YamlSource& source, const YAML::Node& node) {
+  const YamlFields f(source, node, "imu",
+                     {"scale", "bias", "noise_density", "bias_random_walk", "bias_sigma",
+                      "scale_sigma", "max_rate", "latency"});
+  GyroOptions imu;
+  imu.scale = static_cast<real>(f.positive("scale", imu.scale));
+  imu.bias = static_cast<real>(f.number("bias", imu.bias));
+  imu.noise_density = static_cast<real>(f.positive("noise_density", imu.noise_density));
+  imu.bias_random_walk =
+      static_cast<real>(f.non_negative("bias_random_walk", imu.bias_random_walk));
+  imu.bias_sigma = static_cast<real>(f.positive("bias_sigma", imu.bias_sigma));
+  imu.scale_sigma = static_cast<real>(f.positive("scale_sigma", imu.scale_sigma));
+  imu.max_rate = static_cast<real>(f.positive("max_rate", imu.max_rate));
+  imu.latency = f.bounded("latency", -1.0, 1.0, imu.latency);
+  if (auto e = imu.validate()) {
+    e->prefix("imu");
+    source.fail(node, e->message());
+  }
+  return imu;
+}
+
 }  // namespace
 
 std::optional<int> RobotConfig::index_of(std::string_view name) const {
@@ -206,7 +229,7 @@ RobotConfig parse_config(std::string_view yaml, std::string_view source_name) {
   }
   if (!has_version) source.fail(root, "missing key 'version'");
 
-  const YamlFields top(source, root, "", {"version", "sensors", "limits"});
+  const YamlFields top(source, root, "", {"version", "sensors", "limits", "imu"});
   const YAML::Node sensors = top.required("sensors");
   if (!sensors.IsSequence()) {
     top.fail("sensors",
@@ -226,6 +249,7 @@ RobotConfig parse_config(std::string_view yaml, std::string_view source_name) {
   }
   config.array = SensorArray(std::move(mounts));
   if (const auto limits = top.get("limits")) config.limits = parse_limits(source, *limits);
+  if (const auto imu = top.get("imu")) config.imu = parse_imu(source, *imu);
   return config;
 }
 
@@ -273,6 +297,18 @@ std::string format_config(const RobotConfig& config) {
     }
     out += fmt::format("limits:\n  accel: {}\n  angular_accel: {}\n", config.limits->accel,
                        config.limits->angular_accel);
+  }
+  if (config.imu) {
+    const GyroOptions& g = *config.imu;
+    if (auto e = g.validate()) {
+      e->prefix("imu");
+      context.fail(e->message());
+    }
+    out += fmt::format(
+        "imu:\n  scale: {}\n  bias: {}\n  noise_density: {}\n  bias_random_walk: {}\n"
+        "  bias_sigma: {}\n  scale_sigma: {}\n  max_rate: {}\n  latency: {}\n",
+        g.scale, num(g.bias), g.noise_density, g.bias_random_walk, g.bias_sigma, g.scale_sigma,
+        g.max_rate, num(g.latency));
   }
   return out;
 }

@@ -44,6 +44,11 @@ void DiagnosticsCsvWriter::write(const OdometryStep& step) {
   }
   impl_->row(t, "wheels", e.tests.wheels, e.source == Source::kWheels, {});
   impl_->row(t, "prior", e.tests.prior, e.source == Source::kHold, {});
+  // The gyro, in epochs that had one.
+  if (!std::isnan(e.tests.gyro) || e.tests.gyro_fused || e.tests.gyro_saturated) {
+    impl_->row(t, "imu", e.tests.gyro, e.tests.gyro_fused,
+               e.tests.gyro_saturated ? "saturated" : (e.tests.gyro_fused ? "" : "inconsistent"));
+  }
 }
 
 void DiagnosticsCsvWriter::commit() { impl_->file.commit(); }

@@ -53,6 +53,18 @@ class RowParser<WheelRow> {
 };
 
 template <>
+class RowParser<ImuRow> {
+ public:
+  explicit RowParser(const CsvReader& csv)
+      : t_(csv.required_column("t")), gz_(csv.required_column("gz")) {}
+
+  ImuRow parse(CsvReader& csv) const { return ImuRow{csv.time(t_), csv.number(gz_)}; }
+
+ private:
+  std::size_t t_, gz_;
+};
+
+template <>
 class RowParser<CameraRow> {
  public:
   explicit RowParser(const CsvReader& csv)
@@ -352,6 +364,7 @@ std::optional<Row> RowReader<Row>::next() {
 
 template class RowReader<WheelRow>;
 template class RowReader<CameraRow>;
+template class RowReader<ImuRow>;
 template class RowReader<TruthRow>;
 
 // ------------------------------------------------------------ OdometryWriter

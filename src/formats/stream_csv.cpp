@@ -16,6 +16,15 @@ void StreamCsvWriter::write(const WheelRow& r) {
   ++wheel_rows_;
 }
 
+void StreamCsvWriter::write(const ImuRow& r) {
+  if (!imu_) {
+    imu_ = std::make_unique<AtomicFile>(dir_ / "imu.csv");
+    fmt::print(imu_->stream(), "# {}\nt,gz\n", comment_);
+  }
+  fmt::print(imu_->stream(), "{},{}\n", r.t, r.gz);
+  ++imu_rows_;
+}
+
 void StreamCsvWriter::write(const CameraFix& f) {
   if (!camera_) {
     camera_ = std::make_unique<AtomicFile>(dir_ / "camera.csv");
@@ -34,6 +43,7 @@ void StreamCsvWriter::write(const CameraFix& f) {
 
 void StreamCsvWriter::commit() {
   if (wheels_) wheels_->commit();
+  if (imu_) imu_->commit();
   if (camera_) camera_->commit();
 }
 

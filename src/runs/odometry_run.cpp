@@ -62,7 +62,7 @@ OdometryOptions resolve_odometry_options(OdometryOptions o, std::string_view est
 
 std::vector<fs::path> LogFiles::files() const {
   std::vector<fs::path> out{mice};
-  for (const auto& f : {wheels, camera, truth, faults}) {
+  for (const auto& f : {wheels, imu, camera, truth, faults}) {
     if (f) out.push_back(*f);
   }
   return out;
@@ -105,6 +105,7 @@ LogFiles resolve_log(const fs::path& log) {
     return std::nullopt;
   };
   files.wheels = optional("wheels.csv");
+  files.imu = optional("imu.csv");
   files.camera = optional("camera.csv");
   files.truth = optional("truth.csv");
   files.faults = optional("faults.csv");
@@ -116,6 +117,7 @@ std::unique_ptr<Odometry> make_odometry(const RobotConfig& config, const std::st
   // The robot's limits, when its config gives them, for the motion prior.
   OdometryOptions options = given;
   if (config.limits) options.consensus.limits = *config.limits;
+  if (config.imu) options.consensus.gyro = *config.imu;
   if (const auto e = options.validate()) {
     throw Error(fmt::format("invalid option: {}", e->message()));
   }
@@ -325,17 +327,20 @@ class StepWriterThread {
 
 /// The files of a log as a run's source: mice.csv parsed on a thread of its
 /// own (with faults.csv's twin rows for the oracle); before each mice row,
-/// the camera fixes and then the wheel rows up to its time; after the last,
-/// those up to the last row's time (the stream ends with its mice).
+/// the camera fixes, then the wheel rows, then the gyro rows up to its time;
+/// after the last, those up to the last row's time (the stream ends with its
+/// mice).
 class LogRunSource final : public RunSource {
  public:
-  LogRunSource(MiceReader& mice, FaultsReader* faults, WheelsReader* wheels, CameraReader* camera,
-               const LogFiles& log)
+  LogRunSource(MiceReader& mice, FaultsReader* faults, WheelsReader* wheels, ImuReader* imu,
+               CameraReader* camera, const LogFiles& log)
       : mice_(mice),
         wheels_(wheels),
+        imu_(imu),
         camera_(camera),
         log_(log),
         wheel_(wheels ? wheels->next() : std::nullopt),
+        gyro_(imu ? imu->next() : std::nullopt),
         fix_(camera ? camera->next() : std::nullopt),
         t_last_(mice.start_time()),
         parsed_(mice, faults) {}
@@ -363,6 +368,12 @@ class LogRunSource final : public RunSource {
       wheel_ = wheels_->next();
       return &row_;
     }
+    if (gyro_ && gyro_->t <= limit) {
+      row_ = *gyro_;
+      from_ = From::kImu;
+      gyro_ = imu_->next();
+      return &row_;
+    }
     if (ended_) return nullptr;
     row_ = pending_->row;
     from_ = From::kMice;
@@ -378,6 +389,8 @@ class LogRunSource final : public RunSource {
         return fmt::format("{}:{}", log_.mice.string(), line_);
       case From::kWheels:
         return log_.wheels->string();
+      case From::kImu:
+        return log_.imu->string();
       case From::kCamera:
         return log_.camera->string();
     }
@@ -385,12 +398,14 @@ class LogRunSource final : public RunSource {
   }
 
  private:
-  enum class From : std::uint8_t { kMice, kWheels, kCamera };
+  enum class From : std::uint8_t { kMice, kWheels, kImu, kCamera };
   MiceReader& mice_;
   WheelsReader* wheels_;
+  ImuReader* imu_;
   CameraReader* camera_;
   const LogFiles& log_;
   std::optional<WheelRow> wheel_;        ///< next wheel row, not yet handed out
+  std::optional<ImuRow> gyro_;           ///< next gyro row, not yet handed out
   std::optional<CameraRow> fix_;         ///< next fix, not yet handed out
   double t_last_;                        ///< s, the last mice row handed out (start: t0)
   const MiceRecord* pending_ = nullptr;  ///< next mice row, not yet handed out
@@ -409,6 +424,12 @@ OdometryRun run_odometry(const RobotConfig& config, const std::string& config_pa
   MiceReader mice(log.mice, config);
   std::unique_ptr<WheelsReader> wheels;
   if (options.use_wheels && log.wheels) wheels = std::make_unique<WheelsReader>(*log.wheels);
+  // The gyro goes to the consensus only (least squares and Sekimori & Miyazaki
+  // stay as their papers define them).
+  std::unique_ptr<ImuReader> imu;
+  if (options.use_imu && log.imu && options.estimator == EstimatorKind::kConsensus) {
+    imu = std::make_unique<ImuReader>(*log.imu);
+  }
   std::unique_ptr<CameraReader> camera;
   if (options.fuse_camera) {
     if (!log.camera) {
@@ -425,7 +446,7 @@ OdometryRun run_odometry(const RobotConfig& config, const std::string& config_pa
     }
     faults = std::make_unique<FaultsReader>(*log.faults, config);
   }
-  LogRunSource source(mice, faults.get(), wheels.get(), camera.get(), log);
+  LogRunSource source(mice, faults.get(), wheels.get(), imu.get(), camera.get(), log);
   RunCallbacks callbacks;
   callbacks.on_step = on_step;
   callbacks.progress = progress;

@@ -71,6 +71,10 @@ OdometryRun run_loop(const RobotConfig& config, const std::string& config_path,
       if (callbacks.on_row) callbacks.on_row(*input);
       if (const auto e = odometry->push_wheels(wheel->t, wheel->twist, sink)) fail(wheel->t, *e);
       ++run.wheel_rows;
+    } else if (const auto* imu = std::get_if<ImuRow>(input)) {
+      if (callbacks.on_row) callbacks.on_row(*input);
+      if (const auto e = odometry->push_gyro(imu->t, imu->gz, sink)) fail(imu->t, *e);
+      ++run.imu_rows;
     } else {
       const auto& fix = std::get<CameraFix>(*input);
       if (callbacks.on_row) callbacks.on_row(*input);

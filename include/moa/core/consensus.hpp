@@ -37,6 +37,14 @@
 //     are wrong: spinning wheels against a wall).
 //  4. Nothing passes: the wheel twist (source wheels) or, without wheels,
 //     the last good twist with its covariance grown (source hold).
+// With a gyro (gyro.hpp) its calibrated rate omega_g is one more reference,
+// on the rotation only: the array is also common-mode wrong when the gyro
+// alone rejects its rotation, (omega_a - omega_g)^2 / (Cov_ww + var_g) >
+// q(1 - alpha, 1) (a translation reference cannot vouch for a rotation). An
+// accepted array twist first teaches the gyro's bias and scale, then takes
+// the gyro's rate in by the gated update (kalman.hpp); a bridge (step 3, 4)
+// takes it in whatever it says: its rotation is the gyro's, weighed against
+// the wheels' or the hold's own.
 // The prior is the twist of step 2, or of the wheels in step 3; a hold does
 // not renew it (its covariance keeps growing). With motion_prior off the
 // estimator is the one before the prior: no prior, and the wheel test of a
@@ -51,6 +59,7 @@
 #include <optional>
 
 #include "moa/core/fallback.hpp"
+#include "moa/core/gyro.hpp"
 #include "moa/core/health.hpp"
 #include "moa/core/motion_prior.hpp"
 #include "moa/core/noise_model.hpp"
@@ -73,6 +82,8 @@ struct ConsensusOptions {
   /// The common-mode test of step 3 (needs motion_prior).
   bool common_mode = true;
   real max_bridge = 1.0;  ///< s, longest bridge over a common-mode rejection
+  /// The gyro, when a gyro stream is fed (config `imu:`).
+  GyroOptions gyro;
   /// nullopt when usable, else the first field out of its bounds, its path
   /// relative to this struct (options_check.hpp).
   OptionCheck validate() const;
@@ -86,10 +97,13 @@ class ConsensusEstimator {
   static std::variant<ConsensusEstimator, GeometryError> create(const SensorArray& array,
                                                                 ConsensusOptions options = {});
 
-  /// One sample; `wheels` is the wheel twist over the same interval, if any.
+  /// One sample; `wheels` is the wheel twist over the same interval, if any,
+  /// `gyro` the gyro's reading averaged over it (rad/s, before calibration).
   /// Returns nullopt only when dt is not positive and finite.
   std::optional<RobustEstimate> estimate(const ArraySample& sample,
-                                         const std::optional<Twist2>& wheels = std::nullopt);
+                                         const std::optional<Twist2>& wheels = std::nullopt,
+                                         const std::optional<real>& gyro = std::nullopt);
+  const GyroModel& gyro() const { return gyro_; }
 
  private:
   ConsensusEstimator(const SensorArray& array, ConsensusOptions options);
@@ -121,6 +135,8 @@ class ConsensusEstimator {
   /// Step 3: every reference rejects the majority candidate's twist.
   bool common_mode(const Candidate& best, const References& refs, const SourceTests& tests,
                    double t) const;
+  /// The gyro's rate into out's twist: gated (an accepted array) or not (a bridge).
+  void fuse_gyro(const GyroRate& rate, bool gated, RobustEstimate& out) const;
   /// Each sensor's residual against the epoch's twist x: tests.sensor.
   void test_sensors(const Twist2& x, SourceTests& tests) const;
 
@@ -130,11 +146,13 @@ class ConsensusEstimator {
   NoiseModel noise_;
   std::array<real, 2 * kMaxSensors> threshold_{};  ///< by dof
   real wheel_threshold_ = 0.0;
+  real gyro_threshold_ = 0.0;  ///< q(1 - alpha, 1)
   // State carried between samples.
   PointMeasurements measurements_;
   Fallback fallback_;
   MotionPrior prior_;
   HealthMonitor health_;
+  GyroModel gyro_;
   /// s, the last epoch whose twist came from the mice (none yet: nullopt)
   std::optional<double> last_mice_t_;
 };

@@ -83,6 +83,8 @@ struct OdometryOptions {
   double max_row_interval = 0.05;  ///< s, longest interval one mice row covers
   double max_gap = 3600.0;         ///< s, longest silence of all sensors
   bool use_wheels = true;          ///< wheel rows fed are used (fallback, plausibility)
+  /// gyro rows fed are used (consensus: consensus.gyro is the gyro's model)
+  bool use_imu = true;
   /// world_T_robot at the first epoch's start. Unset: identity, or with
   /// fuse_camera the first fix fed before the first epoch is processed.
   std::optional<Pose2> initial;
@@ -147,6 +149,8 @@ enum class OdometryError : std::uint8_t {
   kWheelsFull,        ///< wheel rows fed too far ahead of the mice rows
   kFixesFull,         ///< camera fixes fed too far ahead of the mice rows
   kWheelsBackwards,   ///< a wheel row earlier than the previous one, or not finite
+  kImuFull,           ///< gyro rows fed too far ahead of the mice rows
+  kImuBackwards,      ///< a gyro row earlier than the previous one, or not finite
   kImpossibleCounts,  ///< counts implying a speed far beyond what the sensor can track
 };
 
@@ -195,6 +199,11 @@ class Odometry {
   /// A wheel-odometry row: twist (robot frame) averaged over the interval
   /// since the previous wheel row, ending at t. Ignored unless use_wheels.
   std::optional<OdometryError> push_wheels(double t, const Twist2& twist, StepSink sink);
+  /// A gyro row (imu.csv): the rate about z (rad/s, counter-clockwise)
+  /// averaged over the interval since the previous gyro row, ending at t as
+  /// stamped (the pipeline takes t - consensus.gyro.latency). Used by the
+  /// consensus estimator; ignored unless use_imu.
+  std::optional<OdometryError> push_gyro(double t, double gz, StepSink sink);
   /// A camera fix (ignored unless fuse_camera).
   std::optional<OdometryError> push_fix(const CameraFix& fix);
   /// Ends the stream at t_end (the last row's time): emits every remaining
@@ -217,7 +226,9 @@ class Odometry {
   void process(const ArraySample& sample, StepSink sink);
   /// Into `out`, default-constructed; false when the epoch has no interval.
   bool estimate(const ArraySample& sample, const std::optional<Twist2>& wheels,
-                RobustEstimate& out);
+                const std::optional<real>& gyro, RobustEstimate& out);
+  /// Every stream an epoch waits for has a row at or after t.
+  bool covered(double t) const;
   void apply_fixes(double t);
   Mat2 fix_covariance(const CameraFix& fix) const;
 
@@ -236,6 +247,9 @@ class Odometry {
   WheelAverager wheels_;
   bool wheels_seen_ = false;
   double last_wheel_t_ = 0.0;
+  IntervalAverager<1> gyro_;  ///< rad/s, on the mice's clock (latency removed)
+  bool gyro_seen_ = false;
+  double last_gyro_t_ = 0.0;
   FixedRing<ArraySample, kMaxWaitingEpochs> ready_;  ///< final epochs waiting for wheels
   FixedRing<CameraFix, kMaxPendingFixes> pending_fixes_;
   DeadReckoner reckoner_;

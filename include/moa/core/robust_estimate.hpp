@@ -84,6 +84,11 @@ struct SourceTests {
   /// d = x_a - x_r: the common-mode test (consensus.hpp, step 3).
   real wheels = std::numeric_limits<real>::quiet_NaN();
   real prior = std::numeric_limits<real>::quiet_NaN();
+  /// The gyro's calibrated rate omega_g against the array's omega_a:
+  /// (omega_a - omega_g)^2 / (Cov_ww + var_g) / q(1 - alpha, 1) (gyro.hpp).
+  real gyro = std::numeric_limits<real>::quiet_NaN();
+  bool gyro_fused = false;      ///< the gyro's rate went into the twist
+  bool gyro_saturated = false;  ///< its reading was at its full scale: not used
   SourceTests() { sensor.fill(std::numeric_limits<real>::quiet_NaN()); }
 };
 

@@ -13,6 +13,15 @@
 //   limits:                      # optional (moa extension): the motion prior
 //     accel: 2.0                 # m/s^2, default 2
 //     angular_accel: 20.0        # rad/s^2, default 20
+//   imu:                         # optional (moa extension): the z gyro of imu.csv
+//     scale: 1.0                 # reading per true rate
+//     bias: 0.0                  # rad/s, reading at rest
+//     noise_density: 0.00015     # rad/s/sqrt(Hz)
+//     bias_random_walk: 0.0001   # rad/s/sqrt(s)
+//     bias_sigma: 0.05           # rad/s, sd of the bias left
+//     scale_sigma: 0.03          # sd of the scale error left
+//     max_rate: 8.7              # rad/s, full scale
+//     latency: 0.0               # s, a row's t minus the true end of its interval
 //
 // Unknown keys and missing required keys are errors that name the line,
 // the key and the sensor; so are wrong types, non-finite numbers, cpi or
@@ -27,6 +36,7 @@
 #include <vector>
 
 #include "moa/core/array.hpp"
+#include "moa/core/gyro.hpp"
 #include "moa/core/motion_prior.hpp"
 
 namespace moa::io {
@@ -38,6 +48,9 @@ struct RobotConfig {
   /// RobotLimits. io::resolve_odometry_options gives them to the consensus's
   /// motion prior.
   std::optional<RobotLimits> limits = std::nullopt;
+  /// The gyro (key `imu`); unset: the defaults of GyroOptions, used when a
+  /// log has imu.csv.
+  std::optional<GyroOptions> imu = std::nullopt;
 
   /// Index of the sensor called `name`, nullopt if there is none.
   std::optional<int> index_of(std::string_view name) const;

@@ -62,6 +62,14 @@ struct WheelRow {
   double t = 0.0;  ///< s, end of the averaging interval
   Twist2 twist;    ///< robot frame, m/s and rad/s
 };
+/// A gyro row (imu.csv): the rate about the robot's z axis (rad/s,
+/// counter-clockwise seen from above), averaged over the interval since the
+/// previous row, ending at t (s), as the gyro reports it (before its
+/// config's scale, bias and latency).
+struct ImuRow {
+  double t = 0.0;   ///< s, end of the averaging interval
+  double gz = 0.0;  ///< rad/s
+};
 struct CameraRow {
   double t = 0.0;                        ///< s
   Eigen::Vector2d position{0, 0};        ///< m, world frame
@@ -87,6 +95,7 @@ class RowReader {
 };
 using WheelsReader = RowReader<WheelRow>;   ///< wheels.csv: t,vx,vy,omega
 using CameraReader = RowReader<CameraRow>;  ///< camera.csv: t,x,y[,theta][,sx,sy]
+using ImuReader = RowReader<ImuRow>;        ///< imu.csv: t,gz
 using TruthReader = RowReader<TruthRow>;    ///< truth.csv: t,x,y,theta
 
 /// Reads a whole file of rows (evaluation and calibration, not streaming).

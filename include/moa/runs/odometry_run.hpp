@@ -23,7 +23,7 @@ namespace moa::io {
 struct LogFiles {
   std::filesystem::path dir;
   std::filesystem::path mice;
-  std::optional<std::filesystem::path> wheels, camera, truth, faults;
+  std::optional<std::filesystem::path> wheels, imu, camera, truth, faults;
   /// mice and the optional files present: what an output must not name.
   std::vector<std::filesystem::path> files() const;
 };
@@ -49,7 +49,8 @@ using ProgressCallback = std::function<void(std::size_t rows, double t)>;
 
 /// Runs the pipeline (the run loop of runs/run_loop.hpp) over the log's
 /// files: wheels.csv is fed when options.use_wheels and it
-/// exists, camera.csv when options.fuse_camera (required then), faults.csv
+/// exists, imu.csv when options.use_imu, it exists and the estimator is
+/// the consensus, camera.csv when options.fuse_camera (required then), faults.csv
 /// (or `faults`) when the estimator is the oracle (required then). Throws
 /// io::Error naming the file, line or option on anything wrong. A selected
 /// sensor that never reports is refused for least squares and the oracle

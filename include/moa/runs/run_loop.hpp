@@ -22,9 +22,10 @@
 namespace moa::io {
 
 /// One row of a run's input: a mice row, a wheel twist (robot frame, m/s
-/// and rad/s, averaged over the interval ending at t) or a camera fix
-/// (world frame, m and rad).
-using InputRow = std::variant<SensorRow, WheelRow, CameraFix>;
+/// and rad/s, averaged over the interval ending at t), a camera fix (world
+/// frame, m and rad) or a gyro rate (rad/s about z, averaged over the
+/// interval ending at t).
+using InputRow = std::variant<SensorRow, WheelRow, CameraFix, ImuRow>;
 
 /// The time of a row (s).
 double row_time(const InputRow& row);
@@ -71,6 +72,7 @@ struct OdometryRun {
   std::size_t rows = 0;          ///< mice rows fed
   std::size_t wheel_rows = 0;    ///< wheel rows fed
   std::size_t fix_rows = 0;      ///< camera fixes fed
+  std::size_t imu_rows = 0;      ///< gyro rows fed
   std::size_t steps = 0;         ///< epochs written
   double t0 = 0.0, t_end = 0.0;  ///< s, first epoch's start, last mice row's time
   /// Mice rows per sensor of the config (index as in the config).
