@@ -179,6 +179,7 @@ void AvrBench::on_twcr_write(avr_t* avr, std::uint16_t address, std::uint8_t val
   if (bench->gyro_ && bench->gyro_->bus_held(bench->now_us())) {
     // Writing 1 to TWINT clears it; nothing sets it again.
     avr->data[address] = static_cast<std::uint8_t>(value & ~kTwint);
+    ++bench->twcr_writes_held_;
     return;
   }
   bench->twcr_write_(avr, address, value, bench->twcr_param_);

@@ -74,6 +74,8 @@ class AvrBench {
   /// bus has no device: every address goes unacknowledged.
   void attach_gyro(std::unique_ptr<Mpu6050Model> gyro);
   Mpu6050Model* gyro() { return gyro_.get(); }
+  /// TWCR writes the firmware made while the gyro held the bus.
+  std::size_t twcr_writes_while_held() const { return twcr_writes_held_; }
   /// Bus-level faults (several sensors selected, wrong SPI mode or clock).
   const std::vector<std::string>& violations() const { return violations_; }
   /// When the firmware started Timer1 (its timestamp epoch), or -1.
@@ -116,6 +118,7 @@ class AvrBench {
   std::unique_ptr<Mpu6050Model> gyro_;
   avr_irq_t* twi_in_ = nullptr;
   bool twi_after_address_write_ = false;  ///< the last TWI step sent SLA+W
+  std::size_t twcr_writes_held_ = 0;
   // simavr's own TWCR write handler, which the bench's wraps.
   void (*twcr_write_)(avr_t*, std::uint16_t, std::uint8_t, void*) = nullptr;
   void* twcr_param_ = nullptr;

@@ -643,6 +643,14 @@ TEST_P(FirmwareGyro, GyroFramesCarryTheRateOfTheirDataWindow) {
   const std::vector<serial::Gyro> gyros = s.gyros();
   const auto windows = samples_per_window(s);
   const double frame_us = 1e6 / build.frame_hz;
+  // The gyro read fits the frame with the sensors': no tick is lost.
+  const std::vector<serial::Data> data = s.data();
+  const std::uint32_t frame_ticks = build.f_cpu / 8u / static_cast<std::uint32_t>(build.frame_hz);
+  for (std::size_t d = 1; d < data.size(); ++d) {
+    EXPECT_EQ(data[d].timestamp - data[d - 1].timestamp,
+              static_cast<std::uint32_t>(build.k) * frame_ticks)
+        << d;
+  }
   for (std::size_t w = 0; w < gyros.size(); ++w) {
     SCOPED_TRACE("window " + std::to_string(w));
     const serial::Gyro& g = gyros[w];
@@ -745,6 +753,9 @@ TEST(FirmwareGyroFaults, AHungBusStopsTheGyroFramesAndNotTheMice) {
   ASSERT_FALSE(gyros.empty());
   EXPECT_LT(s.tick_time_us(data[gyros.back().sequence].timestamp) - 12000.0, hang_us);
   for (const auto& sample : s.bench().gyro()->samples()) EXPECT_LT(sample.t_us, hang_us);
+  // One timeout, not one per frame: the step that hung (a write), the
+  // module switched off and on (two), then the gyro is left alone.
+  EXPECT_EQ(s.bench().twcr_writes_while_held(), 3u);
   expect_no_violations(s);
 }
 
