@@ -327,6 +327,92 @@ TEST(Live, DeviceHangUpEndsTheRunWithEverythingWritten) {
   EXPECT_EQ(moa.out(), read_text(replay));
 }
 
+TEST(Live, SerialGyroSamplesAreRecordedToImuCsvOnTheRowsClock) {
+  Scene scene;
+  // After each DATA frame k (sequence k - 1, K = 1), the GYRO frame of its
+  // window: one sample of (30 k - 1500) LSB at 65.5 LSB per deg/s.
+  const auto lsb_of = [](std::size_t k) { return 30 * static_cast<int>(k) - 1500; };
+  std::vector<std::vector<std::uint8_t>> wire;
+  std::size_t k = 0;
+  for (const auto& frame : device_frames(scene.log)) {
+    wire.push_back(frame);
+    if (k > 0) {
+      io::serial::Gyro g;
+      g.sequence = static_cast<std::uint16_t>(k - 1);
+      g.sum = lsb_of(k);
+      g.n = 1;
+      g.lsb_per_dps_x10 = 655;
+      wire.push_back(io::serial::encode(g));
+    }
+    ++k;
+  }
+  const std::size_t frames = k - 1;
+  PseudoTerminal pty;
+  const fs::path record = scene.dir / "rec";
+  const fs::path odometry = scene.dir / "live.csv";
+  // The consensus (the default) takes the gyro.
+  Child moa({"live", "--config", scene.config.string(), "--serial", pty.device(), "--record",
+             record.string(), "--out", odometry.string()},
+            scene.dir);
+  ASSERT_TRUE(moa.started());
+  std::thread device([&] {
+    if (!pty.wait_for_hello_request(10.0)) return;
+    for (const auto& bytes : wire) {
+      pty.write(bytes);
+      std::this_thread::sleep_for(200us);  // a line's pace: frames do not all come at once
+    }
+    const auto deadline = std::chrono::steady_clock::now() + 10s;
+    while (std::chrono::steady_clock::now() < deadline) {
+      const fs::path journal = record / "mice.csv.part";
+      if (fs::exists(journal) && data_lines(journal) >= scene.log.rows.size()) break;
+      std::this_thread::sleep_for(10ms);
+    }
+    pty.close_master();
+  });
+  device.join();
+  ASSERT_EQ(moa.wait(10s), 0) << moa.err();
+  EXPECT_NE(moa.out().find(std::to_string(frames) + " gyro samples"), std::string::npos)
+      << moa.out();
+
+  std::istringstream lines(read_text(record / "imu.csv"));
+  std::string line;
+  std::vector<std::string> header;
+  std::vector<std::pair<double, double>> rows;
+  while (std::getline(lines, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    if (header.empty()) {
+      header.push_back(line);
+      continue;
+    }
+    const auto comma = line.find(',');
+    ASSERT_NE(comma, std::string::npos) << line;
+    rows.emplace_back(std::stod(line.substr(0, comma)), std::stod(line.substr(comma + 1)));
+  }
+  ASSERT_EQ(header.size(), 1u);
+  EXPECT_EQ(header[0], "t,gz");
+  ASSERT_EQ(rows.size(), frames);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    // Frame k = i + 1 ends at 10 ms k of device time; rows count from the
+    // first window's start, one 10 ms window before the first frame's end:
+    // the same t as the frame's mice rows.
+    EXPECT_NEAR(rows[i].first, 0.01 * static_cast<double>(i + 1), 1e-12) << i;
+    const double gz = lsb_of(i + 1) / 65.5 * 3.14159265358979323846 / 180.0;
+    EXPECT_NEAR(rows[i].second, gz, 1e-12) << i;
+  }
+  // Fed in the order a replay feeds imu.csv: the same odometry, byte for byte.
+  const fs::path replay = scene.dir / "replay.csv";
+  const auto r = run_moa("odometry --config " + (record / "robot.yaml").string() + " --log " +
+                         record.string() + " --quiet --out " + replay.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(read_text(replay), read_text(odometry));
+  // The gyro was fed: without it the odometry differs.
+  const fs::path no_imu = scene.dir / "no_imu.csv";
+  const auto n = run_moa("odometry --config " + (record / "robot.yaml").string() + " --log " +
+                         record.string() + " --no-imu --quiet --out " + no_imu.string());
+  ASSERT_EQ(n.exit_code, 0) << n.err;
+  EXPECT_NE(read_text(no_imu), read_text(odometry));
+}
+
 TEST(Live, CtrlCBeforeTheDeviceSpeaksFailsAndWritesNothing) {
   Scene scene;
   PseudoTerminal pty;

@@ -298,6 +298,82 @@ TEST(Decoder, DecodesEveryMessageTypeItEncodes) {
   EXPECT_EQ(decoder.stats().corrupt, 0u);
 }
 
+TEST(Decoder, GyroFrameRoundTripsItsFieldsAndRate) {
+  Gyro gyro;
+  gyro.sequence = 0xBEEF;
+  gyro.sum = -123456789;  // below -2^16: all four bytes and the sign in use
+  gyro.n = 1000;
+  gyro.lsb_per_dps_x10 = 655;
+  gyro.flags = kGyroSaturated;
+  const Bytes wire = encode(gyro);
+  // 12 payload bytes + 2 CRC, one COBS code byte per zero-free run, delimiter.
+  Bytes payload{0x03, 0xEF, 0xBE};
+  const auto raw = static_cast<std::uint32_t>(gyro.sum);
+  for (int shift = 0; shift < 32; shift += 8) payload.push_back((raw >> shift) & 0xFF);
+  payload.insert(payload.end(), {0xE8, 0x03, 0x8F, 0x02, 0x01});
+  EXPECT_EQ(wire, frame_of(payload));
+  Decoder decoder;
+  const Fed fed = feed(decoder, wire);
+  ASSERT_EQ(fed.messages.size(), 1u);
+  const auto& got = std::get<Gyro>(fed.messages[0]);
+  EXPECT_EQ(got.sequence, gyro.sequence);
+  EXPECT_EQ(got.sum, gyro.sum);
+  EXPECT_EQ(got.n, gyro.n);
+  EXPECT_EQ(got.lsb_per_dps_x10, gyro.lsb_per_dps_x10);
+  EXPECT_EQ(got.flags, gyro.flags);
+  // -123456789 LSB / 1000 samples / 65.5 LSB per deg/s, in rad/s.
+  EXPECT_NEAR(got.rate(), -123456.789 / 65.5 * 3.14159265358979 / 180.0, 1e-9);
+}
+
+TEST(Decoder, OldReaderSkipsAFrameOfANewTypeBetweenDataFrames) {
+  // What a reader that does not know a type sees: a good frame it skips,
+  // the DATA frames around it whole, nothing counted corrupt.
+  Decoder decoder;
+  const Fed fed = feed(decoder, concat({encode(sample_data(1, 10, 2)),
+                                        frame_of({0x7E, 1, 0, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11}),
+                                        encode(sample_data(2, 20, 2))}));
+  ASSERT_EQ(fed.messages.size(), 2u);
+  EXPECT_EQ(std::get<Data>(fed.messages[0]).sequence, 1);
+  EXPECT_EQ(std::get<Data>(fed.messages[1]).sequence, 2);
+  ASSERT_EQ(fed.errors.size(), 1u);
+  EXPECT_EQ(fed.errors[0], FrameError::kUnknownType);
+  EXPECT_EQ(decoder.stats().unknown, 1u);
+  EXPECT_EQ(decoder.stats().corrupt, 0u);
+}
+
+TEST(Decoder, TruncatedOrCorruptGyroFramesAreCountedAndTheNextDecodes) {
+  Gyro gyro;
+  gyro.sequence = 3;
+  gyro.sum = 65500;
+  gyro.n = 12;
+  gyro.lsb_per_dps_x10 = 655;
+  const Bytes wire = encode(gyro);
+  // Every cut: the frame's head, then a delimiter.
+  for (std::size_t cut = 1; cut + 1 < wire.size(); ++cut) {
+    Decoder decoder;
+    Bytes stream(wire.begin(), wire.begin() + static_cast<long>(cut));
+    stream.push_back(0);
+    const Fed fed = feed(decoder, concat({stream, encode(sample_data(4, 40, 1))}));
+    EXPECT_EQ(decoder.stats().corrupt, 1u) << cut;
+    ASSERT_EQ(fed.messages.size(), 1u) << cut;
+    EXPECT_EQ(std::get<Data>(fed.messages[0]).sequence, 4) << cut;
+  }
+  // Every single-bit error of every byte before the delimiter.
+  for (std::size_t at = 0; at + 1 < wire.size(); ++at) {
+    for (int bit = 0; bit < 8; ++bit) {
+      Bytes bad = wire;
+      bad[at] = static_cast<std::uint8_t>(bad[at] ^ (1u << bit));
+      Decoder decoder;
+      const Fed fed = feed(decoder, concat({bad, Bytes{0}, encode(sample_data(4, 40, 1))}));
+      // A flipped byte may become a delimiter and split the block in two.
+      EXPECT_GE(decoder.stats().corrupt, 1u) << at << " " << bit;
+      ASSERT_FALSE(fed.messages.empty()) << at << " " << bit;
+      EXPECT_TRUE(std::holds_alternative<Data>(fed.messages.back())) << at << " " << bit;
+      for (const auto& m : fed.messages) EXPECT_FALSE(std::holds_alternative<Gyro>(m));
+    }
+  }
+}
+
 TEST(Decoder, IgnoresEmptyBlocks) {
   Decoder decoder;
   Bytes stream{0, 0, 0};
@@ -368,6 +444,14 @@ TEST(Decoder, EachMalformedFrameIsDroppedWithItsReason) {
       {"hello name cut", hello(1, 1, 1, 1000, {3, 'a'}), FrameError::kBadLength},
       {"hello missing name", hello(1, 2, 1, 1000, {1, 'a'}), FrameError::kBadLength},
       {"hello trailing byte", hello(1, 1, 1, 1000, {1, 'a', 'b'}), FrameError::kBadLength},
+      {"gyro a byte short", frame_of({0x03, 1, 0, 5, 0, 0, 0, 1, 0, 0x8F, 0x02}),
+       FrameError::kBadLength},
+      {"gyro a byte long", frame_of({0x03, 1, 0, 5, 0, 0, 0, 1, 0, 0x8F, 0x02, 0, 0}),
+       FrameError::kBadLength},
+      {"gyro without samples", frame_of({0x03, 1, 0, 5, 0, 0, 0, 0, 0, 0x8F, 0x02, 0}),
+       FrameError::kBadField},
+      {"gyro sensitivity zero", frame_of({0x03, 1, 0, 5, 0, 0, 0, 1, 0, 0, 0, 0}),
+       FrameError::kBadField},
   };
   for (const auto& c : cases) {
     Decoder decoder;
@@ -375,7 +459,10 @@ TEST(Decoder, EachMalformedFrameIsDroppedWithItsReason) {
     ASSERT_EQ(fed.errors.size(), 1u) << c.what;
     EXPECT_EQ(fed.errors[0], c.error) << c.what << ": " << describe(fed.errors[0]);
     EXPECT_TRUE(fed.messages.empty()) << c.what;
-    EXPECT_EQ(decoder.stats().corrupt, 1u) << c.what;
+    // A well-framed unknown type is a newer device's frame: skipped, not corrupt.
+    const bool unknown = c.error == FrameError::kUnknownType;
+    EXPECT_EQ(decoder.stats().corrupt, unknown ? 0u : 1u) << c.what;
+    EXPECT_EQ(decoder.stats().unknown, unknown ? 1u : 0u) << c.what;
     EXPECT_EQ(decoder.stats().frames, 0u) << c.what;
     // The decoder is in step again for the next frame.
     EXPECT_EQ(feed(decoder, data_one).messages.size(), 1u) << c.what;
@@ -494,7 +581,8 @@ TEST(Decoder, RandomBytesNeverCrashAndEveryBlockIsAccounted) {
     }
     Decoder decoder;
     const Fed fed = feed(decoder, stream);
-    EXPECT_EQ(decoder.stats().frames + decoder.stats().corrupt, blocks) << trial;
+    EXPECT_EQ(decoder.stats().frames + decoder.stats().corrupt + decoder.stats().unknown, blocks)
+        << trial;
     EXPECT_EQ(fed.messages.size() + fed.errors.size(), blocks) << trial;
   }
 }

@@ -182,6 +182,123 @@ TEST(SerialReader, StreamsRowsAndCountsLostAndCorruptFrames) {
   EXPECT_TRUE(contains_text(warnings, pty.device() + ": device lost ("));
 }
 
+serial::Gyro gyro_frame(std::uint16_t sequence, std::int32_t sum, std::uint8_t flags = 0) {
+  serial::Gyro g;
+  g.sequence = sequence;
+  g.sum = sum;
+  g.n = 4;  // K of hello_ba()
+  g.lsb_per_dps_x10 = 655;
+  g.flags = flags;
+  return g;
+}
+
+TEST(SerialReader, GyroFramesBecomeSamplesAtTheirDataFramesTime) {
+  test::PseudoTerminal pty;
+  std::vector<std::string> warnings;
+  std::atomic<int> seen{0};
+  SerialReader reader(pty.device(), two_sensors(), fast_options(), collecting(warnings));
+  // Frame k's gyro sum: 4 samples of (300 k - 3000) LSB, clockwise first.
+  const auto sum_of = [](int k) { return 4 * (300 * k - 3000); };
+  const int n_frames = 20;
+  std::thread device([&] {
+    ASSERT_TRUE(pty.wait_for_hello_request(5.0));
+    pty.write(serial::encode(hello_ba()));
+    for (int k = 0; k < n_frames; ++k) {
+      const auto sequence = static_cast<std::uint16_t>(k);
+      pty.write(serial::encode(data(sequence, 1'000'000u + 10'000u * k, 1, 1)));
+      Bytes gyro = serial::encode(gyro_frame(sequence, sum_of(k), k == 9 ? 1 : 0));
+      if (k == 5) gyro.resize(gyro.size() / 2);  // cut off: the rest of it lost on the line
+      if (k == 5) gyro.push_back(0);
+      if (k == 7) gyro[4] = static_cast<std::uint8_t>(gyro[4] == 0x55 ? 0x56 : 0x55);
+      if (k == 12) gyro = serial::encode(gyro_frame(11, sum_of(k)));  // names another frame
+      // Time for the reader to take the DATA frame alone: its rows must
+      // still wait for the sample.
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      pty.write(gyro);
+    }
+    wait_for(seen, 2 * n_frames);
+    pty.close_master();
+  });
+  reader.start_time();
+  std::vector<SensorRow> rows;
+  std::vector<GyroSample> samples;
+  // Whether the sample of a row's window was there when next() gave the row.
+  std::vector<bool> sample_first;
+  while (const auto row = reader.next()) {
+    rows.push_back(*row);
+    ++seen;
+    for (const GyroSample& g : reader.take_gyro()) samples.push_back(g);
+    sample_first.push_back(!samples.empty() && samples.back().t == row->t);
+  }
+  for (const GyroSample& g : reader.take_gyro()) samples.push_back(g);
+  device.join();
+  // From the first GYRO frame on, a frame's rows wait for its sample.
+  for (std::size_t i = 2; i < rows.size(); ++i) {
+    const std::size_t k = i / 2;
+    if (k != 5 && k != 7 && k != 12) {
+      EXPECT_TRUE(sample_first[i]) << "row " << i;
+    }
+  }
+
+  ASSERT_EQ(rows.size(), 2u * n_frames);
+  std::vector<int> frames;
+  for (int k = 0; k < n_frames; ++k) {
+    if (k != 5 && k != 7 && k != 12) frames.push_back(k);
+  }
+  ASSERT_EQ(samples.size(), frames.size());
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const int k = frames[i];
+    SCOPED_TRACE("frame " + std::to_string(k));
+    // On the rows' clock: the time of the rows of its DATA frame.
+    EXPECT_EQ(samples[i].t, rows[2 * static_cast<std::size_t>(k)].t);
+    // (300 k - 3000) LSB / 65.5 LSB per deg/s, in rad/s.
+    EXPECT_NEAR(samples[i].gz, (300.0 * k - 3000.0) / 65.5 * 3.14159265358979 / 180.0, 1e-12);
+    EXPECT_EQ(samples[i].saturated, k == 9);
+  }
+  const auto& stats = reader.stats();
+  EXPECT_EQ(stats.gyro_frames, frames.size());
+  EXPECT_EQ(stats.corrupt, 2u);  // frames 5 (cut) and 7 (bad CRC)
+  EXPECT_EQ(stats.gyro_unmatched, 1u);
+  EXPECT_EQ(stats.gyro_saturated, 1u);
+  EXPECT_EQ(stats.lost_frames, 0u);
+  EXPECT_TRUE(contains_text(warnings, "GYRO frames without their DATA frame"));
+  EXPECT_TRUE(contains_text(warnings, "gyro samples saturated"));
+}
+
+TEST(SerialReader, FramesOfAnUnknownTypeAreSkippedNotCorrupt) {
+  test::PseudoTerminal pty;
+  std::vector<std::string> warnings;
+  std::atomic<int> seen{0};
+  SerialReader reader(pty.device(), two_sensors(), fast_options(), collecting(warnings));
+  std::thread device([&] {
+    ASSERT_TRUE(pty.wait_for_hello_request(5.0));
+    pty.write(serial::encode(hello_ba()));
+    // Type 0x7E, well framed: what a newer firmware might add.
+    Bytes payload{0x7E, 1, 2, 3};
+    const std::uint16_t crc = serial::crc16(payload);
+    payload.push_back(static_cast<std::uint8_t>(crc & 0xFF));
+    payload.push_back(static_cast<std::uint8_t>(crc >> 8));
+    Bytes unknown = serial::cobs_encode(payload);
+    unknown.push_back(0);
+    for (int k = 0; k < 5; ++k) {
+      pty.write(serial::encode(data(static_cast<std::uint16_t>(k), 10'000u * k, 1, 1)));
+      pty.write(unknown);
+    }
+    wait_for(seen, 10);
+    pty.close_master();
+  });
+  reader.start_time();
+  const auto rows = read_rows(reader, seen);
+  device.join();
+  EXPECT_EQ(rows.size(), 10u);
+  EXPECT_EQ(reader.stats().unknown, 5u);
+  EXPECT_EQ(reader.stats().corrupt, 0u);
+  EXPECT_EQ(reader.stats().lost_frames, 0u);
+  EXPECT_TRUE(reader.take_gyro().empty());
+  EXPECT_FALSE(contains_text(warnings, "corrupt"));
+  EXPECT_TRUE(contains_text(warnings, "of a type this moa does not know"));
+}
+
 TEST(SerialReader, JoinsAfterRandomBytesAndSkipsDataBeforeHello) {
   test::PseudoTerminal pty;
   std::vector<std::string> warnings;

@@ -122,8 +122,9 @@ class RateMeter {
 int run_live(LiveArgs args) {
   namespace fs = std::filesystem;
   const io::RobotConfig config = io::read_config(args.config);
-  const OdometryOptions odometry_options =
-      resolve_odometry_flags(args.odometry, config, args.config);
+  OdometryOptions odometry_options = resolve_odometry_flags(args.odometry, config, args.config);
+  // As `moa odometry` on the recording: the gyro goes to the consensus only.
+  if (odometry_options.estimator != EstimatorKind::kConsensus) odometry_options.use_imu = false;
   for (const auto& w : self_calibration_warnings(odometry_options)) {
     fmt::print(stderr, "moa live: warning: {}\n", w);
   }
@@ -161,6 +162,7 @@ int run_live(LiveArgs args) {
       io::refuse_output_onto_inputs(dir / "wheels.csv", "--record", inputs);
       io::refuse_output_onto_inputs(dir / "camera.csv", "--record", inputs);
     }
+    if (!spec.serial.empty()) io::refuse_output_onto_inputs(dir / "imu.csv", "--record", inputs);
     // A recording is data that cannot be made again: replaced only when asked.
     for (const char* name : {"mice.csv", "mice.csv.part", "robot.yaml"}) {
       std::error_code ec;
@@ -228,10 +230,16 @@ int run_live(LiveArgs args) {
                                                  live.serial != nullptr || live.replay != nullptr,
                                                  io::MiceWriter::Durability::kJournal, comments);
   }
+  // The streams' rows, and a serial board's gyro (imu.csv).
   std::unique_ptr<io::StreamCsvWriter> stream_recording;
-  if (recording && !args.streams.empty()) {
+  if (recording && (!args.streams.empty() || live.serial)) {
     stream_recording = std::make_unique<io::StreamCsvWriter>(
-        args.record, fmt::format("recorded by moa live from the streams of {}", args.streams));
+        args.record,
+        args.streams.empty()
+            ? fmt::format("recorded by moa live from the gyro of {} (t: s; gz: rad/s, "
+                          "counter-clockwise about z)",
+                          live.where)
+            : fmt::format("recorded by moa live from the streams of {}", args.streams));
   }
   std::unique_ptr<io::OdometryCsvWriter> odometry_out;
   if (to_stdout) {
@@ -311,6 +319,7 @@ int run_live(LiveArgs args) {
   };
 
   if (streams) input.add_streams(*streams, spec.replay.empty() ? 1.0 : spec.replay_options.speed);
+  if (live.serial) input.add_gyro(*live.serial);
   // A live input's bad row (a saturated record, a time out of order) is
   // skipped and not recorded, so that the recording replays; each kind is
   // reported once, with the count at the end.
@@ -367,8 +376,8 @@ int run_live(LiveArgs args) {
     }
     if (live.serial) {
       const auto& s = live.serial->stats();
-      fmt::print(report, "moa live: {} DATA frames, {} lost, {} corrupt\n", s.data_frames,
-                 s.lost_frames, s.corrupt);
+      fmt::print(report, "moa live: {} DATA frames, {} lost, {} corrupt; {} gyro samples\n",
+                 s.data_frames, s.lost_frames, s.corrupt, s.gyro_frames);
     }
     if (streams) {
       const auto st = streams->stats();
@@ -410,8 +419,8 @@ void add_live(CLI::App& app, Action& action) {
       ->check(CLI::ExistingFile);
   add_source_flags(cmd, args->source);
   cmd->add_option("--record", args->record,
-                  "Record the rows to DIR (log v1 mice.csv + robot.yaml) for replay with "
-                  "`moa odometry`");
+                  "Record the rows to DIR (log v1 mice.csv + robot.yaml; a serial board's gyro "
+                  "to imu.csv, t,gz in s, rad/s) for replay with `moa odometry`");
   cmd->add_option("--out", args->out, "Write odometry.csv to FILE (at the end), or '-' for stdout");
   // No limit on silences: live rows come at the pace of real time, so a
   // robot parked for hours is no runaway of still epochs.

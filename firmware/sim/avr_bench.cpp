@@ -3,6 +3,7 @@
 extern "C" {
 #include <avr_ioport.h>
 #include <avr_spi.h>
+#include <avr_twi.h>
 #include <avr_uart.h>
 #include <sim_avr.h>
 #include <sim_elf.h>
@@ -34,12 +35,15 @@ struct McuRegisters {
   std::uint16_t spsr;
   std::uint16_t spdr;
   std::uint16_t tccr1b;
+  std::uint16_t twsr;
+  std::uint16_t twcr;
 };
 
 namespace {
 
-constexpr McuRegisters kMcuRegisters[] = {{"atmega328p", 0x4C, 0x4D, 0x4E, 0x81},
-                                          {"atmega8", 0x2D, 0x2E, 0x2F, 0x4E}};
+constexpr McuRegisters kMcuRegisters[] = {{"atmega328p", 0x4C, 0x4D, 0x4E, 0x81, 0xB9, 0xBC},
+                                          {"atmega8", 0x2D, 0x2E, 0x2F, 0x4E, 0x21, 0x56}};
+constexpr std::uint8_t kTwint = 1u << 7;
 constexpr std::uint8_t kTimerClockSelect = 0x07;  // CS12:0 in TCCR1B
 constexpr std::uint8_t kSpif = 1u << 7;
 
@@ -133,6 +137,25 @@ void AvrBench::wire() {
   avr_->io[AVR_DATA_TO_IO(mcu_->spdr)].w.c = on_spdr_write;
   avr_->io[AVR_DATA_TO_IO(mcu_->spdr)].w.param = this;
 
+  // The TWI bus (the gyro, if one is attached).
+  twi_in_ = get_irq(avr_, AVR_IOCTL_TWI_GETIRQ(0), TWI_IRQ_INPUT, "TWI input");
+  avr_irq_register_notify(get_irq(avr_, AVR_IOCTL_TWI_GETIRQ(0), TWI_IRQ_OUTPUT, "TWI output"),
+                          on_twi, this);
+  // simavr 1.6 reports an acknowledged SLA+W as 0x28 (data sent, ACK)
+  // instead of the data sheet's 0x18; the status is put right as simavr
+  // sets it, before the firmware can see TWINT.
+  avr_irq_register_notify(get_irq(avr_, AVR_IOCTL_TWI_GETIRQ(0), TWI_IRQ_STATUS, "TWI status"),
+                          on_twi_status, this);
+  // TWCR writes pass through the bench: TWINT cleared as the hardware
+  // does, and a held bus: writes go to the register but start nothing, so
+  // TWINT never rises again (the firmware's timeout must end the wait).
+  auto& io = avr_->io[AVR_DATA_TO_IO(mcu_->twcr)];
+  twcr_write_ = io.w.c;
+  twcr_param_ = io.w.param;
+  if (twcr_write_ == nullptr) throw std::runtime_error("simavr: no TWI on " + build_.mcu);
+  io.w.c = on_twcr_write;
+  io.w.param = this;
+
   hooks_.reserve(kMaxChipSelects + 1);
   for (int i = 0; i < kMaxChipSelects; ++i) {
     hooks_.push_back(PinHook{this, i});
@@ -144,6 +167,61 @@ void AvrBench::wire() {
   avr_irq_register_notify(
       get_irq(avr_, AVR_IOCTL_IOPORT_GETIRQ(kSensorReset.port), kSensorReset.bit, "RESET"), on_pin,
       &hooks_.back());
+}
+
+void AvrBench::attach_gyro(std::unique_ptr<Mpu6050Model> gyro) {
+  if (avr_->cycle != 0) throw std::runtime_error("attach_gyro: the AVR has run already");
+  gyro_ = std::move(gyro);
+}
+
+void AvrBench::on_twcr_write(avr_t* avr, std::uint16_t address, std::uint8_t value, void* param) {
+  auto* bench = static_cast<AvrBench*>(param);
+  if (bench->gyro_ && bench->gyro_->bus_held(bench->now_us())) {
+    // Writing 1 to TWINT clears it; nothing sets it again.
+    avr->data[address] = static_cast<std::uint8_t>(value & ~kTwint);
+    ++bench->twcr_writes_held_;
+    return;
+  }
+  bench->twcr_write_(avr, address, value, bench->twcr_param_);
+  // Writing one to TWINT clears it (data sheet); simavr 1.6 leaves it set
+  // (its TWI vector is "sticky"), so the next wait would end at once. Its
+  // handler has seen the flag by now; simavr sets TWINT only from timers.
+  if (value & kTwint) avr->data[address] = static_cast<std::uint8_t>(avr->data[address] & ~kTwint);
+}
+
+void AvrBench::on_twi_status(avr_irq_t*, std::uint32_t value, void* param) {
+  auto* bench = static_cast<AvrBench*>(param);
+  constexpr std::uint8_t kMtDataAck = 0x28;
+  constexpr std::uint8_t kMtSlaAck = 0x18;
+  if (value == kMtDataAck && bench->twi_after_address_write_) {
+    std::uint8_t& twsr = bench->avr_->data[bench->mcu_->twsr];
+    twsr = static_cast<std::uint8_t>((twsr & 0x07) | kMtSlaAck);
+  }
+  bench->twi_after_address_write_ = false;
+}
+
+void AvrBench::on_twi(avr_irq_t*, std::uint32_t value, void* param) {
+  static_cast<AvrBench*>(param)->twi_message(value);
+}
+
+// simavr's TWI master announces each step on TWI_IRQ_OUTPUT and expects the
+// slave's answer at once on TWI_IRQ_INPUT: an ACK for its address or a
+// written byte, the data for a read. No answer reads as a NACK.
+void AvrBench::twi_message(std::uint32_t value) {
+  avr_twi_msg_irq_t m;
+  m.u.v = value;
+  const std::uint8_t msg = m.u.twi.msg;
+  const std::uint8_t addr = m.u.twi.addr;
+  if (!gyro_) return;  // nobody on the bus: no acknowledge
+  if (msg & TWI_COND_STOP) gyro_->stop();
+  twi_after_address_write_ = (msg & TWI_COND_START) != 0 && (addr & 1u) == 0;
+  if (msg & TWI_COND_START) {
+    if (gyro_->address(addr)) avr_raise_irq(twi_in_, avr_twi_irq_msg(TWI_COND_ACK, addr, 1));
+  } else if (msg & TWI_COND_WRITE) {
+    if (gyro_->write(m.u.twi.data)) avr_raise_irq(twi_in_, avr_twi_irq_msg(TWI_COND_ACK, addr, 1));
+  } else if (msg & TWI_COND_READ) {
+    avr_raise_irq(twi_in_, avr_twi_irq_msg(TWI_COND_READ, addr, gyro_->read(now_us())));
+  }
 }
 
 void AvrBench::release() {

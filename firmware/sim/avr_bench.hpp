@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "adns3080_model.hpp"
+#include "mpu6050_model.hpp"
 
 struct avr_t;
 struct avr_irq_t;
@@ -68,6 +69,13 @@ class AvrBench {
   const std::vector<UartByte>& uart() const { return uart_; }
 
   Adns3080Model* sensor(std::size_t i) { return i < sensors_.size() ? sensors_[i].get() : nullptr; }
+  /// Puts `gyro` on the TWI bus (SDA PC4, SCL PC5); before the first
+  /// run_until_us, so that the firmware finds it at start. Without one the
+  /// bus has no device: every address goes unacknowledged.
+  void attach_gyro(std::unique_ptr<Mpu6050Model> gyro);
+  Mpu6050Model* gyro() { return gyro_.get(); }
+  /// TWCR writes the firmware made while the gyro held the bus.
+  std::size_t twcr_writes_while_held() const { return twcr_writes_held_; }
   /// Bus-level faults (several sensors selected, wrong SPI mode or clock).
   const std::vector<std::string>& violations() const { return violations_; }
   /// When the firmware started Timer1 (its timestamp epoch), or -1.
@@ -90,6 +98,10 @@ class AvrBench {
   static void on_uart(avr_irq_t* irq, std::uint32_t value, void* param);
   static void on_tccr1b(avr_irq_t* irq, std::uint32_t value, void* param);
   static void on_pin(avr_irq_t* irq, std::uint32_t value, void* param);
+  static void on_twi(avr_irq_t* irq, std::uint32_t value, void* param);
+  static void on_twi_status(avr_irq_t* irq, std::uint32_t value, void* param);
+  static void on_twcr_write(avr_t* avr, std::uint16_t address, std::uint8_t value, void* param);
+  void twi_message(std::uint32_t value);
   int sclk_divider() const;
   void spdr_written(std::uint8_t mosi);
   void spi_done();
@@ -103,6 +115,13 @@ class AvrBench {
   double spi_start_us_ = 0.0;
   avr_irq_t* uart_in_ = nullptr;
   std::vector<std::unique_ptr<Adns3080Model>> sensors_;
+  std::unique_ptr<Mpu6050Model> gyro_;
+  avr_irq_t* twi_in_ = nullptr;
+  bool twi_after_address_write_ = false;  ///< the last TWI step sent SLA+W
+  std::size_t twcr_writes_held_ = 0;
+  // simavr's own TWCR write handler, which the bench's wraps.
+  void (*twcr_write_)(avr_t*, std::uint16_t, std::uint8_t, void*) = nullptr;
+  void* twcr_param_ = nullptr;
   std::vector<PinHook> hooks_;
   bool cs_high_[kMaxChipSelects];
   std::vector<void*> elf_memory_;  ///< the ELF symbol table, malloc'ed by simavr

@@ -47,6 +47,13 @@
 
 #define MOA_FW_K_MAX 1000u
 
+/* The gyro (gyro.h) on the TWI bus, whose pins are the chip selects of
+ * sensors 13 and 14: on by default up to 12 sensors. A build with it still
+ * runs without a gyro connected (no GYRO frames then). */
+#ifndef MOA_FW_GYRO
+#define MOA_FW_GYRO (MOA_FW_SENSORS <= 12)
+#endif
+
 /* Timestamp ticks: Timer1 with prescaler 8. */
 #define MOA_FW_TICK_HZ (F_CPU / 8UL)
 #define MOA_FW_FRAME_TICKS (MOA_FW_TICK_HZ / MOA_FW_FRAME_HZ)
@@ -60,6 +67,8 @@ _Static_assert(MOA_FW_TICK_HZ % MOA_FW_FRAME_HZ == 0,
 _Static_assert(MOA_FW_FRAME_TICKS >= 2 && MOA_FW_FRAME_TICKS <= 65536UL,
                "MOA_FW_FRAME_HZ out of Timer1's range");
 _Static_assert(MOA_FW_FRAME_HZ <= 65535UL, "MOA_FW_FRAME_HZ must fit the HELLO's u16");
+_Static_assert(!MOA_FW_GYRO || MOA_FW_SENSORS <= 12,
+               "MOA_FW_GYRO: the TWI pins are the chip selects of sensors 13 and 14");
 
 /* Time budget of one frame (docs/firmware.md, rates): a motion burst costs
  * the sensor's 75 us wait plus 5 bytes at 2 MHz (25 us), and about 480 CPU
@@ -68,8 +77,13 @@ _Static_assert(MOA_FW_FRAME_HZ <= 65535UL, "MOA_FW_FRAME_HZ must fit the HELLO's
  * must fit 90 % of the frame period (measured in simavr by the firmware
  * tests, which also check that no tick is missed). */
 #define MOA_FW_READ_NS_PER_SENSOR (100000ULL + 480ULL * 1000000000ULL / F_CPU)
-#define MOA_FW_FRAME_READ_NS \
-  (MOA_FW_SENSORS * MOA_FW_READ_NS_PER_SENSOR + 300ULL * 1000000000ULL / F_CPU)
+/* The gyro read: START, SLA+W, register, repeated START, SLA+R, two bytes,
+ * about 47 SCL periods at 400 kHz (118 us) and up to 2 us of code per step;
+ * a bus that hangs costs at most one step's 50 us timeout more (twi.h). */
+#define MOA_FW_GYRO_READ_NS (MOA_FW_GYRO ? 190000ULL : 0ULL)
+#define MOA_FW_FRAME_READ_NS                                                     \
+  (MOA_FW_SENSORS * MOA_FW_READ_NS_PER_SENSOR + 300ULL * 1000000000ULL / F_CPU + \
+   MOA_FW_GYRO_READ_NS)
 _Static_assert(MOA_FW_FRAME_READ_NS * 10ULL <= 9ULL * 1000000000ULL / MOA_FW_FRAME_HZ,
                "MOA_FW_SENSORS reads do not fit one frame at MOA_FW_FRAME_HZ: lower the rate");
 

@@ -1,7 +1,8 @@
-/* moa acquisition firmware: reads N ADNS-3080 sensors once per frame tick,
- * sums K frames per sensor (Kim & Lee's downsampler, their Section V) and
- * streams one DATA frame per window over the UART in moa serial protocol
- * v1 (docs/serial-protocol.md).
+/* moa acquisition firmware: reads N ADNS-3080 sensors (and the z rate of
+ * an MPU-6050 gyro, if one answers) once per frame tick, sums K frames per
+ * sensor (Kim & Lee's downsampler, their Section V) and streams one DATA
+ * frame per window, followed by a GYRO frame for the same window, over the
+ * UART in moa serial protocol v1 (docs/serial-protocol.md).
  *
  * Two contexts share the work. The frame interrupt (clock.h) reads the
  * sensors and closes windows: hard real time, it keeps to the clock. The
@@ -20,6 +21,7 @@
 #include "board.h"
 #include "clock.h"
 #include "config.h"
+#include "gyro.h"
 #include "protocol.h"
 #include "spi.h"
 #include "uart.h"
@@ -30,26 +32,42 @@
 /* HELLO: 13 fixed bytes and "m1".."m14" (length byte + up to 3 chars). */
 #define HELLO_MAX (13u + 4u * N)
 #define DATA_LENGTH (8u + 6u * N)
-/* Both payloads plus the CRC appended in place. */
+#define GYRO_LENGTH 12u
+/* Both payloads plus the CRC appended in place (GYRO's is shorter). */
 #define PAYLOAD_MAX ((HELLO_MAX > DATA_LENGTH ? HELLO_MAX : DATA_LENGTH) + 2u)
+_Static_assert(GYRO_LENGTH + 2u <= PAYLOAD_MAX, "the GYRO payload must fit the buffer");
 _Static_assert(HELLO_MAX <= MOA_PAYLOAD_MAX && DATA_LENGTH <= MOA_PAYLOAD_MAX,
                "payload longer than protocol.h allows for");
 _Static_assert(MOA_FRAME_MAX < MOA_UART_TX_SIZE, "a whole frame must fit the transmit ring");
+
+/* The gyro's share of a window: the z rates of `n` frames summed (raw LSB;
+ * K <= 1000 frames of |z| <= 32768 fit 26 bits). */
+typedef struct {
+  int32_t sum;
+  uint16_t n;
+  uint8_t flags; /* bit 0: a sample at full scale */
+} gyro_window_t;
 
 /* A closed window on its way from the frame interrupt to the main loop. */
 typedef struct {
   uint16_t sequence;
   uint32_t time;
   moa_window_t windows[N];
+  gyro_window_t gyro;
 } closed_window_t;
 
 /* Settings; written by the main loop only while reads are paused. */
 static uint16_t k = MOA_FW_K;
 static uint16_t cpi = MOA_FW_CPI;
 static bool present[N];
+/* The gyro answered at start and has not failed since: a failed read (a
+ * NACK or a bus timeout) turns it off until reset, so that a broken bus
+ * costs one timeout, not one per frame. */
+static volatile bool gyro_on;
 
 /* Frame interrupt state (the main loop touches it only while paused). */
 static moa_window_t windows[N];
+static gyro_window_t gyro_window;
 static uint16_t frames_in_window;
 static uint32_t last_frame_time;
 static uint16_t next_sequence;
@@ -78,6 +96,9 @@ static void put_u32(uint8_t* p, uint32_t v) {
 
 static void start_window(void) {
   for (uint8_t i = 0; i < N; ++i) window_reset(&windows[i]);
+  gyro_window.sum = 0;
+  gyro_window.n = 0;
+  gyro_window.flags = 0;
   frames_in_window = 0;
 }
 
@@ -90,10 +111,15 @@ static void close_window(void) {
   uint8_t slot = slot_state[0] == SLOT_READY ? 0 : 1;
   if (slot_state[slot] == SLOT_READY) {
     for (uint8_t i = 0; i < N; ++i) window_merge(&slots[slot].windows[i], &windows[i]);
+    gyro_window_t* g = &slots[slot].gyro;
+    g->sum += gyro_window.sum;
+    g->n = (uint16_t)(g->n + gyro_window.n);
+    g->flags |= gyro_window.flags;
   } else {
     slot = slot_state[0] == SLOT_EMPTY ? 0 : 1;
     slots[slot].sequence = next_sequence++;
     memcpy(slots[slot].windows, windows, sizeof windows);
+    slots[slot].gyro = gyro_window;
   }
   slots[slot].time = last_frame_time;
   slot_state[slot] = SLOT_READY;
@@ -108,6 +134,19 @@ void frame_tick(uint32_t tick_time) {
     adns3080_motion_burst(i, &m);
     window_add(&windows[i], m.motion, m.dx, m.dy, m.squal, MOA_FW_SQUAL_FLOOR);
   }
+#if MOA_FW_GYRO
+  /* After the mice, so that their reads keep to the clock. */
+  if (gyro_on) {
+    int16_t z;
+    if (gyro_read_z(&z)) {
+      gyro_window.sum += z;
+      ++gyro_window.n;
+      if (z == INT16_MAX || z == INT16_MIN) gyro_window.flags |= MOA_GYRO_SATURATED;
+    } else {
+      gyro_on = false;
+    }
+  }
+#endif
   last_frame_time = tick_time;
   if (++frames_in_window >= k) close_window();
 }
@@ -156,8 +195,19 @@ static void send_ready(void) {
     record[4] = r.squal;
     record[5] = r.flags;
   }
+  const gyro_window_t gyro = w->gyro;
+  const uint16_t sequence = w->sequence;
   slot_state[slot] = SLOT_EMPTY;
   protocol_send(payload, DATA_LENGTH);
+  /* The rate over the same window, if the gyro gave any sample in it. */
+  if (gyro.n == 0) return;
+  payload[0] = MOA_TYPE_GYRO;
+  put_u16(payload + 1, sequence);
+  put_u32(payload + 3, (uint32_t)gyro.sum);
+  put_u16(payload + 7, gyro.n);
+  put_u16(payload + 9, MOA_GYRO_LSB_PER_DPS_X10);
+  payload[11] = gyro.flags;
+  protocol_send(payload, GYRO_LENGTH);
 }
 
 /* Stops the reads between two frames, so that the main loop may use the
@@ -235,6 +285,9 @@ int main(void) {
   spi_init();
   adns3080_init_bus(N);
   for (uint8_t i = 0; i < N; ++i) present[i] = adns3080_present(i);
+#if MOA_FW_GYRO
+  gyro_on = gyro_init();
+#endif
   command_reader_reset(&command_reader);
   start_window();
   apply_cpi(cpi);

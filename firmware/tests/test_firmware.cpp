@@ -13,6 +13,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -98,8 +99,12 @@ serial::SensorCounts expected_record(const std::vector<MotionFrame>& script, std
 /// The firmware in simavr with its UART decoded as it runs.
 class Session {
  public:
-  Session(const FirmwareBuild& build, const std::vector<SensorSetup>& setups)
-      : build_(build), setups_(setups), bench_(build, make_models(setups)) {}
+  /// `gyro`: an MPU-6050 on the TWI bus, or none.
+  Session(const FirmwareBuild& build, const std::vector<SensorSetup>& setups,
+          std::unique_ptr<Mpu6050Model> gyro = nullptr)
+      : build_(build), setups_(setups), bench_(build, make_models(setups)) {
+    if (gyro) bench_.attach_gyro(std::move(gyro));
+  }
 
   /// Runs until `done` holds (checked every simulated millisecond);
   /// false if `timeout_us` of simulated time passed first.
@@ -122,6 +127,7 @@ class Session {
 
   std::vector<serial::Data> data() const { return of_type<serial::Data>(); }
   std::vector<serial::Hello> hellos() const { return of_type<serial::Hello>(); }
+  std::vector<serial::Gyro> gyros() const { return of_type<serial::Gyro>(); }
   const std::vector<serial::Message>& received() const { return received_; }
   const serial::Decoder::Stats& stats() const { return decoder_.stats(); }
   AvrBench& bench() { return bench_; }
@@ -572,6 +578,184 @@ TEST(FirmwareCommands, MissingSensorsAreReportedWithoutSurface) {
   // After its product ID read the impostor is left alone.
   EXPECT_EQ(s.bench().sensor(3)->accesses(), 2u);
   EXPECT_EQ(s.bench().sensor(3)->configuration(), Adns3080Model::kConfigurationReset);
+  expect_no_violations(s);
+}
+
+// ------------------------------------------------- the gyro (TWI bus)
+
+constexpr double kPi = 3.14159265358979323846;
+
+/// The builds whose TWI pins are free (12 sensors or fewer, config.h).
+std::vector<FirmwareBuild> gyro_builds() {
+  std::vector<FirmwareBuild> out;
+  for (const FirmwareBuild& b : kFirmwareBuilds) {
+    if (b.sensors <= 12) out.push_back(b);
+  }
+  return out;
+}
+
+/// rad/s to raw LSB at +-500 deg/s (65.5 LSB per deg/s), unrounded.
+double lsb_of(double rate) { return rate * 180.0 / kPi * 65.5; }
+
+/// The gyro samples (the model's ZOUT reads) of each DATA window, in order:
+/// a window's samples are those read before the next tick after its
+/// timestamp (a frame's reads fit in its period, checked below).
+std::vector<std::vector<Mpu6050Model::Sample>> samples_per_window(Session& s) {
+  const auto& samples = s.bench().gyro()->samples();
+  std::vector<std::vector<Mpu6050Model::Sample>> out;
+  std::size_t at = 0;
+  for (const serial::Data& d : s.data()) {
+    const double end = s.tick_time_us(d.timestamp) + 1e6 / s.build().frame_hz;
+    out.emplace_back();
+    while (at < samples.size() && samples[at].t_us < end) out.back().push_back(samples[at++]);
+  }
+  return out;
+}
+
+class FirmwareGyro : public ::testing::TestWithParam<FirmwareBuild> {};
+
+TEST_P(FirmwareGyro, GyroFramesCarryTheRateOfTheirDataWindow) {
+  const FirmwareBuild& build = GetParam();
+  // Counter-clockwise, 0.5 to 1.5 rad/s over a 40 ms period: each window
+  // sees a different rate.
+  const auto rate = [](double t_us) { return 1.0 + 0.5 * std::sin(2.0 * kPi * t_us / 40000.0); };
+  Session s(build, random_sensors(build.sensors, 300), std::make_unique<Mpu6050Model>(rate));
+  ASSERT_TRUE(s.run_until([&] { return s.gyros().size() >= 8; }, kBootUs + 200000.0));
+
+  // Set up as gyro.h says: awake, +-500 deg/s, DLPF 2, 1 kHz.
+  const Mpu6050Model& model = *s.bench().gyro();
+  EXPECT_FALSE(model.asleep());
+  EXPECT_EQ(model.register_value(Mpu6050Model::kRegGyroConfig), 0x08);
+  EXPECT_EQ(model.register_value(Mpu6050Model::kRegConfig), 0x02);
+
+  // Every DATA frame is followed by the GYRO frame of its window.
+  std::size_t pairs = 0;
+  for (std::size_t m = 0; m + 1 < s.received().size(); ++m) {
+    const auto* d = std::get_if<serial::Data>(&s.received()[m]);
+    if (d == nullptr) continue;
+    const auto* g = std::get_if<serial::Gyro>(&s.received()[m + 1]);
+    ASSERT_NE(g, nullptr) << "no GYRO after DATA " << d->sequence;
+    EXPECT_EQ(g->sequence, d->sequence);
+    ++pairs;
+  }
+  EXPECT_GE(pairs, 8u);
+
+  const std::vector<serial::Gyro> gyros = s.gyros();
+  const auto windows = samples_per_window(s);
+  const double frame_us = 1e6 / build.frame_hz;
+  // The gyro read fits the frame with the sensors': no tick is lost.
+  const std::vector<serial::Data> data = s.data();
+  const std::uint32_t frame_ticks = build.f_cpu / 8u / static_cast<std::uint32_t>(build.frame_hz);
+  for (std::size_t d = 1; d < data.size(); ++d) {
+    EXPECT_EQ(data[d].timestamp - data[d - 1].timestamp,
+              static_cast<std::uint32_t>(build.k) * frame_ticks)
+        << d;
+  }
+  for (std::size_t w = 0; w < gyros.size(); ++w) {
+    SCOPED_TRACE("window " + std::to_string(w));
+    const serial::Gyro& g = gyros[w];
+    ASSERT_EQ(g.n, static_cast<std::uint16_t>(build.k));
+    ASSERT_EQ(windows[w].size(), static_cast<std::size_t>(build.k));
+    EXPECT_EQ(g.lsb_per_dps_x10, 655);
+    EXPECT_EQ(g.flags, 0);
+    // Each sample within its frame's period, after the tick: the rate of
+    // the same K frames as the counts.
+    const double last_tick = s.tick_time_us(s.data()[w].timestamp);
+    EXPECT_GE(windows[w].back().t_us, last_tick);
+    EXPECT_GE(windows[w].front().t_us, last_tick - (build.k - 1) * frame_us);
+    // The programmed rate at the read times, rounded once per sample:
+    // within half an LSB each, one LSB per frame in all.
+    double want = 0.0;
+    for (const auto& sample : windows[w]) want += lsb_of(rate(sample.t_us));
+    EXPECT_NEAR(g.sum, want, g.n * 1.0);
+    EXPECT_GT(g.sum, 0);  // counter-clockwise is positive
+    EXPECT_NEAR(g.rate(), want / g.n / 65.5 * kPi / 180.0, kPi / 180.0 / 65.5);
+  }
+  expect_frames_match_script(s);
+  expect_no_violations(s);
+  EXPECT_EQ(s.stats().corrupt, 0u);
+}
+
+TEST_P(FirmwareGyro, FullScaleSamplesAreFlaggedSaturated) {
+  const FirmwareBuild& build = GetParam();
+  // -20 rad/s (-1146 deg/s) for 30 ms, beyond the +-500 deg/s full scale;
+  // -1 rad/s (clockwise) before and after.
+  const double fast_from = kBootUs + 40000.0;
+  const double fast_to = fast_from + 30000.0;
+  const auto rate = [&](double t) { return t >= fast_from && t < fast_to ? -20.0 : -1.0; };
+  Session s(build, random_sensors(build.sensors, 300), std::make_unique<Mpu6050Model>(rate));
+  ASSERT_TRUE(s.run_until([&] { return s.bench().now_us() > fast_to + 30000.0; }, 400000.0));
+  const std::vector<serial::Gyro> gyros = s.gyros();
+  const auto windows = samples_per_window(s);
+  std::size_t saturated = 0;
+  ASSERT_GE(windows.size(), gyros.size());
+  for (std::size_t w = 0; w < gyros.size(); ++w) {
+    ASSERT_EQ(gyros[w].sequence, w);
+    const bool fast = std::any_of(windows[w].begin(), windows[w].end(), [&](const auto& x) {
+      return x.t_us >= fast_from && x.t_us < fast_to;
+    });
+    const bool all_fast = std::all_of(windows[w].begin(), windows[w].end(), [&](const auto& x) {
+      return x.t_us >= fast_from && x.t_us < fast_to;
+    });
+    EXPECT_EQ(gyros[w].flags, fast ? serial::kGyroSaturated : 0) << w;
+    EXPECT_LT(gyros[w].sum, 0) << w;
+    if (all_fast) {
+      EXPECT_EQ(gyros[w].sum, -32768 * static_cast<int>(gyros[w].n)) << w;
+      ++saturated;
+    }
+  }
+  EXPECT_GE(saturated, 1u);
+}
+
+INSTANTIATE_TEST_SUITE_P(WithTwi, FirmwareGyro, ::testing::ValuesIn(gyro_builds()),
+                         [](const ::testing::TestParamInfo<FirmwareBuild>& param) {
+                           return param.param.name;
+                         });
+
+TEST(FirmwareGyroFaults, AnotherChipOrNoneMeansNoGyroFramesAndTheMiceAsBefore) {
+  // WHO_AM_I 0x70 (an MPU-6500): not the part the firmware knows.
+  Session other(uno(), random_sensors(uno().sensors, 200),
+                std::make_unique<Mpu6050Model>([](double) { return 1.0; }, 0x70));
+  ASSERT_TRUE(other.run_until([&] { return other.data().size() >= 6; }, kBootUs + 100000.0));
+  EXPECT_TRUE(other.gyros().empty());
+  EXPECT_TRUE(other.bench().gyro()->writes().empty());  // left asleep, untouched
+  EXPECT_TRUE(other.bench().gyro()->samples().empty());
+  expect_frames_match_script(other);
+
+  Session none(uno(), random_sensors(uno().sensors, 200));
+  ASSERT_TRUE(none.run_until([&] { return none.data().size() >= 6; }, kBootUs + 100000.0));
+  EXPECT_TRUE(none.gyros().empty());
+  expect_frames_match_script(none);
+  EXPECT_EQ(none.stats().corrupt + other.stats().corrupt, 0u);
+}
+
+TEST(FirmwareGyroFaults, AHungBusStopsTheGyroFramesAndNotTheMice) {
+  Session s(uno(), random_sensors(uno().sensors, 400),
+            std::make_unique<Mpu6050Model>([](double) { return 0.5; }));
+  ASSERT_TRUE(s.run_until([&] { return s.gyros().size() >= 3; }, kBootUs + 100000.0));
+  const double hang_us = s.bench().now_us() + 5300.0;  // inside a window
+  s.bench().gyro()->hold_bus_from(hang_us);
+  const std::size_t gyros_before = s.gyros().size();
+  const std::size_t data_before = s.data().size();
+  ASSERT_TRUE(s.run_until([&] { return s.data().size() >= data_before + 10; }, 200000.0));
+
+  // The mice: every window whole, K reads each, timestamps K frames apart.
+  expect_frames_match_script(s);
+  for (const std::size_t reads : reads_per_frame(s, 0)) EXPECT_EQ(reads, 12u);
+  const std::vector<serial::Data> data = s.data();
+  for (std::size_t d = 1; d < data.size(); ++d) {
+    EXPECT_EQ(data[d].timestamp - data[d - 1].timestamp, 12u * 2000u) << d;
+  }
+  // The gyro: at most the window of the hang still has a frame (with the
+  // samples read before it), none after.
+  const std::vector<serial::Gyro> gyros = s.gyros();
+  EXPECT_LE(gyros.size(), gyros_before + 2);
+  ASSERT_FALSE(gyros.empty());
+  EXPECT_LT(s.tick_time_us(data[gyros.back().sequence].timestamp) - 12000.0, hang_us);
+  for (const auto& sample : s.bench().gyro()->samples()) EXPECT_LT(sample.t_us, hang_us);
+  // One timeout, not one per frame: the step that hung (a write), the
+  // module switched off and on (two), then the gyro is left alone.
+  EXPECT_EQ(s.bench().twcr_writes_while_held(), 3u);
   expect_no_violations(s);
 }
 

@@ -87,6 +87,19 @@ std::string LiveRunSource::where() const {
   return from_streams_ ? fmt::format("{} (streams)", where_) : where_;
 }
 
+void LiveRunSource::add_gyro(SerialReader& serial) { gyro_ = &serial; }
+
+void LiveRunSource::take_gyro() {
+  if (gyro_ == nullptr) return;
+  // The reader holds a window's rows for its sample only once it has seen
+  // the gyro: a sample whose rows went out before it (the first) is stamped
+  // just after them, so that a replay feeds it where this run did.
+  const double after = std::nextafter(t_last_, std::numeric_limits<double>::infinity());
+  for (const GyroSample& g : gyro_->take_gyro()) {
+    imu_.push_back(ImuRow{g.t > t_last_ ? g.t : after, g.gz});
+  }
+}
+
 void LiveRunSource::take_streams() {
   if (streams_ == nullptr) return;
   arrived_.clear();
@@ -144,6 +157,7 @@ const InputRow* LiveRunSource::next() {
       ended_ = true;
     }
     take_streams();
+    take_gyro();
   }
   const double limit = ended_ ? t_last_ : pending_->t;
   if (!fixes_.empty() && fixes_.front().t <= limit) {
@@ -156,6 +170,11 @@ const InputRow* LiveRunSource::next() {
     row_ = wheels_.front();
     wheels_.pop_front();
     from_streams_ = true;
+    return &row_;
+  }
+  if (!imu_.empty() && imu_.front().t <= limit) {
+    row_ = imu_.front();
+    imu_.pop_front();
     return &row_;
   }
   if (ended_) return nullptr;

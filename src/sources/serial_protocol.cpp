@@ -2,6 +2,7 @@
 
 #include <cassert>
 #include <limits>
+#include <numbers>
 #include <type_traits>
 
 #include "moa/formats/error.hpp"
@@ -17,6 +18,7 @@ constexpr std::size_t kMaxBlock = kMaxFrameBytes + kMaxFrameBytes / 254 + 1;
 constexpr std::size_t kHelloFixed = 13;  // bytes before the names
 constexpr std::size_t kDataFixed = 8;    // bytes before the sensor records
 constexpr std::size_t kDataRecord = 6;
+constexpr std::size_t kGyroLength = 12;
 constexpr std::size_t kMaxNameLength = 15;
 constexpr std::uint16_t kMaxK = 1000;
 
@@ -41,6 +43,11 @@ std::uint32_t get_u32(std::span<const std::uint8_t> bytes, std::size_t at) {
   std::uint32_t value = 0;
   for (std::size_t i = 0; i < 4; ++i) value |= std::uint32_t{bytes[at + i]} << (8 * i);
   return value;
+}
+
+std::int32_t get_i32(std::span<const std::uint8_t> bytes, std::size_t at) {
+  const std::int64_t raw = get_u32(bytes, at);
+  return static_cast<std::int32_t>(raw >= 0x80000000LL ? raw - 0x100000000LL : raw);
 }
 
 // Two's complement from the raw 16 bits, without implementation-defined casts.
@@ -88,6 +95,13 @@ std::vector<std::uint8_t> payload_of(const Message& message) {
             out.push_back(m.sensors[i].squal);
             out.push_back(m.sensors[i].flags);
           }
+        } else if constexpr (std::is_same_v<T, Gyro>) {
+          out.push_back(static_cast<std::uint8_t>(Type::kGyro));
+          put_u16(out, m.sequence);
+          put_u32(out, static_cast<std::uint32_t>(m.sum));
+          put_u16(out, m.n);
+          put_u16(out, m.lsb_per_dps_x10);
+          out.push_back(m.flags);
         } else if constexpr (std::is_same_v<T, SetK>) {
           out.push_back(static_cast<std::uint8_t>(Type::kSetK));
           put_u16(out, m.k);
@@ -155,12 +169,26 @@ std::variant<Message, FrameError> parse_data(std::span<const std::uint8_t> p) {
   return Message{data};
 }
 
+std::variant<Message, FrameError> parse_gyro(std::span<const std::uint8_t> p) {
+  if (p.size() != kGyroLength) return FrameError::kBadLength;
+  Gyro gyro;
+  gyro.sequence = get_u16(p, 1);
+  gyro.sum = get_i32(p, 3);
+  gyro.n = get_u16(p, 7);
+  gyro.lsb_per_dps_x10 = get_u16(p, 9);
+  gyro.flags = p[11];
+  if (gyro.n == 0 || gyro.lsb_per_dps_x10 == 0) return FrameError::kBadField;
+  return Message{gyro};
+}
+
 std::variant<Message, FrameError> parse_payload(std::span<const std::uint8_t> p) {
   switch (p[0]) {
     case static_cast<std::uint8_t>(Type::kHello):
       return parse_hello(p);
     case static_cast<std::uint8_t>(Type::kData):
       return parse_data(p);
+    case static_cast<std::uint8_t>(Type::kGyro):
+      return parse_gyro(p);
     case static_cast<std::uint8_t>(Type::kSetK): {
       if (p.size() != 3) return FrameError::kBadLength;
       const SetK set{get_u16(p, 1)};
@@ -182,6 +210,12 @@ std::variant<Message, FrameError> parse_payload(std::span<const std::uint8_t> p)
 }
 
 }  // namespace
+
+double Gyro::rate() const {
+  // mean LSB / (LSB per deg/s) = deg/s; times pi/180 = rad/s.
+  const double dps = static_cast<double>(sum) / n / (lsb_per_dps_x10 / 10.0);
+  return dps * std::numbers::pi / 180.0;
+}
 
 // --------------------------------------------------------------------- CRC
 
@@ -272,7 +306,8 @@ const char* describe(FrameError error) {
     case FrameError::kBadLength:
       return "frame length does not match its type, or longer than 255 payload bytes";
     case FrameError::kBadField:
-      return "field out of range (version, sensor count, K, tick rate or sensor name)";
+      return "field out of range (version, sensor count, K, tick rate, sensor name, gyro samples "
+             "or sensitivity)";
   }
   return "invalid frame error";
 }
@@ -311,7 +346,15 @@ std::optional<std::variant<Message, FrameError>> Decoder::push(std::uint8_t byte
   const std::uint16_t crc = get_u16(frame, frame.size() - 2);
   if (crc16(payload) != crc) return fail(FrameError::kCrc);
   auto parsed = parse_payload(payload);
-  if (const auto* error = std::get_if<FrameError>(&parsed)) return fail(*error);
+  if (const auto* error = std::get_if<FrameError>(&parsed)) {
+    // A good frame of a type added after this decoder: skipped, not corrupt.
+    if (*error == FrameError::kUnknownType) {
+      block_.clear();
+      ++stats_.unknown;
+      return std::variant<Message, FrameError>{*error};
+    }
+    return fail(*error);
+  }
   block_.clear();
   ++stats_.frames;
   return std::variant<Message, FrameError>{std::move(std::get<Message>(parsed))};

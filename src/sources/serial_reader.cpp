@@ -127,6 +127,19 @@ struct SerialReader::Impl {
   double offset = 0.0;
   double last_t = 0.0;
   std::deque<SensorRow> ready;
+  std::vector<GyroSample> gyro;
+  // The last DATA frame turned into rows, whose GYRO frame may follow.
+  std::optional<std::uint16_t> gyro_sequence;
+  // Once the device has shown a gyro, a DATA frame's rows wait here for its
+  // GYRO frame (or the next frame), so that a window's sample is taken
+  // before its rows are handed out: the order a replay of imu.csv keeps.
+  bool gyro_present = false;
+  std::vector<SensorRow> held;
+
+  void release_held() {
+    ready.insert(ready.end(), held.begin(), held.end());
+    held.clear();
+  }
   Stats stats;
   bool hung_up = false;
   std::uint64_t bytes = 0;
@@ -188,6 +201,7 @@ struct SerialReader::Impl {
   bool rebase_next = false;
 
   void restart() {
+    gyro_sequence.reset();
     lost_before += tracker.lost_frames();
     tracker = serial::DataTracker{};
     rebase_next = true;
@@ -204,6 +218,7 @@ struct SerialReader::Impl {
   }
 
   void on_data(const serial::Data& data) {
+    release_held();  // the frame before had no GYRO frame
     if (!have_hello) {
       ++stats.before_hello;
       return;
@@ -227,6 +242,7 @@ struct SerialReader::Impl {
     const std::uint64_t lost_then = tracker.lost_frames();
     const double t_device = tracker.accept(data, hello.tick_hz);
     stats.lost_frames = lost_before + tracker.lost_frames();
+    gyro_sequence.reset();
     // It arrived (no sequence gap), but its records cannot be assigned.
     if (data.n != index.size()) {
       ++stats.mismatched;
@@ -255,6 +271,7 @@ struct SerialReader::Impl {
     }
     last_t = t;
     last_data = Clock::now();
+    gyro_sequence = data.sequence;
     ++stats.data_frames;
     for (std::size_t i = 0; i < data.n; ++i) {
       const auto& s = data.sensors[i];
@@ -265,8 +282,27 @@ struct SerialReader::Impl {
       row.squal = s.squal;
       row.flags = s.flags;
       if (s.flags & 1u) ++stats.overflow_rows;
-      ready.push_back(row);
+      if (gyro_present) {
+        held.push_back(row);
+      } else {
+        ready.push_back(row);
+      }
     }
+  }
+
+  // The GYRO frame of the last DATA frame: a sample at that frame's t.
+  void on_gyro(const serial::Gyro& g) {
+    if (!gyro_sequence || *gyro_sequence != g.sequence) {
+      ++stats.gyro_unmatched;
+      return;
+    }
+    gyro_sequence.reset();  // one sample per window
+    const bool saturated = (g.flags & serial::kGyroSaturated) != 0;
+    gyro.push_back(GyroSample{last_t, g.rate(), saturated});
+    gyro_present = true;
+    release_held();
+    ++stats.gyro_frames;
+    if (saturated) ++stats.gyro_saturated;
   }
 
   void on_bytes(const std::uint8_t* data, std::size_t n) {
@@ -276,14 +312,18 @@ struct SerialReader::Impl {
       if (!out) continue;
       if (const auto* message = std::get_if<serial::Message>(&*out)) {
         if (const auto* h = std::get_if<serial::Hello>(message)) {
+          release_held();
           on_hello(*h);
         } else if (const auto* d = std::get_if<serial::Data>(message)) {
           on_data(*d);
+        } else if (const auto* g = std::get_if<serial::Gyro>(message)) {
+          on_gyro(*g);
         }
         // Host commands echoed back are not for us.
       }
     }
     stats.corrupt = decoder.stats().corrupt;
+    stats.unknown = decoder.stats().unknown;
   }
 
   // Waits up to one tick for bytes and decodes them.
@@ -320,6 +360,7 @@ struct SerialReader::Impl {
   void hang_up(const std::string& why) {
     if (hung_up) return;
     hung_up = true;
+    release_held();
     report();
     hooks.warning(fmt::format("{}: device lost ({}); the stream ends", name, why));
   }
@@ -354,6 +395,20 @@ struct SerialReader::Impl {
           fmt::format("{}: the device restarted ({} so far); times continue from the "
                       "last row",
                       name, stats.restarts));
+    }
+    if (stats.gyro_unmatched > reported.gyro_unmatched) {
+      hooks.warning(fmt::format("{}: {} GYRO frames without their DATA frame dropped so far", name,
+                                stats.gyro_unmatched));
+    }
+    if (stats.gyro_saturated > reported.gyro_saturated) {
+      hooks.warning(fmt::format(
+          "{}: {} gyro samples saturated so far (turned faster than the gyro's full scale)", name,
+          stats.gyro_saturated));
+    }
+    if (stats.unknown > reported.unknown) {
+      hooks.warning(fmt::format(
+          "{}: {} frames of a type this moa does not know skipped so far (a newer firmware?)", name,
+          stats.unknown));
     }
     if (stats.duplicates > reported.duplicates) {
       hooks.warning(
@@ -429,11 +484,21 @@ std::optional<SensorRow> SerialReader::next() {
     }
     if (impl.hung_up) return std::nullopt;
     if (impl.hooks.should_stop()) {
+      if (!impl.held.empty()) {
+        impl.release_held();  // the last frame's rows, its GYRO frame not come
+        continue;
+      }
       impl.report();
       return std::nullopt;
     }
     impl.pump();
   }
+}
+
+std::vector<GyroSample> SerialReader::take_gyro() {
+  std::vector<GyroSample> out;
+  out.swap(impl_->gyro);
+  return out;
 }
 
 void SerialReader::send(const serial::Message& message) {

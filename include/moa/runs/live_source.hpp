@@ -84,6 +84,12 @@ class LiveRunSource final : public RunSource {
   /// Merges the robot's streams in; `speed`: the source's seconds per
   /// second of wall time (a replay's speed; 1 for devices).
   void add_streams(StreamLineReader& streams, double speed);
+  /// Merges the serial board's gyro samples in (SerialReader::take_gyro) as
+  /// ImuRows, each before the first mice row at or after its t, after that
+  /// row's fixes and wheel rows: the order a replay of imu.csv keeps. A
+  /// sample that comes after the rows of its window (the first of a stream)
+  /// is stamped just after them.
+  void add_gyro(SerialReader& serial);
   double start_time() override;
   const InputRow* next() override;
   std::string where() const override;
@@ -93,6 +99,7 @@ class LiveRunSource final : public RunSource {
 
  private:
   void take_streams();
+  void take_gyro();
   FrameSource& frames_;
   int sensors_;
   std::string where_;
@@ -115,6 +122,8 @@ class LiveRunSource final : public RunSource {
   double last_wheel_t_ = -std::numeric_limits<double>::infinity();  ///< s
   double last_fix_t_ = -std::numeric_limits<double>::infinity();    ///< s
   std::size_t dropped_ = 0;
+  SerialReader* gyro_ = nullptr;
+  std::deque<ImuRow> imu_;
 };
 
 }  // namespace moa::io

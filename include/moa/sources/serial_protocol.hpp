@@ -21,6 +21,7 @@ inline constexpr int kMaxSensors = 16;
 enum class Type : std::uint8_t {
   kHello = 0x01,
   kData = 0x02,
+  kGyro = 0x03,
   kSetK = 0x10,
   kSetCpi = 0x11,
   kHelloRequest = 0x12,
@@ -57,6 +58,23 @@ struct Data {
   std::array<SensorCounts, kMaxSensors> sensors{};
 };
 
+/// The z rate of an MPU-6050 class gyro over the window of the DATA frame
+/// with the same sequence number: `n` raw samples (one per sensor frame
+/// read) summed. Raw LSB are counter-clockwise positive about the chip's z
+/// axis; `lsb_per_dps_x10` is the sensitivity, LSB per deg/s times 10
+/// (655 at +-500 deg/s).
+struct Gyro {
+  std::uint16_t sequence = 0;
+  std::int32_t sum = 0;               ///< raw LSB summed over the n samples
+  std::uint16_t n = 0;                ///< samples summed (1..65535)
+  std::uint16_t lsb_per_dps_x10 = 0;  ///< > 0
+  std::uint8_t flags = 0;             ///< bit 0: a sample at full scale (saturated)
+
+  /// rad/s, the mean rate over the window (n > 0, lsb_per_dps_x10 > 0).
+  double rate() const;
+};
+inline constexpr std::uint8_t kGyroSaturated = 0x01;
+
 struct SetK {
   std::uint16_t k = 1;
 };
@@ -65,7 +83,7 @@ struct SetCpi {
 };
 struct HelloRequest {};
 
-using Message = std::variant<Hello, Data, SetK, SetCpi, HelloRequest>;
+using Message = std::variant<Hello, Data, Gyro, SetK, SetCpi, HelloRequest>;
 
 /// A whole wire frame: COBS(payload || crc16) || 0x00. Fields are written
 /// as given, even out of range (so tests can make invalid frames); throws
@@ -87,8 +105,11 @@ class Decoder {
  public:
   struct Stats {
     std::uint64_t frames = 0;    ///< good frames decoded
-    std::uint64_t corrupt = 0;   ///< frames dropped (any FrameError)
+    std::uint64_t corrupt = 0;   ///< frames dropped (any FrameError but kUnknownType)
     std::uint64_t overlong = 0;  ///< blocks longer than any valid frame
+    /// Good frames (COBS and CRC) of a type this decoder does not know: a
+    /// newer device's additions, skipped without counting them corrupt.
+    std::uint64_t unknown = 0;
   };
 
   /// Feeds one byte; returns a message when it completes a good frame, or

@@ -10,6 +10,12 @@
 // the device time of the stream's start, which is the end of the first DATA
 // window minus its length K / frame rate (0 if the rate is unknown).
 //
+// A GYRO frame (a device with a gyro) gives one GyroSample for the DATA
+// frame of its sequence number, at that frame's t: the mean z rate over the
+// same window, converted to rad/s with the sensitivity the frame states.
+// A GYRO frame that does not follow the DATA frame it names (that frame
+// lost, dropped or never accepted) is counted and dropped.
+//
 // Bad bytes never stop the stream: the decoder resynchronises at the next
 // delimiter, corrupt frames and frames lost (sequence gaps) are counted and
 // reported through LiveHooks::warn. A device clock that steps back (a
@@ -41,19 +47,30 @@ struct SerialOptions {
   double start_timeout = 5.0;
 };
 
+/// The device's gyro over one DATA window.
+struct GyroSample {
+  double t = 0.0;          ///< s, the DATA frame's row time (end of the window)
+  double gz = 0.0;         ///< rad/s, mean over the window, counter-clockwise about the chip's z
+  bool saturated = false;  ///< a sample of the window was at full scale: gz is too small
+};
+
 class SerialReader : public FrameSource {
  public:
   struct Stats {
-    std::uint64_t data_frames = 0;    ///< DATA frames turned into rows
-    std::uint64_t lost_frames = 0;    ///< from sequence gaps
-    std::uint64_t corrupt = 0;        ///< frames dropped by the decoder
-    std::uint64_t mismatched = 0;     ///< DATA whose N differs from the HELLO's
-    std::uint64_t before_hello = 0;   ///< DATA skipped before the first HELLO
-    std::uint64_t overflow_rows = 0;  ///< rows with the overflow flag
-    std::uint64_t clock_steps = 0;    ///< device clock stepped back or ahead (re-based)
-    std::uint64_t restarts = 0;       ///< a new HELLO, or the sequence restarted
-    std::uint64_t duplicates = 0;     ///< DATA frames repeating the last sequence number
-    std::uint64_t stale = 0;          ///< DATA frames behind the sequence, dropped
+    std::uint64_t data_frames = 0;     ///< DATA frames turned into rows
+    std::uint64_t lost_frames = 0;     ///< from sequence gaps
+    std::uint64_t corrupt = 0;         ///< frames dropped by the decoder
+    std::uint64_t mismatched = 0;      ///< DATA whose N differs from the HELLO's
+    std::uint64_t before_hello = 0;    ///< DATA skipped before the first HELLO
+    std::uint64_t overflow_rows = 0;   ///< rows with the overflow flag
+    std::uint64_t clock_steps = 0;     ///< device clock stepped back or ahead (re-based)
+    std::uint64_t restarts = 0;        ///< a new HELLO, or the sequence restarted
+    std::uint64_t duplicates = 0;      ///< DATA frames repeating the last sequence number
+    std::uint64_t stale = 0;           ///< DATA frames behind the sequence, dropped
+    std::uint64_t gyro_frames = 0;     ///< GYRO frames turned into samples
+    std::uint64_t gyro_unmatched = 0;  ///< GYRO frames not after their DATA frame, dropped
+    std::uint64_t gyro_saturated = 0;  ///< samples flagged saturated
+    std::uint64_t unknown = 0;         ///< good frames of a type this host does not know, skipped
   };
 
   /// Opens and sets up `device`; throws io::Error "DEV: why". Does not wait
@@ -67,6 +84,13 @@ class SerialReader : public FrameSource {
   double start_time() override;
   /// Blocks until a row, the stop hook, or a hang-up.
   std::optional<SensorRow> next() override;
+
+  /// The gyro samples decoded since the last call, in time order (none
+  /// from a device without a gyro). Once a first GYRO frame has come, the
+  /// rows of each DATA frame are held until its GYRO frame (or the next
+  /// frame, a HELLO, the end): when next() hands out a row, the sample of
+  /// its window, if any, is here already.
+  std::vector<GyroSample> take_gyro();
 
   /// Sends a host command (SET_K, SET_CPI, HELLO_REQUEST).
   void send(const serial::Message& message);
