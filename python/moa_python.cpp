@@ -145,7 +145,7 @@ class Options {
 };
 
 const std::set<std::string> kOdometryOptions{
-    "sensors",          "rate",    "no_wheels", "fuse_camera", "camera_latency",
+    "sensors",          "rate",    "no_wheels", "no_imu",      "fuse_camera", "camera_latency",
     "camera_sigma",     "e_th",    "r_th",      "alpha",       "initial_pose",
     "max_row_interval", "max_gap", "ekf_scale"};
 
@@ -164,6 +164,7 @@ OdometryOptions odometry_options(const std::string& estimator, const py::kwargs&
   o.set("alpha", options.consensus.alpha);
   o.set("max_row_interval", options.max_row_interval);
   o.set("max_gap", options.max_gap);
+  options.use_imu = !o.get<bool>("no_imu").value_or(false);
   if (const auto pose = o.get<std::vector<double>>("initial_pose")) {
     if (pose->size() != 3) throw py::value_error("initial_pose: expected (x, y, theta)");
     options.initial = Pose2{{(*pose)[0], (*pose)[1]}, (*pose)[2]};
