@@ -122,6 +122,12 @@ class RateMeter {
 int run_live(LiveArgs args) {
   namespace fs = std::filesystem;
   const io::RobotConfig config = io::read_config(args.config);
+  // A replay reads a log: its silences are bounded as `moa odometry`
+  // bounds them (--max-gap's default unless given), since at --speed the
+  // still epochs of its gaps come faster than real time.
+  if (!args.source.replay.empty() && std::isinf(args.odometry.options.max_gap)) {
+    args.odometry.options.max_gap = OdometryOptions{}.max_gap;
+  }
   const OdometryOptions odometry_options =
       resolve_odometry_flags(args.odometry, config, args.config);
   for (const auto& w : self_calibration_warnings(odometry_options)) {
@@ -414,7 +420,8 @@ void add_live(CLI::App& app, Action& action) {
                   "`moa odometry`");
   cmd->add_option("--out", args->out, "Write odometry.csv to FILE (at the end), or '-' for stdout");
   // No limit on silences: live rows come at the pace of real time, so a
-  // robot parked for hours is no runaway of still epochs.
+  // robot parked for hours is no runaway of still epochs (a replay: see
+  // run_live).
   args->odometry.options.max_gap = std::numeric_limits<double>::infinity();
   add_odometry_flags(cmd, args->odometry, /*live=*/true);
   cmd->add_option("--serve", args->serve,
