@@ -14,6 +14,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <regex>
 #include <sstream>
 #include <thread>
@@ -21,10 +22,12 @@
 #include "moa/formats/config.hpp"
 #include "moa/formats/error.hpp"
 #include "moa/formats/log.hpp"
+#include "moa/formats/odometry_csv.hpp"
 #include "moa/sources/replay_reader.hpp"
 #include "moa/web/dashboard.hpp"
 #include "support/browser.hpp"
 #include "support/http.hpp"
+#include "support/pty_moa.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"
 
@@ -323,6 +326,94 @@ TEST(LiveDashboard, ListenAddressIsHostColonPortOrAPort) {
             "send_buffer: must be in [1024, 16777216], is 1023");
   EXPECT_EQ(message([](auto& d) { d.history_points = 2000000; }),
             "history_points: must be <= 1000000, is 2000000");
+  EXPECT_EQ(message([](auto& d) { d.max_warnings = 20000; }),
+            "max_warnings: must be <= 10000, is 20000");
+}
+
+/// The numbers of an "event: history" data line: one array per point.
+std::vector<std::vector<double>> history_points(const std::string& stream) {
+  std::vector<std::vector<double>> points;
+  const std::string head = "event: history\ndata: {\"points\": [";
+  const auto at = stream.find(head);
+  if (at == std::string::npos) return points;
+  const std::string body =
+      stream.substr(at + head.size(), stream.find('\n', at + head.size()) - (at + head.size()));
+  const std::regex point(R"(\[([^\[\]]*)\])");
+  for (auto it = std::sregex_iterator(body.begin(), body.end(), point);
+       it != std::sregex_iterator(); ++it) {
+    std::vector<double> values;
+    std::istringstream in((*it)[1].str());
+    std::string value;
+    while (std::getline(in, value, ',')) values.push_back(std::stod(value));
+    points.push_back(values);
+  }
+  return points;
+}
+
+// A short replay at a terminal: when it ends, the dashboard keeps serving
+// until Ctrl-C. A client that joins then gets the trajectory with the
+// twist (each point the odometry moa wrote at that time), the run's
+// warning (a saturated row skipped), the final state and the end, at the
+// last epoch's time.
+TEST(LiveDashboard, ALateJoinerGetsTheHistoryTheWarningsAndTheEnd) {
+  const fs::path& simulated = simulated_log();
+  const fs::path log = test::scratch_dir("dashboard-late-joiner");
+  fs::copy_file(simulated / "robot.yaml", log / "robot.yaml");
+  {
+    std::ifstream in(simulated / "mice.csv");
+    std::ofstream out(log / "mice.csv");
+    std::string line;
+    for (int k = 0; std::getline(in, line); ++k) {
+      if (k == 400) {  // dx of 32767 counts in one row: far beyond any rated speed
+        const auto a = line.find(',', line.find(',') + 1);
+        const auto b = line.find(',', a + 1);
+        line = line.substr(0, a + 1) + "32767" + line.substr(b);
+      }
+      out << line << "\n";
+    }
+  }
+  const int port = test::free_port();
+  const fs::path out = log / "o.csv";
+  test::PtyMoa moa({"live", "--config", (log / "robot.yaml").string(), "--replay", log.string(),
+                    "--speed", "20", "--serve", "127.0.0.1:" + std::to_string(port), "--out",
+                    out.string()});
+  const auto deadline = Clock::now() + std::chrono::seconds(30);
+  ASSERT_TRUE(moa.wait_for("shows its final state until Ctrl-C", 1, deadline)) << moa.output();
+
+  const auto stream = test::http_get(port, "/events", 2.0);
+  ASSERT_EQ(stream.status, 200);
+  EXPECT_THAT(stream.body, HasSubstr("event: warning\ndata: {\"text\": \""));
+  EXPECT_THAT(stream.body, HasSubstr("skipped: counts imply a speed far beyond"));
+  EXPECT_EQ(events_of(stream.body).size(), 1u);  // the final state
+
+  const io::RobotConfig config = io::read_config(log / "robot.yaml");
+  io::OdometryCsvReader reader(out, config, (log / "robot.yaml").string());
+  std::map<double, io::OdometryRow> written;
+  double t_last = 0.0;
+  while (const auto row = reader.next()) {
+    written[row->t] = *row;
+    t_last = row->t;
+  }
+  const auto points = history_points(stream.body);
+  // 40 s of log at 20x, at most 20 events a second: about 40.
+  EXPECT_GE(points.size(), 20u);
+  for (const auto& p : points) {
+    ASSERT_EQ(p.size(), 6u);
+    const auto row = written.find(p[0]);
+    ASSERT_NE(row, written.end()) << "no epoch at t = " << p[0];
+    EXPECT_EQ(p[1], row->second.pose.t.x());
+    EXPECT_EQ(p[2], row->second.pose.t.y());
+    EXPECT_EQ(p[3], row->second.twist.v.x());
+    EXPECT_EQ(p[4], row->second.twist.v.y());
+    EXPECT_EQ(p[5], row->second.twist.omega);
+  }
+  ASSERT_FALSE(points.empty());
+  EXPECT_EQ(points.back()[0], t_last);  // the final state is the last epoch's
+  EXPECT_THAT(stream.body, HasSubstr(fmt::format("event: end\ndata: {{\"t\": {}}}", t_last)));
+
+  moa.type("\x03");  // Ctrl-C
+  EXPECT_EQ(moa.exit_code(10.0), 0) << moa.output();
+  if (!HasFailure()) fs::remove_all(log);
 }
 
 unsigned long attribute(const std::string& tag, const std::string& name) {

@@ -30,6 +30,7 @@
 #include <numbers>
 #include <optional>
 #include <string>
+#include <thread>
 #include <type_traits>
 #include <variant>
 #include <vector>
@@ -141,6 +142,7 @@ int run_live(LiveArgs args) {
   // Shared by the hooks and the loop below.
   bool status_shown = false;
   std::function<void()> show_status;
+  io::Dashboard* dashboard_shown = nullptr;  // the dashboard, once it serves
   io::LiveHooks hooks;
   hooks.stop = [&] {
     return g_stop != 0 || (args.duration > 0 && std::chrono::steady_clock::now() - started >=
@@ -149,6 +151,7 @@ int run_live(LiveArgs args) {
   hooks.warn = [&](const std::string& text) {
     if (status_shown) fmt::print(stderr, "\r\033[K");
     fmt::print(stderr, "moa live: warning: {}\n", text);
+    if (dashboard_shown != nullptr) dashboard_shown->warn(text);
   };
   hooks.tick = [&] {
     if (show_status) show_status();
@@ -253,6 +256,8 @@ int run_live(LiveArgs args) {
     options.title = fmt::format("moa live: {}", live.origin);
     dashboard = std::make_unique<io::Dashboard>(config, options);
     if (!args.quiet) fmt::print(stderr, "moa live: dashboard at {}\n", dashboard->url());
+    dashboard_shown = dashboard.get();
+    for (const auto& w : self_calibration_warnings(odometry_options)) dashboard->warn(w);
   }
 
   std::unique_ptr<io::DiagnosticsCsvWriter> diagnostics_out;
@@ -398,6 +403,18 @@ int run_live(LiveArgs args) {
                  "moa live: dashboard sent {} events ({} dropped for slow clients, {} clients "
                  "refused)\n",
                  d.events, d.dropped, d.refused);
+    }
+  }
+  if (dashboard) {
+    dashboard->finish();
+    // Someone at a terminal (a short replay ends before a page is opened):
+    // the dashboard keeps serving the run's final state until Ctrl-C.
+    if (g_stop == 0 && isatty(STDIN_FILENO) && isatty(STDERR_FILENO)) {
+      fmt::print(stderr,
+                 "moa live: the run ended; the dashboard at {} shows its final state until "
+                 "Ctrl-C\n",
+                 dashboard->url());
+      while (g_stop == 0) std::this_thread::sleep_for(std::chrono::milliseconds(100));
     }
   }
   return 0;
