@@ -120,6 +120,42 @@ TEST(ReplayReader, StopsWhenTheStopHookSaysSo) {
   EXPECT_LT(std::chrono::duration<double>(Clock::now() - started).count(), 1.0);
 }
 
+// Held (the guided wizard waiting for a key) from the 100th row for 0.5 s:
+// no row comes while held, and the rows after keep the log's pace from
+// there, 0.5 s later than unheld (speed 20: within 2 s of log, 0.1 s).
+TEST(ReplayReader, WaitsWhileHeldWithItsClockStopped) {
+  const fs::path& log = simulated_log();
+  const io::RobotConfig config = io::read_config(log / "robot.yaml");
+  bool hold = false;
+  Clock::time_point released{};
+  io::LiveHooks hooks;
+  hooks.hold = [&] {
+    if (hold && Clock::now() >= released) hold = false;
+    return hold;
+  };
+  io::ReplayOptions options;
+  options.speed = 20.0;
+  io::ReplayReader replay(log, config, options, hooks);
+  const double t0 = replay.start_time();
+  const auto started = Clock::now();
+  const auto since = [&] { return std::chrono::duration<double>(Clock::now() - started).count(); };
+  for (int k = 0; k < 100; ++k) ASSERT_TRUE(replay.next());
+  hold = true;
+  released = Clock::now() + std::chrono::milliseconds(500);
+  const auto row = replay.next();
+  ASSERT_TRUE(row);
+  EXPECT_GE(Clock::now(), released);  // nothing while held
+  // Then on the log's pace, shifted by the hold: never early, and, rows
+  // being 10 ms apart, not late by much.
+  double t_last = row->t;
+  while (const auto next = replay.next()) {
+    if (next->t - t0 > 2.0) break;
+    ASSERT_GE(since(), (next->t - t0) / options.speed + 0.5 - 1e-3);
+    t_last = next->t;
+  }
+  EXPECT_LT(since(), (t_last - t0) / options.speed + 0.5 + 0.3);
+}
+
 TEST(ReplayReader, SpeedMustBePositiveAndFinite) {
   const fs::path& log = simulated_log();
   for (const char* speed : {"nan", "inf", "0", "-1"}) {
@@ -330,6 +366,32 @@ TEST(LiveDashboard, ListenAddressIsHostColonPortOrAPort) {
             "max_warnings: must be <= 10000, is 20000");
 }
 
+/// simulated_log() with one row of 32767 counts (far beyond any rated
+/// speed): `moa live` skips it with a warning. Made once, removed at exit.
+const fs::path& saturated_log() {
+  struct Log {
+    fs::path dir = test::scratch_dir("live-dashboard-saturated");
+    Log() {
+      const fs::path& simulated = simulated_log();
+      fs::copy_file(simulated / "robot.yaml", dir / "robot.yaml");
+      std::ifstream in(simulated / "mice.csv");
+      std::ofstream out(dir / "mice.csv");
+      std::string line;
+      for (int k = 0; std::getline(in, line); ++k) {
+        if (k == 400) {  // dx
+          const auto a = line.find(',', line.find(',') + 1);
+          const auto b = line.find(',', a + 1);
+          line = line.substr(0, a + 1) + "32767" + line.substr(b);
+        }
+        out << line << "\n";
+      }
+    }
+    ~Log() { fs::remove_all(dir); }
+  };
+  static const Log log;
+  return log.dir;
+}
+
 /// The numbers of an "event: history" data line: one array per point.
 std::vector<std::vector<double>> history_points(const std::string& stream) {
   std::vector<std::vector<double>> points;
@@ -356,24 +418,10 @@ std::vector<std::vector<double>> history_points(const std::string& stream) {
 // warning (a saturated row skipped), the final state and the end, at the
 // last epoch's time.
 TEST(LiveDashboard, ALateJoinerGetsTheHistoryTheWarningsAndTheEnd) {
-  const fs::path& simulated = simulated_log();
-  const fs::path log = test::scratch_dir("dashboard-late-joiner");
-  fs::copy_file(simulated / "robot.yaml", log / "robot.yaml");
-  {
-    std::ifstream in(simulated / "mice.csv");
-    std::ofstream out(log / "mice.csv");
-    std::string line;
-    for (int k = 0; std::getline(in, line); ++k) {
-      if (k == 400) {  // dx of 32767 counts in one row: far beyond any rated speed
-        const auto a = line.find(',', line.find(',') + 1);
-        const auto b = line.find(',', a + 1);
-        line = line.substr(0, a + 1) + "32767" + line.substr(b);
-      }
-      out << line << "\n";
-    }
-  }
+  const fs::path& log = saturated_log();
   const int port = test::free_port();
-  const fs::path out = log / "o.csv";
+  const fs::path dir = test::scratch_dir("dashboard-late-joiner");
+  const fs::path out = dir / "o.csv";
   test::PtyMoa moa({"live", "--config", (log / "robot.yaml").string(), "--replay", log.string(),
                     "--speed", "20", "--serve", "127.0.0.1:" + std::to_string(port), "--out",
                     out.string()});
@@ -413,7 +461,7 @@ TEST(LiveDashboard, ALateJoinerGetsTheHistoryTheWarningsAndTheEnd) {
 
   moa.type("\x03");  // Ctrl-C
   EXPECT_EQ(moa.exit_code(10.0), 0) << moa.output();
-  if (!HasFailure()) fs::remove_all(log);
+  if (!HasFailure()) fs::remove_all(dir);
 }
 
 unsigned long attribute(const std::string& tag, const std::string& name) {
@@ -425,7 +473,7 @@ unsigned long attribute(const std::string& tag, const std::string& name) {
 TEST(LiveDashboard, ChromiumDrawsTheChartsUpdatingWhileAReplayRuns) {
   const auto chromium = test::find_chromium();
   if (!chromium) GTEST_SKIP() << "no chromium on the PATH (make deps installs it)";
-  const fs::path& log = simulated_log();
+  const fs::path& log = saturated_log();
   const fs::path dir = test::scratch_dir("live-dashboard-browser");
   const int port = test::free_port();
   test::BackgroundMoa moa("live --config " + (log / "robot.yaml").string() + " --replay " +
@@ -442,6 +490,11 @@ TEST(LiveDashboard, ChromiumDrawsTheChartsUpdatingWhileAReplayRuns) {
   EXPECT_EQ(moa.wait(15.0), 0) << moa.err();
 
   EXPECT_THAT(dom, HasSubstr("data-moa-status=\"ended\""));
+  EXPECT_THAT(dom, HasSubstr("the run ended at t "));
+  // The warnings panel lists the skipped row.
+  const auto warnings = dom.find("<ul id=\"warnings\"><li>");
+  ASSERT_NE(warnings, std::string::npos) << dom;
+  EXPECT_THAT(dom.substr(warnings, 400), HasSubstr("skipped: counts imply a speed far beyond"));
   EXPECT_THAT(test::tag_of(dom, "moa-errors"), HasSubstr("hidden"));
   EXPECT_EQ(console.find("CONSOLE"), std::string::npos) << console;
   // About 20 events a second for the seconds after the page loaded (Chromium
