@@ -5,8 +5,11 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -216,6 +219,152 @@ TEST(BoundedInputs, ASaturatedLiveRecordIsSkippedAndTheRecordingReplays) {
   EXPECT_EQ(rows_of(record, config).size(), rows_of(log, config).size() - 1);
   const auto replay = test::run_moa_bounded(odometry_args(record, record / "o.csv"));
   EXPECT_EQ(replay.exit_code, 0) << replay.err;
+}
+
+// Sparse rows: every sensor of the example's config (front, left, rear,
+// right) with zero counts at each of `times`.
+std::string rows_at(const std::vector<double>& times, const std::vector<std::string>& names) {
+  std::ostringstream mice;
+  mice.precision(17);
+  mice << "t,sensor,dx,dy\n";
+  for (const double t : times) {
+    for (const auto& name : names) mice << t << "," << name << ",0,0\n";
+  }
+  return mice.str();
+}
+
+const std::vector<std::string> kNames{"front", "left", "rear", "right"};
+
+// The silence rule as docs/reliability.md states it, with the defaults
+// (--max-gap 3600 s, --max-row-interval 0.05 s, 100 Hz): each row adds the
+// time since the previous row beyond 0.05 s; a row is refused when the sum
+// exceeds 3600 s plus 0.01 s for each row before it. Returns the refused
+// row's line in mice.csv (the header is line 1), 0 if none.
+std::size_t first_refused_line(const std::vector<double>& row_times) {
+  double silence = 0.0;
+  double last = row_times.front();
+  for (std::size_t i = 0; i < row_times.size(); ++i) {
+    silence += std::max(0.0, row_times[i] - last - 0.05);
+    if (silence > 3600.0 + 0.01 * static_cast<double>(i)) return i + 2;
+    last = row_times[i];
+  }
+  return 0;
+}
+
+std::vector<double> every(double step, double span) {
+  std::vector<double> times;
+  for (int k = 0; k * step <= span; ++k) times.push_back(k * step);
+  return times;
+}
+
+std::vector<double> repeated(const std::vector<double>& times, std::size_t n) {
+  std::vector<double> rows;
+  for (const double t : times) rows.insert(rows.end(), n, t);
+  return rows;
+}
+
+// Rows an hour apart over a day would write 8.64 million still epochs (850
+// MB): refused at the second gap, the numbers and the flag named.
+TEST(BoundedInputs, RowsAnHourApartOverADayAreRefusedAtTheSecondGap) {
+  const auto times = every(3599.0, 86400.0);
+  const fs::path log = log_with("hour-apart", rows_at(times, kNames));
+  const auto r = test::run_moa_bounded(odometry_args(log, log / "o.csv"));
+  EXPECT_EQ(test::limits_exceeded(r), "");
+  EXPECT_EQ(r.exit_code, 1);
+  // Lines 2-5 at t = 0, 6-9 at 3599 s, 10 the first at 7198 s.
+  ASSERT_EQ(first_refused_line(repeated(times, kNames.size())), 10u);
+  EXPECT_THAT(r.err, HasSubstr("mice.csv:10: row at t = 7198 s: the sensors have been silent "
+                               "for 7197.90 s in total by this row"));
+  EXPECT_THAT(r.err, HasSubstr("more than the 3600.08 s allowed: --max-gap 3600 s plus 0.01 s "
+                               "(one epoch) for each of the 8 rows before it"));
+  EXPECT_FALSE(fs::exists(log / "o.csv"));
+}
+
+// The variants: rows 59 s apart over a day; one sensor once a second for a
+// day while the others stay silent. Each refused at the row the rule names.
+TEST(BoundedInputs, SparseRowsAreRefusedWhereTheirSilencesExceedTheBound) {
+  struct Case {
+    std::string tag;
+    std::vector<double> times;
+    std::vector<std::string> names;
+  };
+  const std::vector<Case> cases{{"59s-apart", every(59.0, 86400.0), kNames},
+                                {"one-sensor-1hz", every(1.0, 86400.0), {"front"}}};
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.tag);
+    const fs::path log = log_with(c.tag, rows_at(c.times, c.names));
+    const auto r = test::run_moa_bounded(odometry_args(log, log / "o.csv"));
+    EXPECT_EQ(test::limits_exceeded(r), "");
+    EXPECT_EQ(r.exit_code, 1);
+    const std::size_t line = first_refused_line(repeated(c.times, c.names.size()));
+    ASSERT_GT(line, 0u);
+    EXPECT_THAT(r.err, HasSubstr("mice.csv:" + std::to_string(line) + ": row at t = "));
+    EXPECT_THAT(r.err, HasSubstr("--max-gap 3600 s plus 0.01 s"));
+    EXPECT_FALSE(fs::exists(log / "o.csv"));
+  }
+}
+
+// Within the bound: one gap of 3599 s (a parked robot) is written epoch by
+// epoch, and a silence raised by --max-gap is accepted; both read back.
+TEST(BoundedInputs, ASilenceWithinTheBoundIsWrittenEpochByEpoch) {
+  const fs::path log = log_with("one-gap", rows_at({0.0, 3599.0}, kNames));
+  const auto r = test::run_moa_bounded(odometry_args(log, log / "o.csv"));
+  EXPECT_EQ(test::limits_exceeded(r), "");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(data_lines(log / "o.csv"), 359900u);  // 3599 s / 10 ms
+
+  const fs::path sparse = log_with("raised", rows_at(every(59.0, 600.0), kNames));
+  const auto raised =
+      test::run_moa_bounded(odometry_args(sparse, sparse / "o.csv") + " --max-gap 100");
+  EXPECT_EQ(raised.exit_code, 1);
+  EXPECT_THAT(raised.err, HasSubstr("--max-gap 100 s plus"));
+  const auto ok =
+      test::run_moa_bounded(odometry_args(sparse, sparse / "o.csv") + " --max-gap 1000");
+  ASSERT_EQ(ok.exit_code, 0) << ok.err;
+  EXPECT_EQ(data_lines(sparse / "o.csv"), 59000u);  // the last row at 590 s
+}
+
+// `moa live --replay` bounds a log's silences as `moa odometry` does: at
+// --speed the still epochs would come faster than real time.
+TEST(BoundedInputs, AReplayOfRowsAnHourApartIsRefusedAsByOdometry) {
+  const fs::path log = log_with("replay-hour-apart", rows_at(every(3599.0, 86400.0), kNames));
+  const auto r = test::run_moa_bounded(
+      "live --config " + (log / "robot.yaml").string() + " --replay " + log.string() +
+      " --speed 1000000 --quiet --out " + (log / "o.csv").string());
+  EXPECT_EQ(test::limits_exceeded(r), "");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_THAT(r.err, HasSubstr(log.string() +
+                               ": row at t = 7198 s: the sensors have been silent for 7197.90 s "
+                               "in total by this row"));
+  EXPECT_FALSE(fs::exists(log / "o.csv"));
+}
+
+// A full disk: the error names the file and says "No space left on
+// device", and no file (nor a temporary) is left. The disk is a tmpfs of 64
+// KiB mounted in a user and mount namespace of its own (`unshare -r -m`),
+// smaller than the example's odometry.csv; where the kernel or the
+// container forbids that, the test is skipped and says why.
+TEST(BoundedInputs, AFullDiskIsSaidWithTheFileAndLeavesNothing) {
+  const fs::path dir = test::scratch_dir("disk-full");
+  const fs::path full = dir / "full";
+  fs::create_directory(full);
+  const std::string out = (full / "o.csv").string();
+  const std::string script = "mount -t tmpfs -o size=64k tmpfs " + full.string() + " || exit 77; " +
+                             MOA_CLI_PATH + " " + odometry_args(kExample, out) + " 2>" +
+                             (dir / "err").string() + "; echo $? >" + (dir / "code").string() +
+                             "; ls -A " + full.string() + " >" + (dir / "left").string();
+  const std::string command =
+      "unshare -r -m sh -c '" + script + "' 2>" + (dir / "unshare-err").string();
+  const int status = std::system(command.c_str());
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    GTEST_SKIP() << "cannot mount a small tmpfs in a namespace of its own (`unshare -r -m`, "
+                    "then `mount -t tmpfs`): "
+                 << test::read_text(dir / "unshare-err");
+  }
+  EXPECT_EQ(test::read_text(dir / "code"), "3\n");  // an output that cannot be written
+  EXPECT_EQ(test::read_text(dir / "err"),
+            "moa odometry: error: " + out + ": cannot write (No space left on device)\n");
+  EXPECT_EQ(test::read_text(dir / "left"), "");  // nothing in the full file system
 }
 
 // The firmware runs at 500000 baud (docs/firmware.md): so does --serial

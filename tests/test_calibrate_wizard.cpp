@@ -20,6 +20,7 @@
 #include "moa/calibration/guided_steps.hpp"
 #include "moa/core/array.hpp"
 #include "moa/formats/config.hpp"
+#include "support/pty_moa.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"
 
@@ -29,76 +30,7 @@ namespace {
 using ::testing::HasSubstr;
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
-
-/// `moa ARGS` with its terminal on a pty that the test reads and types into.
-class PtyMoa {
- public:
-  explicit PtyMoa(const std::vector<std::string>& args) {
-    pid_ = forkpty(&master_, nullptr, nullptr, nullptr);
-    if (pid_ == 0) {
-      std::vector<char*> argv;
-      static const std::string cli = MOA_CLI_PATH;
-      argv.push_back(const_cast<char*>(cli.c_str()));
-      for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-      argv.push_back(nullptr);
-      execv(argv[0], argv.data());
-      _exit(127);
-    }
-  }
-  ~PtyMoa() {
-    if (pid_ > 0 && status_ < 0) {
-      kill(pid_, SIGKILL);
-      waitpid(pid_, nullptr, 0);
-    }
-    if (master_ >= 0) close(master_);
-  }
-  /// Reads until `text` has appeared `count` times in all output, or the
-  /// deadline; true if it did.
-  bool wait_for(const std::string& text, int count, Clock::time_point deadline) {
-    for (;;) {
-      if (occurrences(text) >= count) return true;
-      const auto left =
-          std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
-      if (left <= 0) return false;
-      pollfd p{master_, POLLIN, 0};
-      if (poll(&p, 1, static_cast<int>(left)) <= 0) return false;
-      char buffer[4096];
-      const ssize_t n = read(master_, buffer, sizeof buffer);
-      if (n <= 0) return occurrences(text) >= count;  // the child is gone
-      output_.append(buffer, static_cast<std::size_t>(n));
-    }
-  }
-  void type(const std::string& keys) {
-    ASSERT_EQ(write(master_, keys.data(), keys.size()), static_cast<ssize_t>(keys.size()));
-  }
-  int exit_code(double seconds) {
-    const auto deadline = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                             std::chrono::duration<double>(seconds));
-    while (status_ < 0 && Clock::now() < deadline) {
-      wait_for("\x01never\x01", 1,
-               std::min(deadline, Clock::now() + std::chrono::milliseconds(50)));
-      int status = 0;
-      if (waitpid(pid_, &status, WNOHANG) == pid_) {
-        status_ = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-      }
-    }
-    return status_;
-  }
-  int occurrences(const std::string& text) const {
-    int n = 0;
-    for (auto at = output_.find(text); at != std::string::npos; at = output_.find(text, at + 1)) {
-      ++n;
-    }
-    return n;
-  }
-  const std::string& output() const { return output_; }
-
- private:
-  int master_ = -1;
-  pid_t pid_ = -1;
-  int status_ = -1;
-  std::string output_;
-};
+using test::PtyMoa;
 
 TEST(CalibrateWizard, WalksThroughEveryStepWithARedoAndWritesTheCalibration) {
   const fs::path dir = test::scratch_dir("calibrate-wizard");
@@ -164,6 +96,41 @@ TEST(CalibrateWizard, QuitWritesNothing) {
   EXPECT_THAT(moa.output(), HasSubstr("nothing written"));
   EXPECT_FALSE(fs::exists(dir / "cal.yaml"));
   fs::remove_all(dir);
+}
+
+// Late keys: at 20x, each answer typed 1.5 s after its question (30 s of
+// log, the whole of it) would have let the replay run past every motion
+// and end. The replay waits for the wizard: no motion is skipped, and the
+// last key, typed after the data's last row was read, still writes.
+TEST(CalibrateWizard, TheReplayWaitsForLateKeys) {
+  const fs::path dir = test::scratch_dir("calibrate-wizard-late");
+  const auto sim =
+      test::run_moa("simulate --scenario guided --seed 2 --out " + (dir / "log").string());
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  PtyMoa moa({"calibrate", "--guided", "--live", "--config", (dir / "log" / "robot.yaml").string(),
+              "--replay", (dir / "log").string(), "--speed", "20", "--distance", "1", "--turns",
+              "3", "--out", (dir / "cal.yaml").string()});
+  const auto deadline = Clock::now() + std::chrono::seconds(40);
+  const auto late = [&](const std::string& key) {
+    moa.wait_for("\x01never\x01", 1, Clock::now() + std::chrono::milliseconds(1500));
+    moa.type(key);
+  };
+  ASSERT_TRUE(moa.wait_for("Keys: ", 1, deadline)) << moa.output();
+  EXPECT_TRUE(moa.wait_for("k keeps one that failed a check", 1, deadline)) << moa.output();
+  ASSERT_TRUE(moa.wait_for("turned while pushing", 1, deadline)) << moa.output();
+  late("r");
+  ASSERT_TRUE(moa.wait_for("Good enough.", 1, deadline)) << moa.output();
+  late("\r");
+  ASSERT_TRUE(moa.wait_for("Good enough.", 2, deadline)) << moa.output();
+  late("\r");
+  ASSERT_TRUE(moa.wait_for("Good enough.", 3, deadline)) << moa.output();
+  late("\r");
+  ASSERT_TRUE(moa.wait_for("calibrated config written to", 1, deadline)) << moa.output();
+  EXPECT_EQ(moa.exit_code(10.0), 0) << moa.output();
+  EXPECT_EQ(moa.occurrences("Kept."), 3) << moa.output();
+  EXPECT_EQ(moa.occurrences("Again."), 1) << moa.output();
+  EXPECT_TRUE(fs::exists(dir / "cal.yaml"));
+  if (!HasFailure()) fs::remove_all(dir);
 }
 
 // ------------------------------------------------ the checks on synthetic epochs

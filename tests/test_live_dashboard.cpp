@@ -14,6 +14,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <regex>
 #include <sstream>
 #include <thread>
@@ -21,10 +22,12 @@
 #include "moa/formats/config.hpp"
 #include "moa/formats/error.hpp"
 #include "moa/formats/log.hpp"
+#include "moa/formats/odometry_csv.hpp"
 #include "moa/sources/replay_reader.hpp"
 #include "moa/web/dashboard.hpp"
 #include "support/browser.hpp"
 #include "support/http.hpp"
+#include "support/pty_moa.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"
 
@@ -115,6 +118,42 @@ TEST(ReplayReader, StopsWhenTheStopHookSaysSo) {
   while (replay.next()) {
   }
   EXPECT_LT(std::chrono::duration<double>(Clock::now() - started).count(), 1.0);
+}
+
+// Held (the guided wizard waiting for a key) from the 100th row for 0.5 s:
+// no row comes while held, and the rows after keep the log's pace from
+// there, 0.5 s later than unheld (speed 20: within 2 s of log, 0.1 s).
+TEST(ReplayReader, WaitsWhileHeldWithItsClockStopped) {
+  const fs::path& log = simulated_log();
+  const io::RobotConfig config = io::read_config(log / "robot.yaml");
+  bool hold = false;
+  Clock::time_point released{};
+  io::LiveHooks hooks;
+  hooks.hold = [&] {
+    if (hold && Clock::now() >= released) hold = false;
+    return hold;
+  };
+  io::ReplayOptions options;
+  options.speed = 20.0;
+  io::ReplayReader replay(log, config, options, hooks);
+  const double t0 = replay.start_time();
+  const auto started = Clock::now();
+  const auto since = [&] { return std::chrono::duration<double>(Clock::now() - started).count(); };
+  for (int k = 0; k < 100; ++k) ASSERT_TRUE(replay.next());
+  hold = true;
+  released = Clock::now() + std::chrono::milliseconds(500);
+  const auto row = replay.next();
+  ASSERT_TRUE(row);
+  EXPECT_GE(Clock::now(), released);  // nothing while held
+  // Then on the log's pace, shifted by the hold: never early, and, rows
+  // being 10 ms apart, not late by much.
+  double t_last = row->t;
+  while (const auto next = replay.next()) {
+    if (next->t - t0 > 2.0) break;
+    ASSERT_GE(since(), (next->t - t0) / options.speed + 0.5 - 1e-3);
+    t_last = next->t;
+  }
+  EXPECT_LT(since(), (t_last - t0) / options.speed + 0.5 + 0.3);
 }
 
 TEST(ReplayReader, SpeedMustBePositiveAndFinite) {
@@ -323,6 +362,106 @@ TEST(LiveDashboard, ListenAddressIsHostColonPortOrAPort) {
             "send_buffer: must be in [1024, 16777216], is 1023");
   EXPECT_EQ(message([](auto& d) { d.history_points = 2000000; }),
             "history_points: must be <= 1000000, is 2000000");
+  EXPECT_EQ(message([](auto& d) { d.max_warnings = 20000; }),
+            "max_warnings: must be <= 10000, is 20000");
+}
+
+/// simulated_log() with one row of 32767 counts (far beyond any rated
+/// speed): `moa live` skips it with a warning. Made once, removed at exit.
+const fs::path& saturated_log() {
+  struct Log {
+    fs::path dir = test::scratch_dir("live-dashboard-saturated");
+    Log() {
+      const fs::path& simulated = simulated_log();
+      fs::copy_file(simulated / "robot.yaml", dir / "robot.yaml");
+      std::ifstream in(simulated / "mice.csv");
+      std::ofstream out(dir / "mice.csv");
+      std::string line;
+      for (int k = 0; std::getline(in, line); ++k) {
+        if (k == 400) {  // dx
+          const auto a = line.find(',', line.find(',') + 1);
+          const auto b = line.find(',', a + 1);
+          line = line.substr(0, a + 1) + "32767" + line.substr(b);
+        }
+        out << line << "\n";
+      }
+    }
+    ~Log() { fs::remove_all(dir); }
+  };
+  static const Log log;
+  return log.dir;
+}
+
+/// The numbers of an "event: history" data line: one array per point.
+std::vector<std::vector<double>> history_points(const std::string& stream) {
+  std::vector<std::vector<double>> points;
+  const std::string head = "event: history\ndata: {\"points\": [";
+  const auto at = stream.find(head);
+  if (at == std::string::npos) return points;
+  const std::string body =
+      stream.substr(at + head.size(), stream.find('\n', at + head.size()) - (at + head.size()));
+  const std::regex point(R"(\[([^\[\]]*)\])");
+  for (auto it = std::sregex_iterator(body.begin(), body.end(), point);
+       it != std::sregex_iterator(); ++it) {
+    std::vector<double> values;
+    std::istringstream in((*it)[1].str());
+    std::string value;
+    while (std::getline(in, value, ',')) values.push_back(std::stod(value));
+    points.push_back(values);
+  }
+  return points;
+}
+
+// A short replay at a terminal: when it ends, the dashboard keeps serving
+// until Ctrl-C. A client that joins then gets the trajectory with the
+// twist (each point the odometry moa wrote at that time), the run's
+// warning (a saturated row skipped), the final state and the end, at the
+// last epoch's time.
+TEST(LiveDashboard, ALateJoinerGetsTheHistoryTheWarningsAndTheEnd) {
+  const fs::path& log = saturated_log();
+  const int port = test::free_port();
+  const fs::path dir = test::scratch_dir("dashboard-late-joiner");
+  const fs::path out = dir / "o.csv";
+  test::PtyMoa moa({"live", "--config", (log / "robot.yaml").string(), "--replay", log.string(),
+                    "--speed", "20", "--serve", "127.0.0.1:" + std::to_string(port), "--out",
+                    out.string()});
+  const auto deadline = Clock::now() + std::chrono::seconds(30);
+  ASSERT_TRUE(moa.wait_for("shows its final state until Ctrl-C", 1, deadline)) << moa.output();
+
+  const auto stream = test::http_get(port, "/events", 2.0);
+  ASSERT_EQ(stream.status, 200);
+  EXPECT_THAT(stream.body, HasSubstr("event: warning\ndata: {\"text\": \""));
+  EXPECT_THAT(stream.body, HasSubstr("skipped: counts imply a speed far beyond"));
+  EXPECT_EQ(events_of(stream.body).size(), 1u);  // the final state
+
+  const io::RobotConfig config = io::read_config(log / "robot.yaml");
+  io::OdometryCsvReader reader(out, config, (log / "robot.yaml").string());
+  std::map<double, io::OdometryRow> written;
+  double t_last = 0.0;
+  while (const auto row = reader.next()) {
+    written[row->t] = *row;
+    t_last = row->t;
+  }
+  const auto points = history_points(stream.body);
+  // 40 s of log at 20x, at most 20 events a second: about 40.
+  EXPECT_GE(points.size(), 20u);
+  for (const auto& p : points) {
+    ASSERT_EQ(p.size(), 6u);
+    const auto row = written.find(p[0]);
+    ASSERT_NE(row, written.end()) << "no epoch at t = " << p[0];
+    EXPECT_EQ(p[1], row->second.pose.t.x());
+    EXPECT_EQ(p[2], row->second.pose.t.y());
+    EXPECT_EQ(p[3], row->second.twist.v.x());
+    EXPECT_EQ(p[4], row->second.twist.v.y());
+    EXPECT_EQ(p[5], row->second.twist.omega);
+  }
+  ASSERT_FALSE(points.empty());
+  EXPECT_EQ(points.back()[0], t_last);  // the final state is the last epoch's
+  EXPECT_THAT(stream.body, HasSubstr(fmt::format("event: end\ndata: {{\"t\": {}}}", t_last)));
+
+  moa.type("\x03");  // Ctrl-C
+  EXPECT_EQ(moa.exit_code(10.0), 0) << moa.output();
+  if (!HasFailure()) fs::remove_all(dir);
 }
 
 unsigned long attribute(const std::string& tag, const std::string& name) {
@@ -334,7 +473,7 @@ unsigned long attribute(const std::string& tag, const std::string& name) {
 TEST(LiveDashboard, ChromiumDrawsTheChartsUpdatingWhileAReplayRuns) {
   const auto chromium = test::find_chromium();
   if (!chromium) GTEST_SKIP() << "no chromium on the PATH (make deps installs it)";
-  const fs::path& log = simulated_log();
+  const fs::path& log = saturated_log();
   const fs::path dir = test::scratch_dir("live-dashboard-browser");
   const int port = test::free_port();
   test::BackgroundMoa moa("live --config " + (log / "robot.yaml").string() + " --replay " +
@@ -351,6 +490,11 @@ TEST(LiveDashboard, ChromiumDrawsTheChartsUpdatingWhileAReplayRuns) {
   EXPECT_EQ(moa.wait(15.0), 0) << moa.err();
 
   EXPECT_THAT(dom, HasSubstr("data-moa-status=\"ended\""));
+  EXPECT_THAT(dom, HasSubstr("the run ended at t "));
+  // The warnings panel lists the skipped row.
+  const auto warnings = dom.find("<ul id=\"warnings\"><li>");
+  ASSERT_NE(warnings, std::string::npos) << dom;
+  EXPECT_THAT(dom.substr(warnings, 400), HasSubstr("skipped: counts imply a speed far beyond"));
   EXPECT_THAT(test::tag_of(dom, "moa-errors"), HasSubstr("hidden"));
   EXPECT_EQ(console.find("CONSOLE"), std::string::npos) << console;
   // About 20 events a second for the seconds after the page loaded (Chromium

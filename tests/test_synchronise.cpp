@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -153,6 +154,37 @@ TEST(Synchroniser, SilenceLongerThanMaxGapIsRefusedAndChangesNothing) {
   ASSERT_FALSE(sync.push(row(2.01, 0, 1, 0), std::ref(out)));  // exactly max_gap later
   sync.finish(2.01, std::ref(out));
   EXPECT_EQ(out.samples.size(), 201u);
+}
+
+// The silences summed (the time between rows beyond max_row_interval) may
+// reach max_gap plus one period per row accepted: with max_gap 10 s, two
+// gaps of 6 s cannot both pass, while one row in between them earns 0.01 s.
+TEST(Synchroniser, SilencesSummedBeyondMaxGapPlusAnEpochPerRowAreRefused) {
+  SynchroniserOptions options{0.01, 0.05, 10.0};
+  Synchroniser sync(1, 0.0, options);
+  Collected out;
+  ASSERT_FALSE(sync.push(row(0.0, 0, 0, 0), std::ref(out)));
+  ASSERT_FALSE(sync.push(row(6.0, 0, 0, 0), std::ref(out)));
+  EXPECT_NEAR(sync.silence(), 5.95, 1e-12);
+  EXPECT_EQ(sync.rows(), 2);
+  EXPECT_DOUBLE_EQ(sync.silence_allowed(), 10.02);
+  const std::size_t before = out.samples.size();
+  EXPECT_EQ(sync.push(row(12.0, 0, 0, 0), std::ref(out)), RowError::kTooMuchSilence);
+  EXPECT_EQ(out.samples.size(), before);  // the refused row emitted nothing
+  EXPECT_NEAR(sync.silence(), 5.95, 1e-12);
+  EXPECT_EQ(sync.rows(), 2);
+  // A row within max_row_interval of the last adds no silence; one 4.06 s
+  // later (4.01 s of silence) reaches 9.96 s of the 10.03 s allowed.
+  ASSERT_FALSE(sync.push(row(6.05, 0, 0, 0), std::ref(out)));
+  ASSERT_FALSE(sync.push(row(10.11, 0, 0, 0), std::ref(out)));
+  EXPECT_NEAR(sync.silence(), 9.96, 1e-9);
+  // Without a max_gap (live devices) there is no bound.
+  Synchroniser live(1, 0.0, {0.01, 0.05, std::numeric_limits<double>::infinity()});
+  for (int k = 0; k < 10; ++k) ASSERT_FALSE(live.push(row(k * 3600.0, 0, 0, 0), [](auto&) {}));
+  EXPECT_STREQ(describe(RowError::kTooMuchSilence),
+               "the sensors' silences add up to more than --max-gap plus one epoch per row: "
+               "sparse rows would write an epoch per period over every gap (raise --max-gap if "
+               "the log is meant so)");
 }
 
 }  // namespace

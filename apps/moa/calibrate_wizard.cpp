@@ -10,8 +10,11 @@
 // Keys (the terminal is put in non-canonical mode while it runs, so no
 // Enter is needed after a letter): Enter or y keeps a motion, r redoes it,
 // k keeps a motion that failed a check, q quits without writing anything.
-// Data that arrives while the wizard waits for a key is not watched: after
-// the key, the robot must be still again before the next motion counts.
+// A replay waits while the wizard waits for a key (LiveHooks::hold), so a
+// late key skips nothing, and a motion watched at the end of the data still
+// takes its key. From a device, data that arrives while the wizard waits is
+// not watched: after the key, the robot must be still again before the next
+// motion counts.
 #include "calibrate_wizard.hpp"
 
 #include <fmt/core.h>
@@ -72,6 +75,8 @@ class Terminal {
   Terminal(const Terminal&) = delete;
   Terminal& operator=(const Terminal&) = delete;
 
+  /// Standard input ended: no key will come.
+  bool closed() const { return eof_; }
   /// A key if one was pressed, without waiting.
   std::optional<char> key() {
     if (eof_) return std::nullopt;
@@ -162,17 +167,19 @@ int run_wizard(const WizardArgs& args) {
   Terminal terminal;
   io::LiveHooks hooks;
   std::function<void()> poll_keys;
+  std::function<bool()> waiting_for_key;
   hooks.stop = [] { return g_quit != 0; };
   hooks.tick = [&] {
     if (poll_keys) poll_keys();
   };
+  hooks.hold = [&] { return waiting_for_key && waiting_for_key(); };
   hooks.warn = [](const std::string& text) { say("warning: {}\n", text); };
   io::LiveSource live = io::open_live_source(spec, config, args.config, hooks);
   live.source->start_time();  // waits for the source to start (a serial board's HELLO)
 
   say("moa calibrate --guided --live: {} sensors of {}, from {}\n", config.names.size(),
       args.config, live.origin);
-  say("Keys: Enter keeps a motion, r redoes it, q quits.\n");
+  say("Keys: Enter keeps a motion, r redoes it, k keeps one that failed a check, q quits.\n");
 
   GuidedSession session(config.array, limits, !args.no_push_y);
   bool quit = false;
@@ -203,6 +210,7 @@ int run_wizard(const WizardArgs& args) {
   poll_keys = [&] {
     while (const auto key = terminal.key()) on_key(*key);
   };
+  waiting_for_key = [&] { return session.pending() != nullptr && !quit && !terminal.closed(); };
   io::RunCallbacks callbacks;
   callbacks.on_step = [&](const OdometryStep& step) {
     if (quit || g_quit != 0) return;  // the last epochs, after the user quit
@@ -242,6 +250,12 @@ int run_wizard(const WizardArgs& args) {
                           [&] { return quit || session.complete() || g_quit != 0; });
   io::run_loop(config, args.config, guided_session_odometry_options(), input, live.where,
                callbacks);
+  // The data ended with a motion watched (its end is seen in the last
+  // epochs): its key still counts.
+  while (waiting_for_key() && g_quit == 0) {
+    poll_keys();
+    poll(nullptr, 0, 50);
+  }
   if (quit || g_quit != 0) {
     say("\nCalibration abandoned: nothing written.\n");
     return 1;

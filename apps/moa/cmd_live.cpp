@@ -30,6 +30,7 @@
 #include <numbers>
 #include <optional>
 #include <string>
+#include <thread>
 #include <type_traits>
 #include <variant>
 #include <vector>
@@ -122,6 +123,12 @@ class RateMeter {
 int run_live(LiveArgs args) {
   namespace fs = std::filesystem;
   const io::RobotConfig config = io::read_config(args.config);
+  // A replay reads a log: its silences are bounded as `moa odometry`
+  // bounds them (--max-gap's default unless given), since at --speed the
+  // still epochs of its gaps come faster than real time.
+  if (!args.source.replay.empty() && std::isinf(args.odometry.options.max_gap)) {
+    args.odometry.options.max_gap = OdometryOptions{}.max_gap;
+  }
   OdometryOptions odometry_options = resolve_odometry_flags(args.odometry, config, args.config);
   // As `moa odometry` on the recording: the gyro goes to the consensus only.
   if (odometry_options.estimator != EstimatorKind::kConsensus) odometry_options.use_imu = false;
@@ -136,6 +143,7 @@ int run_live(LiveArgs args) {
   // Shared by the hooks and the loop below.
   bool status_shown = false;
   std::function<void()> show_status;
+  io::Dashboard* dashboard_shown = nullptr;  // the dashboard, once it serves
   io::LiveHooks hooks;
   hooks.stop = [&] {
     return g_stop != 0 || (args.duration > 0 && std::chrono::steady_clock::now() - started >=
@@ -144,6 +152,7 @@ int run_live(LiveArgs args) {
   hooks.warn = [&](const std::string& text) {
     if (status_shown) fmt::print(stderr, "\r\033[K");
     fmt::print(stderr, "moa live: warning: {}\n", text);
+    if (dashboard_shown != nullptr) dashboard_shown->warn(text);
   };
   hooks.tick = [&] {
     if (show_status) show_status();
@@ -255,6 +264,8 @@ int run_live(LiveArgs args) {
     options.title = fmt::format("moa live: {}", live.origin);
     dashboard = std::make_unique<io::Dashboard>(config, options);
     if (!args.quiet) fmt::print(stderr, "moa live: dashboard at {}\n", dashboard->url());
+    dashboard_shown = dashboard.get();
+    for (const auto& w : self_calibration_warnings(odometry_options)) dashboard->warn(w);
   }
 
   std::unique_ptr<io::DiagnosticsCsvWriter> diagnostics_out;
@@ -403,6 +414,18 @@ int run_live(LiveArgs args) {
                  d.events, d.dropped, d.refused);
     }
   }
+  if (dashboard) {
+    dashboard->finish();
+    // Someone at a terminal (a short replay ends before a page is opened):
+    // the dashboard keeps serving the run's final state until Ctrl-C.
+    if (g_stop == 0 && isatty(STDIN_FILENO) && isatty(STDERR_FILENO)) {
+      fmt::print(stderr,
+                 "moa live: the run ended; the dashboard at {} shows its final state until "
+                 "Ctrl-C\n",
+                 dashboard->url());
+      while (g_stop == 0) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+  }
   return 0;
 }
 
@@ -423,7 +446,8 @@ void add_live(CLI::App& app, Action& action) {
                   "to imu.csv, t,gz in s, rad/s) for replay with `moa odometry`");
   cmd->add_option("--out", args->out, "Write odometry.csv to FILE (at the end), or '-' for stdout");
   // No limit on silences: live rows come at the pace of real time, so a
-  // robot parked for hours is no runaway of still epochs.
+  // robot parked for hours is no runaway of still epochs (a replay: see
+  // run_live).
   args->odometry.options.max_gap = std::numeric_limits<double>::infinity();
   add_odometry_flags(cmd, args->odometry, /*live=*/true);
   cmd->add_option("--serve", args->serve,

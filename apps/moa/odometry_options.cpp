@@ -123,7 +123,8 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
       ->capture_default_str();
   cmd->add_option("--max-gap", o.max_gap,
                   "Longest time all sensors may stay silent, s (a gap is no motion, written "
-                  "epoch by epoch; a longer one is an error)")
+                  "epoch by epoch; a longer one is an error); the silences summed over the log "
+                  "may reach it plus one epoch per row")
       ->check(kPositive)
       ->capture_default_str();
   cmd->add_option("--initial-pose", f.initial_pose,

@@ -208,6 +208,29 @@ def test_huge_times_are_refused_as_by_the_command_line(tmp_path):
         o.push(1e300, 0, 1.0, 2.0)
 
 
+def test_sparse_rows_are_refused_as_by_the_command_line(tmp_path):
+    # Issue #28: rows an hour apart over a day would write 8.64 million still
+    # epochs; the silences beyond --max-gap plus one epoch per row are refused
+    # with the same message as `moa odometry`, at the first row at 7198 s.
+    cfg = pathlib.Path(__file__).resolve().parents[2] / "examples/logs/mixed-motion/robot.yaml"
+    d = tmp_path / "hour-apart"
+    d.mkdir()
+    rows = "".join(f"{k * 3599},{name},0,0\n" for k in range(25)
+                   for name in ["front", "left", "rear", "right"])
+    (d / "mice.csv").write_text("t,sensor,dx,dy\n" + rows)
+    message = cli_error("odometry", "--config", cfg, "--log", d, "--out", tmp_path / "o.csv")
+    assert "mice.csv:10: row at t = 7198 s: the sensors have been silent for 7197.90 s" in message
+    with pytest.raises(moa.Error) as e:
+        moa.odometry(cfg, d)
+    assert str(e.value) == message
+    o = moa.Odometry(cfg, t0=0.0)
+    for t in [0.0, 3599.0]:
+        for sensor in range(4):
+            o.push(t, sensor, 0.0, 0.0)
+    with pytest.raises(moa.Error, match="silences add up to more than --max-gap"):
+        o.push(7198.0, 0, 0.0, 0.0)
+
+
 def test_calibrate_equals_the_written_config(logs, tmp_path):
     d = logs["calibration"]
     for method in ["exact", "kimlee"]:

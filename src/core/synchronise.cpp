@@ -23,6 +23,10 @@ const char* describe(RowError error) {
     case RowError::kTimeJump:
       return "time jumps forward by more than the longest gap allowed (--max-gap): recordings "
              "made at different times?";
+    case RowError::kTooMuchSilence:
+      return "the sensors' silences add up to more than --max-gap plus one epoch per row: sparse "
+             "rows would write an epoch per period over every gap (raise --max-gap if the log is "
+             "meant so)";
   }
   return "invalid row";
 }

@@ -43,6 +43,31 @@ bool sync_to_disk(const std::filesystem::path& file) {
 
 }  // namespace
 
+void AtomicFile::Buffer::failed() {
+  if (error == 0) error = errno != 0 ? errno : EIO;
+}
+
+AtomicFile::Buffer::int_type AtomicFile::Buffer::overflow(int_type c) {
+  errno = 0;
+  const int_type r = std::filebuf::overflow(c);
+  if (traits_type::eq_int_type(r, traits_type::eof())) failed();
+  return r;
+}
+
+std::streamsize AtomicFile::Buffer::xsputn(const char_type* s, std::streamsize n) {
+  errno = 0;
+  const std::streamsize r = std::filebuf::xsputn(s, n);
+  if (r < n) failed();
+  return r;
+}
+
+int AtomicFile::Buffer::sync() {
+  errno = 0;
+  const int r = std::filebuf::sync();
+  if (r != 0) failed();
+  return r;
+}
+
 AtomicFile::AtomicFile(std::filesystem::path target) : target_(std::move(target)) {
 #if defined(__linux__) && defined(O_TMPFILE)
   // A file without a name in the target's directory (Linux, O_TMPFILE): a
@@ -52,8 +77,8 @@ AtomicFile::AtomicFile(std::filesystem::path target) : target_(std::move(target)
       target_.parent_path().empty() ? std::filesystem::path(".") : target_.parent_path();
   anonymous_fd_ = ::open(dir.c_str(), O_TMPFILE | O_WRONLY | O_CLOEXEC, 0666);
   if (anonymous_fd_ >= 0) {
-    out_.open(fmt::format("/proc/self/fd/{}", anonymous_fd_), std::ios::binary | std::ios::trunc);
-    if (!out_) {
+    if (buffer_.open(fmt::format("/proc/self/fd/{}", anonymous_fd_),
+                     std::ios::out | std::ios::binary | std::ios::trunc) == nullptr) {
       ::close(anonymous_fd_);
       anonymous_fd_ = -1;
     }
@@ -63,9 +88,9 @@ AtomicFile::AtomicFile(std::filesystem::path target) : target_(std::move(target)
     // Elsewhere, a hidden named temporary, removed on SIGINT and SIGTERM.
     temp_ = temporary_beside(target_);
     registered_ = TemporaryPath(temp_);
-    out_.open(temp_, std::ios::binary | std::ios::trunc);
+    (void)buffer_.open(temp_, std::ios::out | std::ios::binary | std::ios::trunc);
   }
-  if (!out_) {
+  if (!buffer_.is_open()) {
     const int error = errno;
     throw IoError(fmt::format("{}: cannot open for writing ({})", target_.string(),
                               error != 0 ? std::strerror(error) : "unknown error"));
@@ -75,7 +100,7 @@ AtomicFile::AtomicFile(std::filesystem::path target) : target_(std::move(target)
 AtomicFile::~AtomicFile() {
   close_writeback();
   if (committed_) return;
-  out_.close();
+  buffer_.close();
 #if defined(__unix__) || defined(__APPLE__)
   if (anonymous_fd_ >= 0) ::close(anonymous_fd_);
 #endif
@@ -108,12 +133,12 @@ void AtomicFile::commit() {
   if (committed_) throw Error(fmt::format("{}: already committed", target_.string()));
   close_writeback();
   out_.flush();
-  const bool written = static_cast<bool>(out_);
-  out_.close();
-  if (!written || !out_) {
-    // errno of the failed write: "No space left on device" on a full disk.
-    throw IoError(fmt::format("{}: cannot write ({})", target_.string(),
-                              std::strerror(errno != 0 ? errno : EIO)));
+  const bool written = static_cast<bool>(out_) && buffer_.close() != nullptr;
+  if (!written) {
+    // The first failed write's errno: "No space left on device" on a full
+    // disk, however long the run went on after it.
+    const int error = buffer_.error != 0 ? buffer_.error : (errno != 0 ? errno : EIO);
+    throw IoError(fmt::format("{}: cannot write ({})", target_.string(), std::strerror(error)));
   }
 #if defined(__linux__) && defined(O_TMPFILE)
   if (anonymous_fd_ >= 0) {

@@ -45,19 +45,34 @@ OdometryRun run_loop(const RobotConfig& config, const std::string& config_path,
     run.summary.add(step, config.array.size());
     if (callbacks.on_step) callbacks.on_step(step);
   };
+  // The refusal's words; for too much silence, with its numbers.
+  const auto detail = [&](double t, OdometryError e) -> std::string {
+    if (e != OdometryError::kRow) return describe(e);
+    const RowError r = odometry->row_error();
+    if (r != RowError::kTooMuchSilence) return describe(r);
+    const Synchroniser& sync = odometry->synchroniser();
+    return fmt::format(
+        "the sensors have been silent for {:.2f} s in total by this row (the time between rows "
+        "beyond --max-row-interval {} s), more than the {:.2f} s allowed: --max-gap {} s plus "
+        "{} s (one epoch) for each of the {} rows before it; a log of sparse rows would write an "
+        "epoch every {} s over every gap. Raise --max-gap if the log is meant so",
+        sync.silence_at(t), sync.options().max_row_interval, sync.silence_allowed(),
+        sync.options().max_gap, sync.options().period, sync.rows(), sync.options().period);
+  };
   const auto fail = [&](double t, OdometryError e) {
-    const std::string detail =
-        e == OdometryError::kRow ? describe(odometry->row_error()) : describe(e);
-    throw Error(fmt::format("{}: row at t = {} s: {}", source.where(), t, detail));
+    throw Error(fmt::format("{}: row at t = {} s: {}", source.where(), t, detail(t, e)));
   };
 
   while (const InputRow* input = source.next()) {
     if (const auto* row = std::get_if<SensorRow>(input)) {
       if (const auto e = odometry->push(*row, sink)) {
-        const bool refused = e == OdometryError::kRow || e == OdometryError::kImpossibleCounts;
+        // Too much silence is not one bad row: every later row would be
+        // refused too, so it ends the run as it ends `moa odometry`.
+        const bool refused =
+            (e == OdometryError::kRow && odometry->row_error() != RowError::kTooMuchSilence) ||
+            e == OdometryError::kImpossibleCounts;
         if (!refused || !callbacks.on_refused) fail(row->t, *e);
-        callbacks.on_refused(
-            *row, e == OdometryError::kRow ? describe(odometry->row_error()) : describe(*e));
+        callbacks.on_refused(*row, detail(row->t, *e));
         continue;
       }
       if (callbacks.on_row) callbacks.on_row(*input);

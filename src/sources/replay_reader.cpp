@@ -42,8 +42,8 @@ std::optional<SensorRow> ReplayReader::next() {
   if (hooks_.should_stop()) return std::nullopt;
   auto row = reader_.next();
   if (!row) return std::nullopt;
-  const auto due = started_ + std::chrono::duration_cast<Clock::duration>(
-                                  std::chrono::duration<double>((row->t - t0) / options_.speed));
+  auto due = started_ + std::chrono::duration_cast<Clock::duration>(
+                            std::chrono::duration<double>((row->t - t0) / options_.speed));
   const auto tick = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(std::max(hooks_.tick_period, 1e-3)));
   for (;;) {
@@ -52,8 +52,17 @@ std::optional<SensorRow> ReplayReader::next() {
       last_tick_ = now;
       hooks_.tick();
     }
-    if (now >= due) break;
     if (hooks_.should_stop()) return std::nullopt;
+    if (hooks_.held()) {
+      // The replay's clock stands still while held: the rows after come
+      // that much later.
+      std::this_thread::sleep_until(now + tick);
+      const auto waited = Clock::now() - now;
+      started_ += waited;
+      due += waited;
+      continue;
+    }
+    if (now >= due) break;
     std::this_thread::sleep_until(std::min(due, last_tick_ + tick));
   }
   ++rows_;

@@ -40,6 +40,7 @@ OptionCheck DashboardOptions::validate() const {
       .at_most("max_rate", max_rate, 100.0)  // events/s
       .closed("send_buffer", send_buffer, 1024, 1 << 24)
       .at_most("history_points", static_cast<double>(history_points), 1e6)
+      .at_most("max_warnings", static_cast<double>(max_warnings), 1e4)
       .result();
 }
 
@@ -114,9 +115,11 @@ std::string dashboard_page(const RobotConfig& config, std::string_view title) {
       "<canvas id=\"chart-trajectory\"></canvas></div></section>\n"
       "<section><h2>Sensors</h2><div class=\"plot\"><canvas id=\"chart-health\"></canvas></div>"
       "<table id=\"sensor-table\"><thead><tr><th>sensor</th><th>dx</th><th>dy</th><th>SQUAL</th>"
-      "<th>used</th><th>left out because</th></tr></thead><tbody></tbody></table></section>\n"
+      "<th>used (last 10 s)</th><th>left out "
+      "because</th></tr></thead><tbody></tbody></table></section>\n"
       "<section><h2>Twist</h2><div class=\"plot\"><canvas id=\"chart-twist\"></canvas></div>"
       "</section>\n"
+      "<section><h2>Warnings</h2><ul id=\"warnings\"><li>none</li></ul></section>\n"
       "</main>\n";
   page += "<script id=\"moa-config\" type=\"application/json\">" + script_safe(j.str()) +
           "</script>\n<script>\n";
@@ -139,6 +142,13 @@ struct Client {
 /// One epoch summed into the event being built.
 struct Pending {
   int epochs = 0;
+  // The last epoch's (s, m, rad, m/s, rad/s), for the event.
+  double t = 0.0;
+  Pose2 pose;
+  Twist2 twist;
+  Source source = Source::kMice;
+  SensorMask used_now = 0;
+  std::vector<Eigen::Vector2d> scales;
   std::vector<Eigen::Vector2d> counts;
   std::vector<int> squal;  ///< lowest (ArraySample: 255 when none reported)
   std::vector<unsigned> flags;
@@ -172,34 +182,39 @@ struct Dashboard::Impl {
   mutable std::mutex mutex;
   std::condition_variable wake;
   std::vector<std::shared_ptr<Client>> clients;
-  std::deque<std::array<double, 3>> history;
+  std::deque<std::array<double, 6>> history;  ///< t, x, y, vx, vy, omega
+  std::vector<Message> warnings;              ///< "event: warning" messages
+  Message last;                               ///< the last event: the state now
+  std::size_t warnings_unsent = 0;            ///< beyond max_warnings
+  double t_last = 0.0;                        ///< s, the last event's time
   bool finished = false;
   bool stopping = false;
   Stats stats;
 
-  std::string event_json(const OdometryStep& step, std::span<const Eigen::Vector2d> scales) const;
+  std::string event_json() const;  // of `pending`
+  void emit();                     // `pending` as an event, then reset
   void broadcast(Message message);
   std::string history_message() const;  // with mutex held
+  std::string end_message() const;      // with mutex held
   bool serve(const std::shared_ptr<Client>& client, httplib::DataSink& sink, bool& greeted);
 };
 
-std::string Dashboard::Impl::event_json(const OdometryStep& step,
-                                        std::span<const Eigen::Vector2d> scales) const {
-  const Twist2& v = step.estimate.estimate.twist;
+std::string Dashboard::Impl::event_json() const {
+  const Twist2& v = pending.twist;
   JsonWriter j;
   j.begin_object()
-      .member("t", step.t())
-      .member("x", step.pose.t.x())
-      .member("y", step.pose.t.y())
-      .member("theta", step.pose.theta)
+      .member("t", pending.t)
+      .member("x", pending.pose.t.x())
+      .member("y", pending.pose.t.y())
+      .member("theta", pending.pose.theta)
       .member("vx", v.v.x())
       .member("vy", v.v.y())
       .member("omega", v.omega)
-      .member("source", to_name(step.estimate.source))
+      .member("source", to_name(pending.source))
       .member("epochs", pending.epochs)
       .key("sensors")
       .begin_array();
-  const SensorMask used = step.estimate.estimate.used;
+  const SensorMask used = pending.used_now;
   for (std::size_t i = 0; i < config.names.size(); ++i) {
     j.begin_object()
         .member("name", config.names[i])
@@ -223,9 +238,9 @@ std::string Dashboard::Impl::event_json(const OdometryStep& step,
     j.end_object();
   }
   j.end_array();
-  if (!scales.empty()) {
+  if (!pending.scales.empty()) {
     j.key("scales").begin_array();
-    for (const auto& s : scales) j.begin_array().value(s.x()).value(s.y()).end_array();
+    for (const auto& s : pending.scales) j.begin_array().value(s.x()).value(s.y()).end_array();
     j.end_array();
   }
   j.end_object();
@@ -249,9 +264,19 @@ void Dashboard::Impl::broadcast(Message message) {
 std::string Dashboard::Impl::history_message() const {
   JsonWriter j;
   j.begin_object().key("points").begin_array();
-  for (const auto& p : history) j.begin_array().value(p[0]).value(p[1]).value(p[2]).end_array();
+  for (const auto& p : history) {
+    j.begin_array();
+    for (const double v : p) j.value(v);
+    j.end_array();
+  }
   j.end_array().end_object();
   return "event: history\ndata: " + j.str() + "\n\n";
+}
+
+std::string Dashboard::Impl::end_message() const {
+  JsonWriter j;
+  j.begin_object().member("t", t_last).end_object();
+  return "event: end\ndata: " + j.str() + "\n\n";
 }
 
 // One turn of a client's stream: true to be called again.
@@ -259,11 +284,15 @@ bool Dashboard::Impl::serve(const std::shared_ptr<Client>& client, httplib::Data
                             bool& greeted) {
   std::vector<Message> batch;
   std::string greeting;
+  std::string ending;
   bool end = false;
   {
     std::unique_lock lock(mutex);
     if (!greeted) {
       greeting = "retry: 2000\n\n" + history_message();
+      for (const auto& w : warnings) greeting += *w;
+      if (last) greeting += *last;
+      client->queue.clear();  // the warnings queued before the greeting are in it
     } else {
       wake.wait_for(lock, std::chrono::seconds(1),
                     [&] { return stopping || finished || !client->queue.empty(); });
@@ -272,6 +301,7 @@ bool Dashboard::Impl::serve(const std::shared_ptr<Client>& client, httplib::Data
     batch.assign(client->queue.begin(), client->queue.end());
     client->queue.clear();
     end = finished;
+    if (end) ending = end_message();
   }
   // Socket writes only from here on, with no lock held.
   if (!greeted) {
@@ -282,8 +312,7 @@ bool Dashboard::Impl::serve(const std::shared_ptr<Client>& client, httplib::Data
     if (!sink.write(m->data(), m->size())) return false;
   }
   if (end) {
-    static constexpr std::string_view kEnd = "event: end\ndata: {}\n\n";
-    sink.write(kEnd.data(), kEnd.size());
+    sink.write(ending.data(), ending.size());
     sink.done();
     return true;
   }
@@ -411,24 +440,74 @@ void Dashboard::publish(const OdometryStep& step, std::span<const Eigen::Vector2
     }
   }
   ++p.epochs;
+  p.t = step.t();
+  p.pose = step.pose;
+  p.twist = e.estimate.twist;
+  p.source = e.source;
+  p.used_now = e.estimate.used;
+  p.scales.assign(scales.begin(), scales.end());
   const auto now = Clock::now();
   if (now - s.last_event < std::chrono::duration<double>(1.0 / s.options.max_rate)) return;
   s.last_event = now;
-  auto message =
-      std::make_shared<const std::string>("data: " + s.event_json(step, scales) + "\n\n");
+  s.emit();
+}
+
+void Dashboard::Impl::emit() {
+  auto message = std::make_shared<const std::string>("data: " + event_json() + "\n\n");
+  {
+    const std::lock_guard lock(mutex);
+    ++stats.events;
+    if (options.history_points > 0) {
+      if (history.size() >= options.history_points) history.pop_front();
+      const Twist2& v = pending.twist;
+      history.push_back(
+          {pending.t, pending.pose.t.x(), pending.pose.t.y(), v.v.x(), v.v.y(), v.omega});
+    }
+    t_last = pending.t;
+    last = message;
+  }
+  broadcast(std::move(message));
+  pending.reset(static_cast<int>(config.names.size()));
+}
+
+void Dashboard::warn(const std::string& text) {
+  Impl& s = *impl_;
+  Message message;
   {
     const std::lock_guard lock(s.mutex);
-    ++s.stats.events;
-    if (s.options.history_points > 0) {
-      if (s.history.size() >= s.options.history_points) s.history.pop_front();
-      s.history.push_back({step.t(), step.pose.t.x(), step.pose.t.y()});
+    if (s.warnings.size() >= s.options.max_warnings) {
+      ++s.warnings_unsent;
+      return;
     }
+    JsonWriter j;
+    j.begin_object().member("text", text).end_object();
+    message = std::make_shared<const std::string>("event: warning\ndata: " + j.str() + "\n\n");
+    s.warnings.push_back(message);
   }
   s.broadcast(std::move(message));
-  p.reset(n);
 }
 
 void Dashboard::finish() {
+  Impl& s = *impl_;
+  {
+    const std::lock_guard lock(s.mutex);
+    if (s.finished) return;
+  }
+  // The epochs since the last event: the run's final state.
+  if (s.pending.epochs > 0) s.emit();
+  Message more;
+  {
+    const std::lock_guard lock(s.mutex);
+    if (s.warnings_unsent > 0) {
+      JsonWriter j;
+      j.begin_object()
+          .member("text", fmt::format("{} more warnings (not kept)", s.warnings_unsent))
+          .end_object();
+      more = std::make_shared<const std::string>("event: warning\ndata: " + j.str() + "\n\n");
+      s.warnings.push_back(more);
+    }
+  }
+  if (more) s.broadcast(more);
   {
     const std::lock_guard lock(impl_->mutex);
     impl_->finished = true;

@@ -1,10 +1,13 @@
 // The live dashboard's script: reads the robot from #moa-config, listens to
 // /events (Server-Sent Events, one JSON object per event) and redraws the
 // trajectory with the robot and its sensors, per-sensor health and the
-// twist over the last seconds. Chart.js 3 is inlined before this script.
+// twist over the last seconds, the run's warnings. Chart.js 3 is inlined
+// before this script. A client that joins late gets the trajectory, the
+// twist and the warnings so far ("event: history", "event: warning").
 // For tests: <body data-moa-status> is loading | live | ended, each canvas
 // carries data-updates (times redrawn) and data-points, <body data-events>
-// the events received; errors go to #moa-errors (not the console).
+// the events received, #warnings one <li> per warning; errors go to
+// #moa-errors (not the console).
 (function () {
   'use strict';
   const config = JSON.parse(document.getElementById('moa-config').textContent);
@@ -101,7 +104,7 @@
     data: {
       labels: sensors.map((s) => s.name),
       datasets: [
-        { label: 'used (share of epochs)', data: sensors.map(() => 0),
+        { label: 'used (share of epochs, last 10 s)', data: sensors.map(() => 0),
           backgroundColor: sensors.map((s, i) => colour(i)), xAxisID: 'x' },
         { label: 'SQUAL / 255', data: sensors.map(() => 0), backgroundColor: '#b0bec5',
           xAxisID: 'x' },
@@ -123,8 +126,25 @@
     return tr;
   });
 
+  // Each sensor's share of the epochs it was used in over the last window_s
+  // seconds (an event carries its own few epochs' share).
+  const used_log = [];  // {t, epochs, used: [epochs used, per sensor]}
+  function used_shares(e) {
+    used_log.push({ t: e.t, epochs: e.epochs,
+                    used: e.sensors.map((m) => m.used_share * e.epochs) });
+    while (used_log.length > 0 && used_log[0].t <= e.t - window_s) used_log.shift();
+    let epochs = 0;
+    const used = sensors.map(() => 0);
+    for (const u of used_log) {
+      epochs += u.epochs;
+      u.used.forEach((n, i) => { used[i] += n; });
+    }
+    return used.map((n) => (epochs > 0 ? n / epochs : 0));
+  }
+
   function draw_health(e) {
-    health.data.datasets[0].data = e.sensors.map((m) => m.used_share);
+    const shares = used_shares(e);
+    health.data.datasets[0].data = shares;
     health.data.datasets[1].data = e.sensors.map((m) => (m.squal === null ? 0 : m.squal / 255));
     health.update('none');
     counted(health);
@@ -133,7 +153,7 @@
       cells[1].textContent = m.dx.toFixed(0);
       cells[2].textContent = m.dy.toFixed(0);
       cells[3].textContent = m.squal === null ? '-' : String(m.squal);
-      cells[4].textContent = (100 * m.used_share).toFixed(0) + ' %';
+      cells[4].textContent = (100 * shares[i]).toFixed(0) + ' %';
       cells[5].textContent = m.excluded === null ? '' : m.excluded;
       rows[i].className = m.used ? '' : 'excluded';
     });
@@ -161,12 +181,16 @@
     },
   });
 
-  function draw_twist(e) {
+  function add_twist(t, values) {
     twist_sets.forEach(([, key], k) => {
       const data = twist.data.datasets[k].data;
-      data.push({ x: e.t, y: e[key] });
-      while (data.length > 0 && data[0].x < e.t - window_s) data.shift();
+      data.push({ x: t, y: values[key] });
+      while (data.length > 0 && data[0].x < t - window_s) data.shift();
     });
+  }
+
+  function draw_twist(e) {
+    add_twist(e.t, e);
     twist.options.scales.x.min = e.t - window_s;
     twist.options.scales.x.max = e.t;
     twist.update('none');
@@ -205,8 +229,21 @@
   const source = new EventSource('events');
   body.dataset.events = '0';
   source.addEventListener('history', (m) => {
-    for (const [, x, y] of JSON.parse(m.data).points) path.push({ x: x, y: y });
+    const points = JSON.parse(m.data).points;
+    for (const [, x, y] of points) path.push({ x: x, y: y });
+    const last = points.length > 0 ? points[points.length - 1][0] : 0;
+    for (const [t, , , vx, vy, omega] of points) {
+      if (t > last - window_s) add_twist(t, { vx: vx, vy: vy, omega: omega });
+    }
     body.dataset.moaStatus = 'live';
+  });
+  const warnings = document.getElementById('warnings');
+  let warned = 0;
+  source.addEventListener('warning', (m) => {
+    if (warned++ === 0) warnings.textContent = '';
+    const li = document.createElement('li');
+    li.textContent = JSON.parse(m.data).text;
+    warnings.appendChild(li);
   });
   source.onmessage = (m) => {
     try {
@@ -215,12 +252,16 @@
       fail('event: ' + err);
     }
   };
-  source.addEventListener('end', () => {
+  source.addEventListener('end', (m) => {
     source.close();
     body.dataset.moaStatus = 'ended';
-    status.textContent = status.textContent.replace(/ live$/, '') + ' (run ended)';
+    const t = JSON.parse(m.data).t;
+    status.textContent = status.textContent.replace(/ live$/, '') + '   the run ended at t ' +
+      t.toFixed(2) + ' s: this is its final state';
   });
   source.onerror = () => {
-    if (body.dataset.moaStatus !== 'ended') status.textContent = 'connection lost, retrying';
+    if (body.dataset.moaStatus !== 'ended') {
+      status.textContent = 'no connection to moa live (the run may have ended), retrying';
+    }
   };
 })();

@@ -212,6 +212,7 @@ class Odometry {
 
   /// The row error of the last kRow error.
   RowError row_error() const { return row_error_; }
+  const Synchroniser& synchroniser() const { return sync_; }
   std::size_t steps() const { return steps_; }
   const FixCounts& fixes() const { return fixes_; }
   const OdometryOptions& options() const { return options_; }

@@ -20,6 +20,7 @@
 // validate says so).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -60,6 +61,9 @@ enum class RowError {
   kUnknownSensor,    ///< index outside the array
   kCountsNotFinite,
   kTimeJump,  ///< t later than the previous row's by more than max_gap
+  /// the sensors' silences so far sum to more than max_gap plus one period
+  /// per row read (Synchroniser::silence_allowed)
+  kTooMuchSilence,
 };
 const char* describe(RowError error);
 
@@ -88,6 +92,8 @@ struct SynchroniserOptions {
   /// s, longest silence of all sensors accepted. A gap is no motion and is
   /// emitted epoch by epoch, so a log glued from recordings made days apart
   /// would emit (and a writer write) millions of still epochs: refused.
+  /// It also bounds the silences summed over the stream (see
+  /// Synchroniser::silence_allowed).
   double max_gap = 3600.0;
 
   /// nullopt when usable, else the first field out of its bounds
@@ -109,6 +115,10 @@ class Synchroniser {
   template <class Sink>
   std::optional<RowError> push(const SensorRow& row, Sink&& sink) {
     if (auto error = check_row(row, n_, t0_, last_row_t_, options_.max_gap)) return error;
+    const double silence = silence_at(row.t);
+    if (silence > silence_allowed()) return RowError::kTooMuchSilence;
+    silence_ = silence;
+    ++rows_;
     // Epochs that end before this row's interval can start are final now;
     // emitting them first keeps the pending span within the ring.
     emit_until(final_time(row.t), sink);
@@ -141,6 +151,26 @@ class Synchroniser {
   }
 
   double t0() const { return t0_; }
+  /// s, the silences so far: for each row, the time since the previous row
+  /// (of any sensor) beyond max_row_interval, which no row covers.
+  double silence() const { return silence_; }
+  /// s, silence() with a row at t added.
+  double silence_at(double t) const {
+    return silence_ + std::max(0.0, t - last_row_t_ - options_.max_row_interval);
+  }
+  /// Rows accepted so far.
+  std::int64_t rows() const { return rows_; }
+  /// s, the silence the stream may have reached: max_gap plus one period per
+  /// row accepted. Each emitted epoch either holds a row's counts (a row
+  /// spreads over at most max_row_interval / period + 2 epochs) or is
+  /// silent, so a stream of N rows emits at most
+  ///   max_gap / period + N (max_row_interval / period + 3)
+  /// epochs (360 000 + 8 N with the defaults): a few sparse rows can no
+  /// longer make millions of still epochs, while a parked robot's hour, or
+  /// a pause for every few rows of a long run, is still accepted.
+  double silence_allowed() const {
+    return options_.max_gap + static_cast<double>(rows_) * options_.period;
+  }
   /// End of sensor i's last row (t0 before its first).
   double last_time(int sensor) const { return last_t_[static_cast<std::size_t>(sensor)]; }
   const SynchroniserOptions& options() const { return options_; }
@@ -175,6 +205,8 @@ class Synchroniser {
   std::array<double, kMaxSensors> last_t_{};        // per sensor, end of its previous row
   std::int64_t next_ = 0;                           // first epoch not yet emitted
   double last_row_t_;
+  double silence_ = 0.0;   // s, see silence()
+  std::int64_t rows_ = 0;  // rows accepted
 };
 
 }  // namespace moa

@@ -32,10 +32,26 @@ class AtomicFile {
  private:
   void close_writeback();
 
+  /// A file buffer that keeps the errno of its first failed write, which a
+  /// std::ofstream forgets ("No space left on device" on a full disk).
+  class Buffer : public std::filebuf {
+   public:
+    int error = 0;  ///< errno of the first failed write, 0 if none
+
+   protected:
+    int_type overflow(int_type c) override;
+    std::streamsize xsputn(const char_type* s, std::streamsize n) override;
+    int sync() override;
+
+   private:
+    void failed();
+  };
+
   std::filesystem::path target_;
   std::filesystem::path temp_;
   TemporaryPath registered_;
-  std::ofstream out_;
+  Buffer buffer_;
+  std::ostream out_{&buffer_};
   int writeback_fd_ = -1;  ///< the temporary, opened by start_writeback()
   int anonymous_fd_ = -1;  ///< the unnamed temporary (O_TMPFILE), until commit()
   bool committed_ = false;

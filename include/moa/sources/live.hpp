@@ -18,9 +18,15 @@ struct LiveHooks {
   /// One line, no newline: a condition the run survives (a device lost,
   /// frames dropped). Empty: warnings are discarded.
   std::function<void(const std::string&)> warn;
+  /// Polled with every tick while a replay is due to hand out a row: while
+  /// true, the replay waits (ticking) and its clock stands still, so that no
+  /// data passes while the user is asked something (the guided wizard).
+  /// Devices cannot wait: their data flows on. Empty: never holds.
+  std::function<bool()> hold;
   double tick_period = 0.1;  ///< s
 
   bool should_stop() const { return stop && stop(); }
+  bool held() const { return hold && hold(); }
   void warning(const std::string& text) const {
     if (warn) warn(text);
   }

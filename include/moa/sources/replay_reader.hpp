@@ -7,8 +7,9 @@
 // start + (t_k - t0) / speed, t0 the log's start time and start the moment
 // start_time() is first called. While it waits, the reader calls
 // LiveHooks::tick every tick_period and stops when LiveHooks::stop says so,
-// as the device readers do. A caller slower than the log does not skip rows:
-// it catches up (rows come back-to-back until it is on time again).
+// as the device readers do; while LiveHooks::hold says so, it waits with its
+// clock stopped (the rows after come that much later). A caller slower than the log does not skip
+// rows: it catches up (rows come back-to-back until it is on time again).
 #pragma once
 
 #include <chrono>

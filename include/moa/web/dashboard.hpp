@@ -15,9 +15,12 @@
 //                 "excluded"}],           last reason it was left out (null: never)
 //    "scales": [[sx, sy], ...]}           only when self-calibration estimates exist
 //
-// A client that connects first gets "event: history" (the trajectory so far,
-// {"points": [[t, x, y], ...]}, the last history_points events), and when
-// the run ends "event: end".
+// A client that connects first gets "event: history" (the trajectory and
+// the twist so far, {"points": [[t, x, y, vx, vy, omega], ...]}, the last
+// history_points events: s, m, m, m/s, m/s, rad/s), then one "event:
+// warning" ({"text"}) per warning of the run so far; later warnings come as
+// they happen, and when the run ends "event: end" ({"t"}: its last time, s).
+// A client that connects after the end gets all of these at once.
 //
 // Threads: publish() is called by the estimator for every epoch. It sums
 // the epoch into the pending event and, at most max_rate times per second
@@ -53,6 +56,7 @@ struct DashboardOptions {
   int send_buffer = 65536;
   double max_rate = 20.0;             ///< events per second of wall time, at most
   std::size_t history_points = 4000;  ///< trajectory points kept for new clients
+  std::size_t max_warnings = 100;     ///< warnings kept for new clients
   std::string title = "moa live";
   /// nullopt when usable, else the first field out of its bounds, the bound
   /// and the value (core/options_check.hpp).
@@ -82,8 +86,12 @@ class Dashboard {
   /// From the estimator's thread, every epoch; never blocks on a client.
   /// `scales`: per sensor (sx, sy) from self-calibration, empty when none.
   void publish(const OdometryStep& step, std::span<const Eigen::Vector2d> scales = {});
-  /// Ends every stream with "event: end"; later clients get the history and
-  /// the end at once.
+  /// A warning of the run (one line), as the run summary has it: sent to
+  /// every client and kept for later ones (the first max_warnings; later
+  /// ones are counted in a last warning).
+  void warn(const std::string& text);
+  /// Ends every stream with "event: end"; later clients get the history,
+  /// the warnings and the end at once.
   void finish();
 
   struct Stats {
