@@ -396,16 +396,17 @@ TEST(Live, StreamsAreFedRecordedAndTheirBadLinesCountedOnce) {
                          " --speed 5 --streams " + streams.string() + " --record " +
                          record.string() + " --out " + live.string() + " --estimator sekimori");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(r.err,
-            "moa live: warning: --streams: unknown stream (not wheels or camera): 'gyro,0.5,0.1' "
-            "(more such lines are counted, not shown)\n"
-            "moa live: warning: --streams: wrong number of fields (wheels,t,vx,vy,omega or "
-            "camera,t,x,y[,theta[,sx,sy]]): 'wheels,1.0,0.1,0' (more such lines are counted, not "
-            "shown)\n"
-            "moa live: warning: --streams: a field is not a finite number (sx, sy: positive): "
-            "'wheels,1.5,0.1,0,zero' (more such lines are counted, not shown)\n");
-  EXPECT_NE(r.out.find("moa live: streams: 59 wheel rows and 0 camera fixes read, 59 and 0 fed; "
-                       "4 bad lines, 0 out of time order"),
+  EXPECT_EQ(
+      r.err,
+      "moa live: warning: --streams: unknown stream (not wheels, imu or camera): 'gyro,0.5,0.1' "
+      "(more such lines are counted, not shown)\n"
+      "moa live: warning: --streams: wrong number of fields (wheels,t,vx,vy,omega or "
+      "imu,t,gz or camera,t,x,y[,theta[,sx,sy]]): 'wheels,1.0,0.1,0' (more such lines are "
+      "counted, not shown)\n"
+      "moa live: warning: --streams: a field is not a finite number (sx, sy: positive): "
+      "'wheels,1.5,0.1,0,zero' (more such lines are counted, not shown)\n");
+  EXPECT_NE(r.out.find("moa live: streams: 59 wheel rows, 0 gyro rows and 0 camera fixes read, "
+                       "59, 0 and 0 fed; 4 bad lines, 0 out of time order"),
             std::string::npos)
       << r.out;
   ASSERT_TRUE(fs::exists(record / "wheels.csv"));

@@ -107,6 +107,14 @@ void LiveRunSource::take_streams() {
       }
       last_wheel_t_ = w->t;
       wheels_.push_back(*w);
+    } else if (auto* g = std::get_if<ImuRow>(&s.row)) {
+      if (!s.stamped) g->t = std::max({estimate, after, last_gyro_t_});
+      if (g->t < last_gyro_t_) {
+        ++dropped_;
+        continue;
+      }
+      last_gyro_t_ = g->t;
+      gyro_.push_back(*g);
     } else {
       auto& f = std::get<CameraFix>(s.row);
       if (!s.stamped) f.t = std::max({estimate, after, last_fix_t_});
@@ -155,6 +163,12 @@ const InputRow* LiveRunSource::next() {
   if (!wheels_.empty() && wheels_.front().t <= limit) {
     row_ = wheels_.front();
     wheels_.pop_front();
+    from_streams_ = true;
+    return &row_;
+  }
+  if (!gyro_.empty() && gyro_.front().t <= limit) {
+    row_ = gyro_.front();
+    gyro_.pop_front();
     from_streams_ = true;
     return &row_;
   }
