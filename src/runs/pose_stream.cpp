@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <climits>
 #include <cmath>
 #include <csignal>
 
@@ -83,7 +84,16 @@ void PoseStream::write(const OdometryStep& step) {
 
 void PoseStream::push_out() {
   while (!gone_ && sent_ < buffer_.size()) {
-    const ssize_t n = ::write(fd_, buffer_.data() + sent_, buffer_.size() - sent_);
+    // Whole lines, at most PIPE_BUF bytes (unless one line is longer): a pipe
+    // takes such a write whole or not at all, so that its reader never sees
+    // part of a line.
+    std::size_t size = buffer_.size() - sent_;
+    if (size > PIPE_BUF) {
+      const std::size_t last = buffer_.rfind('\n', sent_ + PIPE_BUF - 1);
+      size = last != std::string::npos && last >= sent_ ? last + 1 - sent_
+                                                        : buffer_.find('\n', sent_) + 1 - sent_;
+    }
+    const ssize_t n = ::write(fd_, buffer_.data() + sent_, size);
     if (n > 0) {
       sent_ += static_cast<std::size_t>(n);
     } else if (n < 0 && errno == EINTR) {

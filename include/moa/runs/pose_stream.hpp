@@ -6,7 +6,10 @@
 // non-blocking and lines go through a buffer of kBufferBytes; a line that
 // does not fit whole is dropped and counted (a reader that is slow or has
 // stopped), as is every line after the reader is gone (EPIPE; SIGPIPE is
-// ignored while the stream exists). Lines are written whole or not at all.
+// ignored from then on). Writes are of whole lines, at most PIPE_BUF bytes
+// (4096 on Linux), which a pipe takes whole or not at all: its reader never
+// sees part of a line (a line longer than that, 16 long sensor names, may
+// be split, and then cut if the run ends before the reader takes the rest).
 // To UDP: one datagram per line, sent with MSG_DONTWAIT on a connected
 // socket; a send the kernel refuses (no buffer space, no one listening:
 // ECONNREFUSED) is a dropped line. A datagram the kernel accepted but the
