@@ -175,6 +175,7 @@ const InputRow* LiveRunSource::next() {
   if (ended_) return nullptr;
   row_ = *pending_;
   t_last_ = pending_->t;
+  arrival_last_ = arrival_ref_;
   pending_.reset();
   return &row_;
 }

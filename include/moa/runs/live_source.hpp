@@ -91,6 +91,10 @@ class LiveRunSource final : public RunSource {
   /// Stream rows dropped: a t before its stream's previous row's (a line
   /// without t stamped after a line whose t was later).
   std::size_t dropped() const { return dropped_; }
+  /// When the last mice row handed out was received from the source (its
+  /// arrival; steady clock): during a step's callback, the arrival of the
+  /// row that completed the step (`moa bench --live`).
+  std::chrono::steady_clock::time_point last_arrival() const { return arrival_last_; }
 
  private:
   void take_streams();
@@ -107,9 +111,10 @@ class LiveRunSource final : public RunSource {
   double speed_ = 1.0;
   std::optional<SensorRow> pending_;  ///< the next mice row, not yet handed out
   bool ended_ = false;
-  double t_last_ = 0.0;                                ///< s, the last mice row handed out
-  double t_ref_ = 0.0;                                 ///< s, the last mice row received ...
-  std::chrono::steady_clock::time_point arrival_ref_;  ///< ... and when
+  double t_last_ = 0.0;                                 ///< s, the last mice row handed out
+  double t_ref_ = 0.0;                                  ///< s, the last mice row received ...
+  std::chrono::steady_clock::time_point arrival_ref_;   ///< ... and when
+  std::chrono::steady_clock::time_point arrival_last_;  ///< of the last mice row handed out
   std::deque<WheelRow> wheels_;
   std::deque<ImuRow> gyro_;
   std::deque<CameraFix> fixes_;
