@@ -164,20 +164,26 @@ int run_live_bench(const bench::LiveLatencyOptions& args, bool json_out) {
   if (json_out) {
     // Keys: s, Hz; counts plain.
     io::JsonWriter json;
-    json.begin_object().key("latency").begin_array();
-    for (const auto& r : results) {
-      json.begin_object()
-          .member("rate_hz", r.rate_hz)
-          .member("p50_s", r.p50_s)
-          .member("p99_s", r.p99_s)
-          .member("max_s", r.max_s)
-          .member("steps", static_cast<std::uint64_t>(r.steps))
-          .member("lines_received", static_cast<std::uint64_t>(r.lines_received))
-          .member("lines_dropped", static_cast<std::uint64_t>(r.lines_dropped))
-          .end_object();
+    json.begin_object();
+    // "latency": with a reader woken by every line; "latency_reader_stalled":
+    // the same with nobody reading.
+    for (const bool reading : {true, false}) {
+      json.key(reading ? "latency" : "latency_reader_stalled").begin_array();
+      for (const auto& r : results) {
+        if (r.reader_reading != reading) continue;
+        json.begin_object()
+            .member("rate_hz", r.rate_hz)
+            .member("p50_s", r.p50_s)
+            .member("p99_s", r.p99_s)
+            .member("max_s", r.max_s)
+            .member("steps", static_cast<std::uint64_t>(r.steps))
+            .member("lines_received", static_cast<std::uint64_t>(r.lines_received))
+            .member("lines_dropped", static_cast<std::uint64_t>(r.lines_dropped))
+            .end_object();
+      }
+      json.end_array();
     }
-    json.end_array()
-        .member("sensors", 4)
+    json.member("sensors", 4)
         .member("duration_s", args.duration)
         .member("estimator", args.estimator)
         .member("cpu", bench::cpu_model())
@@ -189,11 +195,12 @@ int run_live_bench(const bench::LiveLatencyOptions& args, bool json_out) {
       "from a mice row's arrival to its pose line sent (UDP, loopback); 4 sensors, {} s each, "
       "estimator {}; {}\n",
       args.duration, args.estimator, bench::cpu_model());
-  fmt::print("{:>8} {:>7} {:>10} {:>10} {:>10} {:>9} {:>8}\n", "rate Hz", "steps", "p50 us",
-             "p99 us", "max us", "received", "dropped");
+  fmt::print("{:>8} {:>8} {:>7} {:>10} {:>10} {:>10} {:>9} {:>8}\n", "reader", "rate Hz", "steps",
+             "p50 us", "p99 us", "max us", "received", "dropped");
   for (const auto& r : results) {
-    fmt::print("{:>8} {:>7} {:>10.1f} {:>10.1f} {:>10.1f} {:>9} {:>8}\n", r.rate_hz, r.steps,
-               1e6 * r.p50_s, 1e6 * r.p99_s, 1e6 * r.max_s, r.lines_received, r.lines_dropped);
+    fmt::print("{:>8} {:>8} {:>7} {:>10.1f} {:>10.1f} {:>10.1f} {:>9} {:>8}\n",
+               r.reader_reading ? "reading" : "stalled", r.rate_hz, r.steps, 1e6 * r.p50_s,
+               1e6 * r.p99_s, 1e6 * r.max_s, r.lines_received, r.lines_dropped);
   }
   return 0;
 }
@@ -226,10 +233,12 @@ void add_bench(CLI::App& app, Action& action) {
                                    "(default 5)")
                        ->check(finite_within(1.0, 3600.0))
                        ->capture_default_str();
-  cmd->add_flag("--live", args->live,
-                "Instead: latency of `moa live` from a mice row's arrival to its pose line sent "
-                "(--pose-out udp:), median and 99th percentile, four sensors replayed in real "
-                "time at 100 Hz and 1 kHz (rows per sensor and epochs); takes 2 x --duration s");
+  cmd->add_flag(
+      "--live", args->live,
+      "Instead: latency of `moa live` from a mice row's arrival to its pose line sent "
+      "(--pose-out udp:), median and 99th percentile, four sensors replayed in real "
+      "time at 100 Hz and 1 kHz (rows per sensor and epochs), with a reader reading each line "
+      "and with one stalled; takes 4 x --duration s");
   cmd->add_option("--row-rate", r.row_rate, "--replay: mice rows per second per sensor")
       ->check(finite_within(1.0, 10000.0))
       ->capture_default_str();
@@ -242,7 +251,7 @@ void add_bench(CLI::App& app, Action& action) {
       ->check(CLI::Range(1, 100))
       ->capture_default_str();
   cmd->add_option("--dir", r.dir,
-                  "--replay: directory for the temporary log (default: system temp)")
+                  "--replay, --live: directory for the temporary log (default: system temp)")
       ->check(CLI::ExistingDirectory);
   cmd->add_flag("--keep-log", r.keep_log,
                 "--replay: keep the log (robot.yaml, mice.csv, odometry.csv) and print its "
@@ -252,6 +261,7 @@ void add_bench(CLI::App& app, Action& action) {
       if (args->live) {
         args->live_options.estimator = args->replay_options.estimator;
         if (live_duration) args->live_options.duration = args->replay_options.duration;
+        args->live_options.dir = args->replay_options.dir;
         return run_live_bench(args->live_options, args->json);
       }
       if (!args->replay) return run_bench(*args);

@@ -26,11 +26,13 @@ namespace moa::bench {
 namespace fs = std::filesystem;
 namespace {
 
-/// A UDP socket on an ephemeral port of the loopback, drained by a thread of
-/// its own: the reader of the pose stream.
+/// A UDP socket on an ephemeral port of the loopback: the reader of the
+/// pose stream. `drain`: a thread of its own waits for each line (woken by
+/// every one); else nothing reads (a stalled reader: the kernel discards
+/// what its receive buffer cannot hold).
 class PoseListener {
  public:
-  PoseListener() {
+  explicit PoseListener(bool drain) {
     fd_ = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
     sockaddr_in a{};
     a.sin_family = AF_INET;
@@ -41,6 +43,7 @@ class PoseListener {
       throw std::runtime_error("moa bench --live: cannot bind a UDP socket on the loopback");
     }
     port_ = ntohs(a.sin_port);
+    if (!drain) return;
     thread_ = std::thread([this] {
       char buffer[65536];
       while (!stop_) {
@@ -52,7 +55,7 @@ class PoseListener {
   }
   ~PoseListener() {
     stop_ = true;
-    thread_.join();
+    if (thread_.joinable()) thread_.join();
     ::close(fd_);
   }
   PoseListener(const PoseListener&) = delete;
@@ -91,45 +94,49 @@ std::vector<LiveLatency> run_live_latency_bench(
   }
   const io::RobotConfig config = four_sensors();
   std::vector<LiveLatency> results;
-  for (const double rate : args.rates) {
-    const ScratchDir scratch(args.dir.empty() ? fs::temp_directory_path() : args.dir);
-    write_log(config, args.duration, rate, scratch.path());
-    const std::string config_path = (scratch.path() / "robot.yaml").string();
-    say(fmt::format("{} Hz: replaying {} s of four sensors in real time ...", rate, args.duration));
+  for (const bool drain : {true, false}) {
+    for (const double rate : args.rates) {
+      const ScratchDir scratch(args.dir.empty() ? fs::temp_directory_path() : args.dir);
+      write_log(config, args.duration, rate, scratch.path());
+      const std::string config_path = (scratch.path() / "robot.yaml").string();
+      say(fmt::format("{} Hz, reader {}: replaying {} s of four sensors in real time ...", rate,
+                      drain ? "reading" : "stalled", args.duration));
 
-    // As `moa live --replay DIR --rate RATE --pose-out udp:127.0.0.1:PORT`.
-    OdometryOptions options;
-    options.estimator = *estimator;
-    options.rate = rate;
-    options.max_gap = std::numeric_limits<double>::infinity();
-    PoseListener listener;
-    io::PoseStream stream(fmt::format("udp:127.0.0.1:{}", listener.port()), config.names, 0.0);
-    io::ReplayReader replay(scratch.path(), config, io::ReplayOptions{}, io::LiveHooks{});
-    io::LiveRunSource input(replay, config.array.size(), scratch.path().string());
-    std::vector<double> latency;
-    latency.reserve(static_cast<std::size_t>(args.duration * rate) + 16);
-    io::RunCallbacks callbacks;
-    callbacks.on_step = [&](const OdometryStep& step) {
-      stream.write(step);
-      const auto written = std::chrono::steady_clock::now();
-      // The last one or two steps (Odometry::finish, at the end of the
-      // stream) count from the last row too.
-      latency.push_back(std::chrono::duration<double>(written - input.last_arrival()).count());
-    };
-    io::run_loop(config, config_path, options, input, scratch.path().string(), callbacks);
-    // The listener's last datagrams.
-    std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    LiveLatency r;
-    r.rate_hz = rate;
-    r.steps = latency.size();
-    r.lines_received = listener.received();
-    r.lines_dropped = stream.stats().dropped;
-    if (!latency.empty()) {
-      r.max_s = *std::max_element(latency.begin(), latency.end());
-      r.p99_s = quantile(latency, 0.99);
-      r.p50_s = quantile(latency, 0.5);
+      // As `moa live --replay DIR --rate RATE --pose-out udp:127.0.0.1:PORT`.
+      OdometryOptions options;
+      options.estimator = *estimator;
+      options.rate = rate;
+      options.max_gap = std::numeric_limits<double>::infinity();
+      PoseListener listener(drain);
+      io::PoseStream stream(fmt::format("udp:127.0.0.1:{}", listener.port()), config.names, 0.0);
+      io::ReplayReader replay(scratch.path(), config, io::ReplayOptions{}, io::LiveHooks{});
+      io::LiveRunSource input(replay, config.array.size(), scratch.path().string());
+      std::vector<double> latency;
+      latency.reserve(static_cast<std::size_t>(args.duration * rate) + 16);
+      io::RunCallbacks callbacks;
+      callbacks.on_step = [&](const OdometryStep& step) {
+        stream.write(step);
+        const auto written = std::chrono::steady_clock::now();
+        // The last one or two steps (Odometry::finish, at the end of the
+        // stream) count from the last row too.
+        latency.push_back(std::chrono::duration<double>(written - input.last_arrival()).count());
+      };
+      io::run_loop(config, config_path, options, input, scratch.path().string(), callbacks);
+      // The listener's last datagrams.
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      LiveLatency r;
+      r.rate_hz = rate;
+      r.reader_reading = drain;
+      r.steps = latency.size();
+      r.lines_received = listener.received();
+      r.lines_dropped = stream.stats().dropped;
+      if (!latency.empty()) {
+        r.max_s = *std::max_element(latency.begin(), latency.end());
+        r.p99_s = quantile(latency, 0.99);
+        r.p50_s = quantile(latency, 0.5);
+      }
+      results.push_back(r);
     }
-    results.push_back(r);
   }
   return results;
 }
