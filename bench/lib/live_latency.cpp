@@ -122,8 +122,11 @@ std::vector<LiveLatency> run_live_latency_bench(
         latency.push_back(std::chrono::duration<double>(written - input.last_arrival()).count());
       };
       io::run_loop(config, config_path, options, input, scratch.path().string(), callbacks);
-      // The listener's last datagrams.
-      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+      // The reader's last datagrams (up to 2 s for a thread kept off the CPU).
+      const std::size_t sent = stream.stats().lines - stream.stats().dropped;
+      for (int k = 0; drain && k < 200 && listener.received() < sent; ++k) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      }
       LiveLatency r;
       r.rate_hz = rate;
       r.reader_reading = drain;
