@@ -28,7 +28,8 @@ def main():
     t, sensor, dx, dy = (mice[k].tolist() for k in ("t", "sensor", "dx", "dy"))
     odo = moa.Odometry(config, t0=t[0], estimator="consensus", rate=args.rate)
 
-    latency = []
+    latency = []  # s, per push that completed steps
+    total = 0  # steps
     start = time.monotonic()
     for k in range(len(t)):
         if t[k] - t[0] > args.seconds:
@@ -42,12 +43,14 @@ def main():
         if len(steps["t"]) > 0:
             pose = (steps["x"][-1], steps["y"][-1], steps["theta"][-1])  # what a robot would use
             latency.append(time.monotonic() - arrival)
+            total += len(steps["t"])
     latency.sort()
     n = len(latency)
     p50 = latency[(n + 1) // 2 - 1]
     p99 = latency[-(-99 * n // 100) - 1]
     print(
-        f"{n} steps at {args.rate:g} Hz: from a row's arrival to its step, "
+        f"{total} steps at {args.rate:g} Hz, completed by {n} pushes; from such a row's arrival to "
+        f"its steps returned, "
         f"p50 {1e6 * p50:.1f} us, p99 {1e6 * p99:.1f} us, max {1e6 * latency[-1]:.1f} us; "
         f"last pose x {pose[0]:+.4f} m, y {pose[1]:+.4f} m, theta {pose[2]:+.4f} rad"
     )
