@@ -368,6 +368,41 @@ TEST(Live, BadArgumentsAreRejected) {
   EXPECT_NE(r.err.find("excludes"), std::string::npos) << r.err;
 }
 
+TEST(Live, PoseOutAndUdpStreamsAreCheckedBeforeAnythingIsWritten) {
+  Scene scene;
+  const fs::path log = scene.dir / "log";
+  write_log(scene.log, scene.array, kNames, log);
+  const fs::path record = scene.dir / "rec";
+  const std::string run = "live --config " + scene.config.string() + " --replay " + log.string() +
+                          " --record " + record.string();
+  auto r = run_moa(run + " --out - --pose-out -");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(r.err,
+            "moa live: error: --out - and --pose-out -: standard output can take one of them\n");
+  r = run_moa(run + " --pose-out poses.jsonl");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(r.err,
+            "moa live: error: --pose-out poses.jsonl: expected - (standard output) or "
+            "udp:[HOST:]PORT\n");
+  r = run_moa(run + " --pose-out udp:127.0.0.1:0");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(r.err,
+            "moa live: error: --pose-out udp:127.0.0.1:0: expected udp:[HOST:]PORT, PORT in "
+            "1..65535\n");
+  r = run_moa(run + " --streams udp:65536");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(r.err,
+            "moa live: error: --streams udp:65536: expected udp:[HOST:]PORT, PORT in 1..65535\n");
+  EXPECT_FALSE(fs::exists(record)) << "nothing written for a refused run";
+  r = run_moa(run + " --streams udp:9000 --streams-clock wall");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--streams-clock"), std::string::npos) << r.err;
+  r = run_moa(run + " --pose-out - --stream-rate -1");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--stream-rate"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(record));
+}
+
 // A replay with the robot's wheel twists on --streams (lines with t, lines
 // stamped at arrival, bad lines): the run goes on past the bad lines, says
 // each kind once, records wheels.csv, and the recording replays with `moa

@@ -216,6 +216,13 @@ int run_live(LiveArgs args) {
         "another output of this run");
   }
 
+  // The pose stream, before any file is written: a bad target leaves none.
+  // It never waits for its reader (runs/pose_stream.hpp).
+  std::unique_ptr<io::PoseStream> pose_stream;
+  if (!args.pose_out.empty()) {
+    pose_stream = std::make_unique<io::PoseStream>(args.pose_out, config.names, args.stream_rate);
+  }
+
   io::LiveSource live = io::open_live_source(spec, config, args.config, hooks);
   // Waits for the source to start (a serial board's HELLO): no output exists before.
   io::LiveRunSource input(*live.source, config.array.size(), live.where);
@@ -253,12 +260,6 @@ int run_live(LiveArgs args) {
     odometry_out = std::make_unique<io::OdometryCsvWriter>(stdout, config.names, false);
   } else if (!args.out.empty()) {
     odometry_out = std::make_unique<io::OdometryCsvWriter>(args.out, config.names, false);
-  }
-
-  // The pose stream: never waits for its reader (runs/pose_stream.hpp).
-  std::unique_ptr<io::PoseStream> pose_stream;
-  if (!args.pose_out.empty()) {
-    pose_stream = std::make_unique<io::PoseStream>(args.pose_out, config.names, args.stream_rate);
   }
 
   std::unique_ptr<io::Dashboard> dashboard;
