@@ -373,6 +373,9 @@ int run_live(LiveArgs args) {
     pose_stream->finish(std::chrono::milliseconds(500));
     run.summary.pose_lines = pose_stream->stats().lines;
     run.summary.pose_lines_dropped = pose_stream->stats().dropped;
+    // Standard output blocking again before the summary: on a terminal,
+    // standard error shares its flags.
+    pose_stream.reset();
   }
   if (calibration_out) calibration_out->commit();
   if (diagnostics_out) diagnostics_out->commit();
