@@ -13,6 +13,7 @@
 
 #include "moa/analysis/evaluate.hpp"
 #include "moa/formats/log.hpp"
+#include "support/json_value.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"
 
@@ -234,6 +235,33 @@ TEST(Cli, BenchReplayMeasuresBothPassesAndLeavesNoLog) {
   EXPECT_EQ(wheels.err,
             "moa bench: error: --estimator: 'wheels' is not ls, sekimori or consensus (the log "
             "has no wheels and no faults)\n");
+  EXPECT_TRUE(fs::is_empty(dir));
+}
+
+TEST(Cli, BenchLiveMeasuresEveryStepAtBothRatesAndLeavesNoLog) {
+  // Counts, order and cleanup only: the latencies are the benchmark's to report.
+  const auto dir = test::scratch_dir("bench_live");
+  const auto r = test::run_moa("bench --live --json --duration 1 --dir " + dir.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const test::JsonValue j = test::JsonValue::parse(r.out);
+  for (const char* key : {"latency", "latency_reader_stalled"}) {
+    const auto& rates = j[key].array();
+    ASSERT_EQ(rates.size(), 2u) << key;
+    for (std::size_t k = 0; k < 2; ++k) {
+      const double hz = k == 0 ? 100.0 : 1000.0;
+      const auto& e = rates[k];
+      EXPECT_EQ(e["rate_hz"].number(), hz);
+      // A step per epoch of the 1 s log (and the one the end of the stream cuts).
+      EXPECT_NEAR(e["steps"].number(), hz, 1.0) << key;
+      EXPECT_LE(e["p50_s"].number(), e["p99_s"].number());
+      EXPECT_LE(e["p99_s"].number(), e["max_s"].number());
+      EXPECT_GT(e["p50_s"].number(), 0.0);
+      EXPECT_EQ(e["lines_dropped"].number(), 0.0);
+      // A reading reader got every line; a stalled one none.
+      EXPECT_EQ(e["lines_received"].number(),
+                std::string(key) == "latency" ? e["steps"].number() : 0.0);
+    }
+  }
   EXPECT_TRUE(fs::is_empty(dir));
 }
 

@@ -454,6 +454,41 @@ TEST(Live, BadArgumentsAreRejected) {
   EXPECT_NE(r.err.find("excludes"), std::string::npos) << r.err;
 }
 
+TEST(Live, PoseOutAndUdpStreamsAreCheckedBeforeAnythingIsWritten) {
+  Scene scene;
+  const fs::path log = scene.dir / "log";
+  write_log(scene.log, scene.array, kNames, log);
+  const fs::path record = scene.dir / "rec";
+  const std::string run = "live --config " + scene.config.string() + " --replay " + log.string() +
+                          " --record " + record.string();
+  auto r = run_moa(run + " --out - --pose-out -");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(r.err,
+            "moa live: error: --out - and --pose-out -: standard output can take one of them\n");
+  r = run_moa(run + " --pose-out poses.jsonl");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(r.err,
+            "moa live: error: --pose-out poses.jsonl: expected - (standard output) or "
+            "udp:[HOST:]PORT\n");
+  r = run_moa(run + " --pose-out udp:127.0.0.1:0");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(r.err,
+            "moa live: error: --pose-out udp:127.0.0.1:0: expected udp:[HOST:]PORT, PORT in "
+            "1..65535\n");
+  r = run_moa(run + " --streams udp:65536");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(r.err,
+            "moa live: error: --streams udp:65536: expected udp:[HOST:]PORT, PORT in 1..65535\n");
+  EXPECT_FALSE(fs::exists(record)) << "nothing written for a refused run";
+  r = run_moa(run + " --streams udp:9000 --streams-clock wall");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--streams-clock"), std::string::npos) << r.err;
+  r = run_moa(run + " --pose-out - --stream-rate -1");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--stream-rate"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(record));
+}
+
 // A replay with the robot's wheel twists on --streams (lines with t, lines
 // stamped at arrival, bad lines): the run goes on past the bad lines, says
 // each kind once, records wheels.csv, and the recording replays with `moa
@@ -482,16 +517,17 @@ TEST(Live, StreamsAreFedRecordedAndTheirBadLinesCountedOnce) {
                          " --speed 5 --streams " + streams.string() + " --record " +
                          record.string() + " --out " + live.string() + " --estimator sekimori");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(r.err,
-            "moa live: warning: --streams: unknown stream (not wheels or camera): 'gyro,0.5,0.1' "
-            "(more such lines are counted, not shown)\n"
-            "moa live: warning: --streams: wrong number of fields (wheels,t,vx,vy,omega or "
-            "camera,t,x,y[,theta[,sx,sy]]): 'wheels,1.0,0.1,0' (more such lines are counted, not "
-            "shown)\n"
-            "moa live: warning: --streams: a field is not a finite number (sx, sy: positive): "
-            "'wheels,1.5,0.1,0,zero' (more such lines are counted, not shown)\n");
-  EXPECT_NE(r.out.find("moa live: streams: 59 wheel rows and 0 camera fixes read, 59 and 0 fed; "
-                       "4 bad lines, 0 out of time order"),
+  EXPECT_EQ(
+      r.err,
+      "moa live: warning: --streams: unknown stream (not wheels, imu or camera): 'gyro,0.5,0.1' "
+      "(more such lines are counted, not shown)\n"
+      "moa live: warning: --streams: wrong number of fields (wheels,t,vx,vy,omega or "
+      "imu,t,gz or camera,t,x,y[,theta[,sx,sy]]): 'wheels,1.0,0.1,0' (more such lines are "
+      "counted, not shown)\n"
+      "moa live: warning: --streams: a field is not a finite number (sx, sy: positive): "
+      "'wheels,1.5,0.1,0,zero' (more such lines are counted, not shown)\n");
+  EXPECT_NE(r.out.find("moa live: streams: 59 wheel rows, 0 gyro rows and 0 camera fixes read, "
+                       "59, 0 and 0 fed; 4 bad lines, 0 out of time order"),
             std::string::npos)
       << r.out;
   ASSERT_TRUE(fs::exists(record / "wheels.csv"));

@@ -2,9 +2,13 @@
 // parse, every bad line's kind, and their merge into a live run
 // (io::LiveRunSource): a recorded run with wheel rows replays to the same
 // steps.
+#include <arpa/inet.h>
 #include <fmt/core.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <filesystem>
@@ -92,6 +96,134 @@ TEST(StreamLines, EveryBadLineHasItsKind) {
   EXPECT_EQ(bad("camera,1,2,3,,0,0.1"), E::kNotANumber);  // sx must be positive
   EXPECT_EQ(bad("camera,1,2,3,,0.1,"), E::kNotANumber);
   EXPECT_EQ(bad("wheels,1,2,3," + std::string(kMaxStreamLine, '4')), E::kTooLong);
+}
+
+TEST(StreamLines, AnImuLineIsTheRateOfImuCsv) {
+  const StreamRow r = good("imu,2.5,-0.75");
+  EXPECT_TRUE(r.stamped);
+  const auto& g = std::get<ImuRow>(r.row);
+  EXPECT_EQ(g.t, 2.5);
+  EXPECT_EQ(g.gz, -0.75);
+  EXPECT_FALSE(good("imu,,0.5").stamped);
+  EXPECT_EQ(bad("imu,1"), E::kFieldCount);
+  EXPECT_EQ(bad("imu,1,0.5,0"), E::kFieldCount);
+  EXPECT_EQ(bad("imu,1,fast"), E::kNotANumber);
+}
+
+TEST(StreamLines, AJsonLineIsTheCsvLineByName) {
+  StreamRow r = good(R"({"stream": "wheels", "t": 12.5, "vx": 0.25, "vy": -0.125, "omega": 1.5})");
+  EXPECT_TRUE(r.stamped);
+  const auto& w = std::get<WheelRow>(r.row);
+  EXPECT_EQ(w.t, 12.5);
+  EXPECT_EQ(w.twist.v.x(), 0.25);
+  EXPECT_EQ(w.twist.v.y(), -0.125);
+  EXPECT_EQ(w.twist.omega, 1.5);
+  // Keys in any order; t absent or null: stamped at arrival.
+  r = good(R"({"omega":3,"vy":2,"vx":1,"stream":"wheels"})");
+  EXPECT_FALSE(r.stamped);
+  EXPECT_EQ(std::get<WheelRow>(r.row).twist.omega, 3.0);
+  EXPECT_FALSE(good(R"({"stream":"imu","t":null,"gz":0.5})").stamped);
+  EXPECT_EQ(std::get<ImuRow>(good(R"({"stream":"imu","t":1,"gz":0.5})").row).gz, 0.5);
+  CameraFix f = std::get<CameraFix>(good(R"({"stream":"camera","t":1,"x":2,"y":3})").row);
+  EXPECT_EQ(f.position.y(), 3.0);
+  EXPECT_FALSE(f.theta);
+  EXPECT_FALSE(f.sigma);
+  f = std::get<CameraFix>(good(R"({"stream":"camera","t":1,"x":2,"y":3,"theta":0.5})").row);
+  EXPECT_EQ(f.theta, 0.5);
+  EXPECT_FALSE(f.sigma);
+  f = std::get<CameraFix>(good(R"({"stream":"camera","t":1,"x":2,"y":3,"sx":0.01,"sy":0.02})").row);
+  EXPECT_FALSE(f.theta);
+  ASSERT_TRUE(f.sigma);
+  EXPECT_EQ(f.sigma->x(), 0.01);
+  EXPECT_EQ(f.sigma->y(), 0.02);
+}
+
+TEST(StreamLines, EveryBadJsonLineHasItsKind) {
+  EXPECT_EQ(bad(R"({"stream":"gyro","t":1,"gz":0.5})"), E::kUnknownStream);
+  EXPECT_EQ(bad(R"({"t":1,"gz":0.5})"), E::kBadJson);                        // no stream
+  EXPECT_EQ(bad(R"({"stream":"imu","t":1,"gz":0.5,"gx":0})"), E::kBadJson);  // unknown key
+  EXPECT_EQ(bad(R"({"stream":"imu","t":1,"t":2,"gz":0.5})"), E::kBadJson);   // twice
+  EXPECT_EQ(bad(R"({"stream":"imu","t":1,"gz":{"v":0.5}})"), E::kBadJson);   // nested
+  EXPECT_EQ(bad(R"({"stream":"imu","t":1,"gz":"0.5"})"), E::kBadJson);       // a string
+  EXPECT_EQ(bad(R"({"stream":"imu","t":1,"gz":0.5)"), E::kBadJson);          // unclosed
+  EXPECT_EQ(bad(R"({"stream":"imu","t":1,"gz":0.5} x)"), E::kBadJson);       // trailing
+  EXPECT_EQ(bad(R"({"stream":"i\"mu","gz":0.5})"), E::kBadJson);             // an escape
+  EXPECT_EQ(bad("{}"), E::kBadJson);
+  EXPECT_EQ(bad(R"({"stream":"imu","t":1})"), E::kNotANumber);  // gz missing
+  EXPECT_EQ(bad(R"({"stream":"imu","t":1,"gz":nan})"), E::kNotANumber);
+  EXPECT_EQ(bad(R"({"stream":"camera","t":1,"x":2,"y":3,"sx":0.1})"), E::kNotANumber);
+}
+
+// Sends `text` as one datagram to 127.0.0.1:port.
+void send_datagram(int port, std::string_view text) {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  a.sin_port = htons(static_cast<std::uint16_t>(port));
+  ::sendto(fd, text.data(), text.size(), 0, reinterpret_cast<const sockaddr*>(&a), sizeof a);
+  ::close(fd);
+}
+
+// A port of the loopback free a moment ago.
+int free_port() {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a);
+  socklen_t size = sizeof a;
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &size);
+  ::close(fd);
+  return ntohs(a.sin_port);
+}
+
+std::vector<StreamRow> take_until(StreamLineReader& reader, std::size_t rows, std::size_t bad) {
+  std::vector<StreamRow> out;
+  for (int k = 0; k < 400 && (out.size() < rows || reader.stats().bad_total() < bad); ++k) {
+    reader.take(out);
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return out;
+}
+
+TEST(StreamLines, UdpDatagramsCarryOneLineOrSeveral) {
+  const int port = free_port();
+  StreamLineReader reader("udp:" + std::to_string(port));  // 127.0.0.1 by default
+  send_datagram(port, "wheels,1,0.5,0,0.25");              // one line, no newline
+  send_datagram(port, "imu,1.5,0.125\n{\"stream\":\"camera\",\"t\":2,\"x\":1,\"y\":2}\n");
+  send_datagram(port, "wheels,2,bad,0,0");
+  const auto rows = take_until(reader, 3, 1);
+  reader.stop();
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(std::get<WheelRow>(rows[0].row).twist.omega, 0.25);
+  EXPECT_EQ(std::get<ImuRow>(rows[1].row).gz, 0.125);
+  EXPECT_EQ(std::get<CameraFix>(rows[2].row).position.y(), 2.0);
+  const auto stats = reader.stats();
+  EXPECT_EQ(stats.wheels, 1u);
+  EXPECT_EQ(stats.imu, 1u);
+  EXPECT_EQ(stats.fixes, 1u);
+  EXPECT_EQ(stats.bad[static_cast<std::size_t>(E::kNotANumber)], 1u);
+}
+
+TEST(StreamLines, OnTheMonotonicClockTIsTheArrivalToMap) {
+  const int port = free_port();
+  StreamLineReader reader("udp:127.0.0.1:" + std::to_string(port), StreamClock::kMonotonic);
+  send_datagram(port, "imu,1234.5,0.5\nimu,1234.25,0.5\n");  // the second goes back in time
+  const auto rows = take_until(reader, 1, 1);
+  reader.stop();
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_FALSE(rows[0].stamped) << "its t is mapped onto the source's clock by the run";
+  EXPECT_EQ(std::chrono::duration<double>(rows[0].arrival.time_since_epoch()).count(), 1234.5);
+  EXPECT_EQ(reader.stats().bad[static_cast<std::size_t>(E::kTimeBackwards)], 1u);
+}
+
+TEST(StreamLines, AUdpAddressThatCannotBeUsedIsRefused) {
+  EXPECT_THROW(StreamLineReader("udp:127.0.0.1:70000"), Error);
+  EXPECT_THROW(StreamLineReader("udp:no-such-host.invalid:9000"), Error);
+  const int port = free_port();
+  StreamLineReader first("udp:" + std::to_string(port));
+  EXPECT_THROW(StreamLineReader("udp:" + std::to_string(port)), Error);  // in use
 }
 
 TEST(StreamLines, TheReaderCountsBadLinesAndSaysEachKindOnceWithItsLine) {

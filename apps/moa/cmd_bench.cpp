@@ -21,6 +21,7 @@
 #include "moa/formats/error.hpp"
 #include "moa/formats/json.hpp"
 #include "moa_bench/estimators.hpp"
+#include "moa_bench/live_latency.hpp"
 #include "moa_bench/replay.hpp"
 #include "odometry_options.hpp"
 
@@ -32,6 +33,8 @@ struct BenchArgs {
   bool json = false;
   bool replay = false;
   bench::ReplayBenchOptions replay_options;
+  bool live = false;
+  bench::LiveLatencyOptions live_options;
 };
 
 int run_bench(const BenchArgs& args) {
@@ -149,6 +152,59 @@ int run_replay_bench(const bench::ReplayBenchOptions& args, bool json_out) {
   return 0;
 }
 
+int run_live_bench(const bench::LiveLatencyOptions& args, bool json_out) {
+  std::vector<bench::LiveLatency> results;
+  try {
+    results = bench::run_live_latency_bench(args, [&](const std::string& line) {
+      if (!json_out) fmt::print(stderr, "moa bench --live: {}\n", line);
+    });
+  } catch (const std::invalid_argument& e) {
+    throw io::Error(fmt::format("--estimator: {}", e.what()));
+  }
+  if (json_out) {
+    // Keys: s, Hz; counts plain.
+    io::JsonWriter json;
+    json.begin_object();
+    // "latency": with a reader woken by every line; "latency_reader_stalled":
+    // the same with nobody reading.
+    for (const bool reading : {true, false}) {
+      json.key(reading ? "latency" : "latency_reader_stalled").begin_array();
+      for (const auto& r : results) {
+        if (r.reader_reading != reading) continue;
+        json.begin_object()
+            .member("rate_hz", r.rate_hz)
+            .member("p50_s", r.p50_s)
+            .member("p99_s", r.p99_s)
+            .member("max_s", r.max_s)
+            .member("steps", static_cast<std::uint64_t>(r.steps))
+            .member("lines_received", static_cast<std::uint64_t>(r.lines_received))
+            .member("lines_dropped", static_cast<std::uint64_t>(r.lines_dropped))
+            .end_object();
+      }
+      json.end_array();
+    }
+    json.member("sensors", 4)
+        .member("duration_s", args.duration)
+        .member("estimator", args.estimator)
+        .member("cpu", bench::cpu_model())
+        .end_object();
+    fmt::print("{}\n", json.str());
+    return 0;
+  }
+  fmt::print(
+      "from a mice row's arrival to its pose line sent (UDP, loopback); 4 sensors, {} s each, "
+      "estimator {}; {}\n",
+      args.duration, args.estimator, bench::cpu_model());
+  fmt::print("{:>8} {:>8} {:>7} {:>10} {:>10} {:>10} {:>9} {:>8}\n", "reader", "rate Hz", "steps",
+             "p50 us", "p99 us", "max us", "received", "dropped");
+  for (const auto& r : results) {
+    fmt::print("{:>8} {:>8} {:>7} {:>10.1f} {:>10.1f} {:>10.1f} {:>9} {:>8}\n",
+               r.reader_reading ? "reading" : "stalled", r.rate_hz, r.steps, 1e6 * r.p50_s,
+               1e6 * r.p99_s, 1e6 * r.max_s, r.lines_received, r.lines_dropped);
+  }
+  return 0;
+}
+
 }  // namespace
 
 void add_bench(CLI::App& app, Action& action) {
@@ -172,28 +228,42 @@ void add_bench(CLI::App& app, Action& action) {
                 "Instead: moa odometry over a generated log against a parse-only pass of its "
                 "mice.csv (best of --repeats; the log is written to a temporary directory and "
                 "removed)");
-  cmd->add_option("--duration", r.duration, "--replay: seconds of log")
-      ->check(finite_within(1.0, 3600.0))
-      ->capture_default_str();
+  auto* duration = cmd->add_option("--duration", r.duration,
+                                   "--replay: seconds of log; --live: seconds at each rate "
+                                   "(default 5)")
+                       ->check(finite_within(1.0, 3600.0))
+                       ->capture_default_str();
+  cmd->add_flag(
+      "--live", args->live,
+      "Instead: latency of `moa live` from a mice row's arrival to its pose line sent "
+      "(--pose-out udp:), median and 99th percentile, four sensors replayed in real "
+      "time at 100 Hz and 1 kHz (rows per sensor and epochs), with a reader reading each line "
+      "and with one stalled; takes 4 x --duration s");
   cmd->add_option("--row-rate", r.row_rate, "--replay: mice rows per second per sensor")
       ->check(finite_within(1.0, 10000.0))
       ->capture_default_str();
   cmd->add_option("--rate", r.epoch_rate, "--replay: epochs per second (moa odometry --rate)")
       ->check(finite_within(1.0, 10000.0))
       ->capture_default_str();
-  cmd->add_option("--estimator", r.estimator, "--replay: ls, sekimori or consensus")
+  cmd->add_option("--estimator", r.estimator, "--replay, --live: ls, sekimori or consensus")
       ->capture_default_str();
   cmd->add_option("--repeats", r.repeats, "--replay: timed runs of each pass (best is reported)")
       ->check(CLI::Range(1, 100))
       ->capture_default_str();
   cmd->add_option("--dir", r.dir,
-                  "--replay: directory for the temporary log (default: system temp)")
+                  "--replay, --live: directory for the temporary log (default: system temp)")
       ->check(CLI::ExistingDirectory);
   cmd->add_flag("--keep-log", r.keep_log,
                 "--replay: keep the log (robot.yaml, mice.csv, odometry.csv) and print its "
                 "directory");
-  cmd->callback([&action, args] {
-    action = [args] {
+  cmd->callback([&action, args, duration] {
+    action = [args, live_duration = duration->count() != 0] {
+      if (args->live) {
+        args->live_options.estimator = args->replay_options.estimator;
+        if (live_duration) args->live_options.duration = args->replay_options.duration;
+        args->live_options.dir = args->replay_options.dir;
+        return run_live_bench(args->live_options, args->json);
+      }
       if (!args->replay) return run_bench(*args);
       return run_replay_bench(args->replay_options, args->json);
     };

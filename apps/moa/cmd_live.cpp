@@ -47,6 +47,7 @@
 #include "moa/formats/stream_csv.hpp"
 #include "moa/runs/odometry_run.hpp"
 #include "moa/runs/output_path.hpp"
+#include "moa/runs/pose_stream.hpp"
 #include "moa/runs/run_loop.hpp"
 #include "moa/runs/run_summary.hpp"
 #include "moa/sources/stream_lines.hpp"
@@ -95,7 +96,10 @@ struct LiveArgs {
   std::string record;
   std::string out;
   std::string serve;
-  std::string streams;  ///< --streams PATH|-
+  std::string streams;                   ///< --streams PATH|-|udp:[HOST:]PORT
+  std::string streams_clock = "source";  ///< --streams-clock source|monotonic
+  std::string pose_out;                  ///< --pose-out -|udp:[HOST:]PORT
+  double stream_rate = 0.0;              ///< --stream-rate HZ (0: every step)
   OdometryFlags odometry;
   double duration = 0.0;
   bool quiet = false;
@@ -137,6 +141,10 @@ int run_live(LiveArgs args) {
   }
   const bool status = !args.quiet && isatty(STDERR_FILENO);
   const bool to_stdout = args.out == "-";
+  const bool poses_to_stdout = args.pose_out == "-";
+  if (to_stdout && poses_to_stdout) {
+    throw io::Error("--out - and --pose-out -: standard output can take one of them");
+  }
   const auto started = std::chrono::steady_clock::now();
   StopSignals signals;
 
@@ -162,13 +170,16 @@ int run_live(LiveArgs args) {
   const io::LiveSourceSpec spec = source_spec(args.source, config, args.config);
   std::vector<fs::path> inputs = io::live_source_files(spec);
   inputs.emplace_back(args.config);
-  if (!args.streams.empty() && args.streams != "-") inputs.emplace_back(args.streams);
+  const bool streams_file =
+      !args.streams.empty() && args.streams != "-" && args.streams.rfind("udp:", 0) != 0;
+  if (streams_file) inputs.emplace_back(args.streams);
   if (!args.record.empty()) {
     const fs::path dir(args.record);
     io::refuse_output_onto_inputs(dir / "mice.csv", "--record", inputs);
     io::refuse_output_onto_inputs(dir / "robot.yaml", "--record", inputs);
     if (!args.streams.empty()) {
       io::refuse_output_onto_inputs(dir / "wheels.csv", "--record", inputs);
+      io::refuse_output_onto_inputs(dir / "imu.csv", "--record", inputs);
       io::refuse_output_onto_inputs(dir / "camera.csv", "--record", inputs);
     }
     if (!spec.serial.empty()) io::refuse_output_onto_inputs(dir / "imu.csv", "--record", inputs);
@@ -216,11 +227,22 @@ int run_live(LiveArgs args) {
         "another output of this run");
   }
 
+  // The pose stream, before any file is written: a bad target leaves none.
+  // It never waits for its reader (runs/pose_stream.hpp).
+  std::unique_ptr<io::PoseStream> pose_stream;
+  if (!args.pose_out.empty()) {
+    pose_stream = std::make_unique<io::PoseStream>(args.pose_out, config.names, args.stream_rate);
+  }
+
   io::LiveSource live = io::open_live_source(spec, config, args.config, hooks);
   // Waits for the source to start (a serial board's HELLO): no output exists before.
   io::LiveRunSource input(*live.source, config.array.size(), live.where);
   std::unique_ptr<io::StreamLineReader> streams;
-  if (!args.streams.empty()) streams = std::make_unique<io::StreamLineReader>(args.streams);
+  if (!args.streams.empty()) {
+    streams = std::make_unique<io::StreamLineReader>(args.streams, args.streams_clock == "monotonic"
+                                                                       ? io::StreamClock::kMonotonic
+                                                                       : io::StreamClock::kSource);
+  }
 
   // Outputs. The odometry file appears whole at the end; the recording is
   // journalled (see MiceWriter::Durability::kJournal).
@@ -284,6 +306,7 @@ int run_live(LiveArgs args) {
   io::RunCallbacks callbacks;
   callbacks.on_step = [&](const OdometryStep& step) {
     pose = step.pose;
+    if (pose_stream) pose_stream->write(step);
     if (odometry_out) odometry_out->write(step);
     if (calibration_out) calibration_out->write(step);
     if (diagnostics_out) diagnostics_out->write(step);
@@ -365,12 +388,21 @@ int run_live(LiveArgs args) {
   if (recording) recording->commit();
   if (stream_recording) stream_recording->commit();
   if (odometry_out) odometry_out->commit();
+  if (pose_stream) {
+    // The lines still buffered for a slow reader get a moment, then are dropped.
+    pose_stream->finish(std::chrono::milliseconds(500));
+    run.summary.pose_lines = pose_stream->stats().lines;
+    run.summary.pose_lines_dropped = pose_stream->stats().dropped;
+    // Standard output blocking again before the summary: on a terminal,
+    // standard error shares its flags.
+    pose_stream.reset();
+  }
   if (calibration_out) calibration_out->commit();
   if (diagnostics_out) diagnostics_out->commit();
   if (status_shown) fmt::print(stderr, "\r\033[K");
 
   if (!args.quiet) {
-    std::FILE* report = to_stdout ? stderr : stdout;
+    std::FILE* report = to_stdout || poses_to_stdout ? stderr : stdout;
     fmt::print(
         report,
         "moa live: {} rows, {} samples over {:.3f} s; final pose x {:.4f} m, y {:.4f} m, theta "
@@ -393,10 +425,10 @@ int run_live(LiveArgs args) {
     if (streams) {
       const auto st = streams->stats();
       fmt::print(report,
-                 "moa live: streams: {} wheel rows and {} camera fixes read, {} and {} fed; {} bad "
-                 "lines, {} out of time order\n",
-                 st.wheels, st.fixes, run.wheel_rows, run.fix_rows, st.bad_total(),
-                 input.dropped());
+                 "moa live: streams: {} wheel rows, {} gyro rows and {} camera fixes read, {}, {} "
+                 "and {} fed; {} bad lines, {} out of time order\n",
+                 st.wheels, st.imu, st.fixes, run.wheel_rows, run.imu_rows, run.fix_rows,
+                 st.bad_total(), input.dropped());
     }
     if (recording) {
       fmt::print(report, "moa live: recorded to {} (replay: moa odometry --config {} --log {})\n",
@@ -454,11 +486,29 @@ void add_live(CLI::App& app, Action& action) {
                   "[HOST:]PORT: serve the dashboard (a page at /, events at /events) while it "
                   "runs; HOST defaults to 127.0.0.1 (docs/live.md)");
   cmd->add_option("--streams", args->streams,
-                  "PATH|-: the robot's wheel twists and camera fixes, one CSV line each "
-                  "(wheels,t,vx,vy,omega or camera,t,x,y[,theta[,sx,sy]]; t empty: stamped at "
-                  "arrival), from a FIFO, a file or standard input (docs/live.md); recorded "
-                  "by --record")
-      ->type_name("PATH|-");
+                  "PATH|-|udp:[HOST:]PORT: the robot's wheel twists, gyro rates and camera "
+                  "fixes, one CSV or JSON line each (wheels,t,vx,vy,omega or imu,t,gz or "
+                  "camera,t,x,y[,theta[,sx,sy]]; t empty: stamped at arrival), from a FIFO, a "
+                  "file, standard input or a UDP port (HOST defaults to 127.0.0.1; "
+                  "docs/formats/stream-lines.md); recorded by --record")
+      ->type_name("PATH|-|udp:[HOST:]PORT");
+  cmd->add_option("--streams-clock", args->streams_clock,
+                  "The clock of a --streams line's t: 'source' (the live source's: a replayed "
+                  "log's, the board's) or 'monotonic' (this machine's CLOCK_MONOTONIC, s, as "
+                  "Python's time.monotonic(); mapped onto the source's clock at arrival)")
+      ->check(CLI::IsMember({"source", "monotonic"}))
+      ->capture_default_str();
+  cmd->add_option("--pose-out", args->pose_out,
+                  "-|udp:[HOST:]PORT: a JSON line per step (t, pose in 'odom', twist in "
+                  "'base_link', 6x6 covariances, source, used and excluded sensors; "
+                  "docs/formats/pose-stream.md) to standard output or UDP (HOST defaults to "
+                  "127.0.0.1), never waiting for the reader: lines it cannot take are dropped "
+                  "and counted in the summary")
+      ->type_name("-|udp:[HOST:]PORT");
+  cmd->add_option("--stream-rate", args->stream_rate,
+                  "HZ: --pose-out lines per second of the steps' time (0: every step)")
+      ->check(finite_within(0.0, 1e6))
+      ->capture_default_str();
   cmd->add_option("--duration", args->duration, "Stop after this many seconds (0: at Ctrl-C)")
       ->check(kNonNegative);
   cmd->add_flag("--quiet", args->quiet, "No status line and no summary");

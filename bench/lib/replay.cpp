@@ -24,91 +24,11 @@
 #include "moa/formats/json.hpp"
 #include "moa/formats/mice_writer.hpp"
 #include "moa/runs/odometry_run.hpp"
+#include "moa_bench/bench_log.hpp"
 
 namespace moa::bench {
 namespace fs = std::filesystem;
 namespace {
-
-/// A directory that is removed with everything in it when this goes away
-/// (unless kept).
-class ScratchDir {
- public:
-  explicit ScratchDir(const fs::path& parent, bool keep = false) : keep_(keep) {
-    std::random_device random;
-    path_ = parent / fmt::format("moa-bench-replay-{}-{:08x}", ::getpid(), random());
-    fs::create_directories(path_);
-  }
-  ~ScratchDir() {
-    if (keep_) return;
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
-  ScratchDir(const ScratchDir&) = delete;
-  ScratchDir& operator=(const ScratchDir&) = delete;
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-  bool keep_;
-};
-
-/// Four HDNS-2051 at 45/135/225/315 deg, 0.1 m from the centre, x axis
-/// radial (Sekimori & Miyazaki's layout).
-io::RobotConfig four_sensors() {
-  io::RobotConfig config;
-  std::vector<SensorMount> mounts(4);
-  for (int i = 0; i < 4; ++i) {
-    const double phi = std::numbers::pi / 4.0 + i * std::numbers::pi / 2.0;
-    auto& m = mounts[static_cast<std::size_t>(i)];
-    m.position = 0.1 * Eigen::Vector2d(std::cos(phi), std::sin(phi));
-    m.yaw = phi;
-    m.cpi = kHdns2051.cpi;
-    m.max_speed = kHdns2051.max_speed;
-    config.names.push_back(fmt::format("m{}", i + 1));
-  }
-  config.array = SensorArray(mounts);
-  return config;
-}
-
-/// A smooth drive in every direction at once, below the sensors' rated
-/// speed (at most 0.25 m/s + 0.8 rad/s x 0.1 m = 0.33 m/s at a sensor).
-Twist2 drive(double t) {
-  const double two_pi = 2.0 * std::numbers::pi;
-  return Twist2{{0.2 * std::sin(two_pi * t / 7.0), 0.15 * std::sin(two_pi * t / 11.0 + 1.0)},
-                0.8 * std::sin(two_pi * t / 5.0)};
-}
-
-/// mice.csv (t,sensor,dx,dy,squal,flags) with a row per sensor every
-/// 1/row_rate s from t = 0: each row holds the counts of the twist at the
-/// middle of its interval (the measurement model), the fraction carried to
-/// the next row so that the counts never drift from the motion.
-std::size_t write_log(const io::RobotConfig& config, double duration, double row_rate,
-                      const fs::path& dir) {
-  io::write_config(config, dir / "robot.yaml");
-  io::MiceWriter writer(dir / "mice.csv", config.names, true,
-                        io::MiceWriter::Durability::kWholeOrNothing,
-                        {"moa bench --replay: synthetic drive, noise-free counts"});
-  const int n = config.array.size();
-  std::vector<Eigen::Vector2d> carried(static_cast<std::size_t>(n), Eigen::Vector2d::Zero());
-  const auto rows = static_cast<std::int64_t>(std::llround(duration * row_rate));
-  const double dt = 1.0 / row_rate;
-  SensorRow row;
-  row.squal = 100;
-  for (std::int64_t k = 0; k <= rows; ++k) {
-    row.t = static_cast<double>(k) / row_rate;
-    const Twist2 x = drive(row.t - 0.5 * dt);
-    for (int i = 0; i < n; ++i) {
-      auto& c = carried[static_cast<std::size_t>(i)];
-      if (k > 0) c += config.array[i].counts(x, dt);
-      row.sensor = i;
-      row.counts = c.array().round();
-      c -= row.counts;
-      writer.write(row);
-    }
-  }
-  writer.commit();
-  return writer.rows();
-}
 
 /// The floor any reader of mice.csv has to pay: the file read in 1 MiB
 /// blocks, cut into lines and fields, t parsed with std::from_chars, the

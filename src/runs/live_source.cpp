@@ -87,16 +87,16 @@ std::string LiveRunSource::where() const {
   return from_streams_ ? fmt::format("{} (streams)", where_) : where_;
 }
 
-void LiveRunSource::add_gyro(SerialReader& serial) { gyro_ = &serial; }
+void LiveRunSource::add_gyro(SerialReader& serial) { gyro_serial_ = &serial; }
 
 void LiveRunSource::take_gyro() {
-  if (gyro_ == nullptr) return;
+  if (gyro_serial_ == nullptr) return;
   // The reader holds a window's rows for its sample only once it has seen
   // the gyro: a sample whose rows went out before it (the first) is stamped
   // just after them, so that a replay feeds it where this run did.
   const double after = std::nextafter(t_last_, std::numeric_limits<double>::infinity());
-  for (const GyroSample& g : gyro_->take_gyro()) {
-    imu_.push_back(ImuRow{g.t > t_last_ ? g.t : after, g.gz});
+  for (const GyroSample& g : gyro_serial_->take_gyro()) {
+    serial_gyro_.push_back(ImuRow{g.t > t_last_ ? g.t : after, g.gz});
   }
 }
 
@@ -120,6 +120,14 @@ void LiveRunSource::take_streams() {
       }
       last_wheel_t_ = w->t;
       wheels_.push_back(*w);
+    } else if (auto* g = std::get_if<ImuRow>(&s.row)) {
+      if (!s.stamped) g->t = std::max({estimate, after, last_gyro_t_});
+      if (g->t < last_gyro_t_) {
+        ++dropped_;
+        continue;
+      }
+      last_gyro_t_ = g->t;
+      gyro_.push_back(*g);
     } else {
       auto& f = std::get<CameraFix>(s.row);
       if (!s.stamped) f.t = std::max({estimate, after, last_fix_t_});
@@ -172,14 +180,21 @@ const InputRow* LiveRunSource::next() {
     from_streams_ = true;
     return &row_;
   }
-  if (!imu_.empty() && imu_.front().t <= limit) {
-    row_ = imu_.front();
-    imu_.pop_front();
+  if (!serial_gyro_.empty() && serial_gyro_.front().t <= limit) {
+    row_ = serial_gyro_.front();
+    serial_gyro_.pop_front();
+    return &row_;
+  }
+  if (!gyro_.empty() && gyro_.front().t <= limit) {
+    row_ = gyro_.front();
+    gyro_.pop_front();
+    from_streams_ = true;
     return &row_;
   }
   if (ended_) return nullptr;
   row_ = *pending_;
   t_last_ = pending_->t;
+  arrival_last_ = arrival_ref_;
   pending_.reset();
   return &row_;
 }

@@ -59,6 +59,10 @@ std::string RunSummary::text() const {
         "{} invalid\n",
         fixes.applied, fixes.rejected, fixes.too_old, fixes.invalid);
   }
+  if (pose_lines > 0) {
+    out += fmt::format("pose stream: {} lines, {} dropped (reader absent, slow or gone)\n",
+                       pose_lines, pose_lines_dropped);
+  }
   out += verdict() + "\n";
   return out;
 }

@@ -15,21 +15,25 @@
 
 #include "moa/formats/csv.hpp"
 #include "moa/formats/error.hpp"
+#include "moa/sources/udp.hpp"
 
 namespace moa::io {
 
 const char* describe(StreamLineError e) {
   switch (e) {
     case StreamLineError::kUnknownStream:
-      return "unknown stream (not wheels or camera)";
+      return "unknown stream (not wheels, imu or camera)";
     case StreamLineError::kFieldCount:
-      return "wrong number of fields (wheels,t,vx,vy,omega or camera,t,x,y[,theta[,sx,sy]])";
+      return "wrong number of fields (wheels,t,vx,vy,omega or imu,t,gz or "
+             "camera,t,x,y[,theta[,sx,sy]])";
     case StreamLineError::kNotANumber:
       return "a field is not a finite number (sx, sy: positive)";
     case StreamLineError::kTimeBackwards:
       return "t earlier than the stream's previous line's";
     case StreamLineError::kTooLong:
       return "line too long";
+    case StreamLineError::kBadJson:
+      return "not a flat JSON object of the stream's keys (stream, t and its columns)";
   }
   return "?";
 }
@@ -50,6 +54,92 @@ std::optional<double> number(std::string_view s) {
   return x;
 }
 
+std::string_view skip_space(std::string_view s) {
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+  return s;
+}
+
+// A JSON string without escapes at the front of `s` (its text, `s` moved
+// past it), nullopt if there is none.
+std::optional<std::string_view> json_string_at(std::string_view& s) {
+  if (s.empty() || s.front() != '"') return std::nullopt;
+  const std::size_t end = s.find_first_of("\"\\", 1);
+  if (end == std::string_view::npos || s[end] != '"') return std::nullopt;
+  const std::string_view text = s.substr(1, end - 1);
+  s.remove_prefix(end + 1);
+  return text;
+}
+
+// The keys of each stream after "stream", in the order of its CSV columns.
+constexpr std::array<std::string_view, 7> kWheelKeys{"t", "vx", "vy", "omega"};
+constexpr std::array<std::string_view, 7> kImuKeys{"t", "gz"};
+constexpr std::array<std::string_view, 7> kCameraKeys{"t", "x", "y", "theta", "sx", "sy"};
+
+// A flat JSON object as the fields of its CSV line: the stream, then each
+// column's number text (empty for a key absent or null), the camera's
+// optional columns only as far as given. False for anything else: nesting,
+// escapes, a key given twice, a key the stream does not have.
+bool json_fields(std::string_view line, std::vector<std::string_view>& f) {
+  std::vector<std::pair<std::string_view, std::string_view>> members;
+  std::string_view s = skip_space(line.substr(1));
+  std::optional<std::string_view> stream;
+  if (!s.empty() && s.front() == '}') return false;
+  for (;;) {
+    const auto key = json_string_at(s);
+    if (!key) return false;
+    s = skip_space(s);
+    if (s.empty() || s.front() != ':') return false;
+    s = skip_space(s.substr(1));
+    std::string_view value;
+    if (const auto text = json_string_at(s)) {
+      if (*key != "stream" || stream) return false;
+      stream = *text;
+    } else {
+      const std::size_t end = s.find_first_of(",} \t");
+      if (end == std::string_view::npos || end == 0) return false;
+      value = s.substr(0, end);
+      s.remove_prefix(end);
+      if (*key == "stream") return false;
+      if (value == "null") value = {};
+      for (const auto& m : members) {
+        if (m.first == *key) return false;
+      }
+      members.emplace_back(*key, value);
+    }
+    s = skip_space(s);
+    if (s.empty()) return false;
+    if (s.front() == '}') {
+      if (!skip_space(s.substr(1)).empty()) return false;
+      break;
+    }
+    if (s.front() != ',') return false;
+    s = skip_space(s.substr(1));
+  }
+  if (!stream) return false;
+  f.assign({*stream});
+  if (*stream != "wheels" && *stream != "imu" && *stream != "camera") return true;
+  const auto& keys = *stream == "wheels" ? kWheelKeys : *stream == "imu" ? kImuKeys : kCameraKeys;
+  std::size_t used = 0;
+  for (const std::string_view key : keys) {
+    if (key.empty()) break;
+    std::string_view value;
+    for (const auto& m : members) {
+      if (m.first == key) {
+        value = m.second;
+        ++used;
+      }
+    }
+    f.push_back(value);
+  }
+  if (used != members.size()) return false;
+  // A camera line ends after its last column given (theta, or sx and sy;
+  // one of sx and sy alone stays, to be refused as a missing number).
+  if (*stream == "camera") {
+    if (f[5].empty() && f[6].empty()) f.resize(f[4].empty() ? 4 : 5);
+  }
+  return true;
+}
+
 }  // namespace
 
 std::variant<std::monostate, StreamRow, StreamLineError> parse_stream_line(std::string_view line) {
@@ -57,11 +147,15 @@ std::variant<std::monostate, StreamRow, StreamLineError> parse_stream_line(std::
   line = trim(line);
   if (line.empty() || line.front() == '#') return std::monostate{};
   std::vector<std::string_view> f;
-  for (std::size_t from = 0;;) {
-    const std::size_t comma = line.find(',', from);
-    f.push_back(trim(line.substr(from, comma == std::string_view::npos ? comma : comma - from)));
-    if (comma == std::string_view::npos) break;
-    from = comma + 1;
+  if (line.front() == '{') {
+    if (!json_fields(line, f)) return StreamLineError::kBadJson;
+  } else {
+    for (std::size_t from = 0;;) {
+      const std::size_t comma = line.find(',', from);
+      f.push_back(trim(line.substr(from, comma == std::string_view::npos ? comma : comma - from)));
+      if (comma == std::string_view::npos) break;
+      from = comma + 1;
+    }
   }
   StreamRow out;
   out.stamped = f.size() >= 2 && !f[1].empty();
@@ -80,6 +174,13 @@ std::variant<std::monostate, StreamRow, StreamLineError> parse_stream_line(std::
     double v[3];
     if (!numbers(2, 3, v)) return StreamLineError::kNotANumber;
     out.row = WheelRow{t, Twist2{{v[0], v[1]}, v[2]}};
+    return out;
+  }
+  if (f[0] == "imu") {
+    if (f.size() != 3) return StreamLineError::kFieldCount;
+    double gz = 0.0;
+    if (!numbers(2, 1, &gz)) return StreamLineError::kNotANumber;
+    out.row = ImuRow{t, gz};
     return out;
   }
   if (f[0] == "camera") {
@@ -113,8 +214,10 @@ std::size_t StreamLineReader::Stats::bad_total() const {
 
 struct StreamLineReader::Impl {
   std::string path;
+  StreamClock clock = StreamClock::kSource;
   std::atomic<int> fd{-1};
   bool close_fd = false;
+  bool udp = false;  ///< fd is a bound datagram socket
   std::atomic<bool> stopping{false};
   mutable std::mutex mutex;
   std::vector<StreamRow> queue;  ///< under mutex
@@ -122,7 +225,7 @@ struct StreamLineReader::Impl {
   std::array<bool, kStreamLineErrors> reported{};
   std::thread thread;
 
-  void line(std::string_view text, std::array<std::optional<double>, 2>& last_t) {
+  void line(std::string_view text, std::array<std::optional<double>, 3>& last_t) {
     auto parsed = parse_stream_line(text);
     const auto now = std::chrono::steady_clock::now();
     if (std::holds_alternative<std::monostate>(parsed)) return;
@@ -139,7 +242,14 @@ struct StreamLineReader::Impl {
       }
       if (auto* good = std::get_if<StreamRow>(&parsed)) {
         good->arrival = now;
-        ++(stream == 0 ? stats.wheels : stats.fixes);
+        if (good->stamped && clock == StreamClock::kMonotonic) {
+          // Its own time on this machine's monotonic clock, mapped as an arrival.
+          good->arrival = std::chrono::steady_clock::time_point(
+              std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                  std::chrono::duration<double>(t)));
+          good->stamped = false;
+        }
+        ++(stream == 0 ? stats.wheels : stream == 1 ? stats.fixes : stats.imu);
         queue.push_back(std::move(*good));
         return;
       }
@@ -157,9 +267,9 @@ struct StreamLineReader::Impl {
       close_fd = true;
       fd = opened;
     }
-    std::array<std::optional<double>, 2> last_t;
+    std::array<std::optional<double>, 3> last_t;
     std::string pending;
-    char buffer[4096];
+    char buffer[65536];  // a datagram whole
     while (!stopping) {
       pollfd p{fd.load(), POLLIN, 0};
       const int ready = ::poll(&p, 1, 100);
@@ -167,7 +277,8 @@ struct StreamLineReader::Impl {
       if (ready <= 0) continue;
       const ssize_t n = ::read(fd.load(), buffer, sizeof buffer);
       if (n < 0 && (errno == EINTR || errno == EAGAIN)) continue;
-      if (n <= 0) break;  // end of file: the writer is gone
+      if (n < 0 && udp) continue;  // an ICMP error of an earlier datagram
+      if (n <= 0 && !udp) break;   // end of file: the writer is gone
       for (ssize_t k = 0; k < n; ++k) {
         const char c = buffer[k];
         if (c == '\n') {
@@ -178,14 +289,25 @@ struct StreamLineReader::Impl {
           pending.push_back(c);
         }
       }
+      if (udp && !pending.empty()) {
+        // A datagram's end ends its last line.
+        line(pending, last_t);
+        pending.clear();
+      }
     }
     if (!pending.empty() && !stopping) line(pending, last_t);
   }
 };
 
-StreamLineReader::StreamLineReader(const std::string& path) : impl_(std::make_unique<Impl>()) {
+StreamLineReader::StreamLineReader(const std::string& path, StreamClock clock)
+    : impl_(std::make_unique<Impl>()) {
   impl_->path = path;
-  if (path == "-") {
+  impl_->clock = clock;
+  if (const auto address = parse_udp_address(path, "--streams")) {
+    impl_->fd = open_udp_socket(*address, /*bind=*/true, "--streams");
+    impl_->udp = true;
+    impl_->close_fd = true;
+  } else if (path == "-") {
     impl_->fd = STDIN_FILENO;
   } else if (::access(path.c_str(), R_OK) != 0) {
     throw IoError(fmt::format("{}: cannot read ({})", path, std::strerror(errno)));

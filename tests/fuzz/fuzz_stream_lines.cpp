@@ -1,8 +1,8 @@
-// The lines of `moa live --streams` through io::parse_stream_line, one per
-// '\n'. A good line must give finite numbers and, for a fix with standard
-// deviations, positive ones (what the recording's camera.csv must hold to
-// replay); a bad line is an error value, never an exception. Any exception,
-// any broken property, any sanitizer report is a finding.
+// The lines of `moa live --streams` (CSV and JSON) through
+// io::parse_stream_line, one per '\n'. A good line must give finite numbers and, for a fix with
+// standard deviations, positive ones (what the recording's camera.csv must hold to replay); a bad
+// line is an error value, never an exception. Any exception, any broken property, any sanitizer
+// report is a finding.
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -25,6 +25,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       if (!std::isfinite(w->t) || !w->twist.v.allFinite() || !std::isfinite(w->twist.omega)) {
         std::abort();
       }
+    } else if (const auto* g = std::get_if<moa::io::ImuRow>(&row->row)) {
+      if (!std::isfinite(g->t) || !std::isfinite(g->gz)) std::abort();
     } else {
       const auto& f = std::get<moa::CameraFix>(row->row);
       if (!std::isfinite(f.t) || !f.position.allFinite()) std::abort();

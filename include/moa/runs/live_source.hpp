@@ -65,10 +65,11 @@ LiveSource open_live_source(const LiveSourceSpec& spec, const RobotConfig& confi
 /// start a recording's clock where the live run's did, so that the
 /// recording replays to the same steps.
 ///
-/// With the robot's streams (sources/stream_lines.hpp), their wheel rows and
-/// fixes are merged in as a log's are (runs/odometry_run.hpp): each is held
-/// until the first mice row at or after its t and handed out before it,
-/// fixes first, so that the recording replays in the same order. A line
+/// With the robot's streams (sources/stream_lines.hpp), their wheel rows,
+/// gyro rows and fixes are merged in as a log's are (runs/odometry_run.hpp):
+/// each is held until the first mice row at or after its t and handed out
+/// before it, fixes first, then wheels, then gyro, so that the recording
+/// replays in the same order. A line
 /// without t is stamped at its arrival on the source's clock, estimated from
 /// the last mice row received: t = t_row + speed (arrival - its arrival), and
 /// kept after the last mice row handed out. Rows after the last mice row are
@@ -96,6 +97,10 @@ class LiveRunSource final : public RunSource {
   /// Stream rows dropped: a t before its stream's previous row's (a line
   /// without t stamped after a line whose t was later).
   std::size_t dropped() const { return dropped_; }
+  /// When the last mice row handed out was received from the source (its
+  /// arrival; steady clock): during a step's callback, the arrival of the
+  /// row that completed the step (`moa bench --live`).
+  std::chrono::steady_clock::time_point last_arrival() const { return arrival_last_; }
 
  private:
   void take_streams();
@@ -113,17 +118,20 @@ class LiveRunSource final : public RunSource {
   double speed_ = 1.0;
   std::optional<SensorRow> pending_;  ///< the next mice row, not yet handed out
   bool ended_ = false;
-  double t_last_ = 0.0;                                ///< s, the last mice row handed out
-  double t_ref_ = 0.0;                                 ///< s, the last mice row received ...
-  std::chrono::steady_clock::time_point arrival_ref_;  ///< ... and when
+  double t_last_ = 0.0;                                 ///< s, the last mice row handed out
+  double t_ref_ = 0.0;                                  ///< s, the last mice row received ...
+  std::chrono::steady_clock::time_point arrival_ref_;   ///< ... and when
+  std::chrono::steady_clock::time_point arrival_last_;  ///< of the last mice row handed out
   std::deque<WheelRow> wheels_;
+  std::deque<ImuRow> gyro_;
   std::deque<CameraFix> fixes_;
   std::vector<StreamRow> arrived_;
   double last_wheel_t_ = -std::numeric_limits<double>::infinity();  ///< s
+  double last_gyro_t_ = -std::numeric_limits<double>::infinity();   ///< s
   double last_fix_t_ = -std::numeric_limits<double>::infinity();    ///< s
   std::size_t dropped_ = 0;
-  SerialReader* gyro_ = nullptr;
-  std::deque<ImuRow> imu_;
+  SerialReader* gyro_serial_ = nullptr;  ///< the serial device's gyro (add_gyro)
+  std::deque<ImuRow> serial_gyro_;       ///< its samples, not yet handed out
 };
 
 }  // namespace moa::io

@@ -31,6 +31,9 @@ struct RunSummary {
   /// columns of odometry.csv.
   std::array<std::size_t, kExclusionCount> sensor_epochs{};
   FixCounts fixes;
+  /// `moa live --pose-out`: lines made and, of them, dropped (the reader
+  /// absent, slow or gone; runs/pose_stream.hpp). Both 0 without a stream.
+  std::size_t pose_lines = 0, pose_lines_dropped = 0;
   /// What the caller should tell the user (a selected sensor that never
   /// reported, a self-calibration that ran away), one sentence each.
   std::vector<std::string> warnings;
@@ -52,7 +55,8 @@ struct RunSummary {
   /// file has (no `source` column: no epoch by source).
   void add(const OdometryRow& row, int sensors);
   /// Lines (each ending in '\n'): epochs by source, exclusions by reason
-  /// (the reasons that occurred), fixes when any, the verdict.
+  /// (the reasons that occurred), fixes when any, the pose stream's lines
+  /// when any, the verdict.
   std::string text() const;
 };
 

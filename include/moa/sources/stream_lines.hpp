@@ -1,16 +1,28 @@
-// The robot's own streams while live: wheel twists and camera fixes from the
-// robot's program, one line each, on standard input or a FIFO (`moa live
-// --streams PATH|-`, docs/live.md).
+// The robot's own streams while live: wheel twists, gyro rates and camera
+// fixes from the robot's program, one line each, on standard input, a FIFO,
+// a file or a UDP port (`moa live --streams PATH|-|udp:[HOST:]PORT`;
+// docs/formats/stream-lines.md).
 //
 // A line is CSV: the stream's name, then the columns of its log file
 // (docs/formats/log.md) in their order:
 //   wheels,t,vx,vy,omega          twist in the robot frame (m/s, m/s, rad/s),
 //                                 averaged over the interval ending at t
+//   imu,t,gz                      yaw rate about z up (rad/s, counter-
+//                                 clockwise), averaged over the interval
+//                                 ending at t
 //   camera,t,x,y[,theta[,sx,sy]]  robot centre in the world frame (m), its
 //                                 heading (rad) and standard deviations (m)
-// t (s, on the live source's clock) may be empty: the line is then stamped
-// at its arrival. theta may be empty (no heading); sx and sy come together.
-// Blank lines and lines starting with '#' are skipped.
+// or a flat JSON object with the same names as keys and "stream" for the
+// stream: {"stream":"wheels","t":1.5,"vx":0.2,"vy":0,"omega":0.1}.
+// t (s) may be empty (absent or null in JSON): the line is then stamped at
+// its arrival. theta may be empty (no heading); sx and sy come together.
+// Blank lines and lines starting with '#' are skipped. Over UDP a datagram
+// holds one line or several, its end ending the last.
+//
+// A given t is on the live source's clock (StreamClock::kSource), or on this
+// machine's monotonic clock (kMonotonic: CLOCK_MONOTONIC, as Python's
+// time.monotonic() or C++'s std::chrono::steady_clock), from which the run
+// maps it onto the source's clock as it maps arrivals.
 //
 // A bad line is counted by kind and never stops the run; the first line of
 // each kind is kept for the message.
@@ -33,23 +45,31 @@
 
 namespace moa::io {
 
-/// One good line: a wheel row or a camera fix; `stamped` false when its t
-/// was empty (t then 0 until stamped at `arrival`).
+/// Which clock a line's t is on.
+enum class StreamClock : std::uint8_t {
+  kSource,     ///< the live source's (a replayed log's, the board's)
+  kMonotonic,  ///< this machine's CLOCK_MONOTONIC (std::chrono::steady_clock), s
+};
+
+/// One good line: a wheel row, a camera fix or a gyro rate; `stamped` false
+/// when its t is to be mapped from `arrival` (t empty: the line's arrival;
+/// StreamClock::kMonotonic: the time it gives).
 struct StreamRow {
-  std::variant<WheelRow, CameraFix> row;
+  std::variant<WheelRow, CameraFix, ImuRow> row;
   bool stamped = false;
   std::chrono::steady_clock::time_point arrival;
 };
 
 enum class StreamLineError : std::uint8_t {
-  kUnknownStream,  ///< the first field is neither "wheels" nor "camera"
+  kUnknownStream,  ///< the stream is not "wheels", "imu" or "camera"
   kFieldCount,     ///< too few or too many fields for the stream
   kNotANumber,     ///< a field that is not a finite number (or empty where it may not be)
   kTimeBackwards,  ///< t earlier than the stream's previous line's
   kTooLong,        ///< longer than kMaxStreamLine bytes
+  kBadJson,        ///< starts with '{' but is no flat JSON object of known keys
 };
-inline constexpr std::size_t kStreamLineErrors = 5;
-/// "unknown stream (not wheels or camera)", ...
+inline constexpr std::size_t kStreamLineErrors = 6;
+/// "unknown stream (not wheels, imu or camera)", ...
 const char* describe(StreamLineError error);
 
 /// Longest line taken (bytes, without the newline); longer ones are bad.
@@ -60,23 +80,24 @@ inline constexpr std::size_t kMaxStreamLine = 1024;
 /// order here (StreamLineReader does, per stream).
 std::variant<std::monostate, StreamRow, StreamLineError> parse_stream_line(std::string_view line);
 
-/// Reads lines from a file descriptor (standard input, a FIFO, a file) on a
-/// thread of its own, parses them and queues the good ones, stamped with
+/// Reads lines from standard input, a FIFO, a file or a UDP port on a thread
+/// of its own, parses them and queues the good ones, stamped with
 /// their arrival. Never blocks its consumer; stops at end of file, at
 /// destruction or stop().
 class StreamLineReader {
  public:
   struct Stats {
-    std::size_t wheels = 0, fixes = 0;                   ///< good lines
+    std::size_t wheels = 0, fixes = 0, imu = 0;          ///< good lines
     std::array<std::size_t, kStreamLineErrors> bad{};    ///< bad lines by kind
     std::array<std::string, kStreamLineErrors> first{};  ///< the first bad line of each kind
     std::size_t bad_total() const;
   };
 
-  /// `path`: a file or FIFO, or "-" for standard input. Throws io::Error
-  /// when it cannot be opened (a FIFO is opened on the thread: the run does
-  /// not wait for its writer).
-  explicit StreamLineReader(const std::string& path);
+  /// `path`: a file or FIFO, "-" for standard input, or "udp:[HOST:]PORT"
+  /// (HOST defaults to 127.0.0.1) to listen on. Throws io::Error when it
+  /// cannot be opened (a FIFO is opened on the thread: the run does not
+  /// wait for its writer) or the port cannot be bound.
+  explicit StreamLineReader(const std::string& path, StreamClock clock = StreamClock::kSource);
   ~StreamLineReader();
   StreamLineReader(const StreamLineReader&) = delete;
   StreamLineReader& operator=(const StreamLineReader&) = delete;
