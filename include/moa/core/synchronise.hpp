@@ -156,7 +156,7 @@ class Synchroniser {
   double silence() const { return silence_; }
   /// s, silence() with a row at t added.
   double silence_at(double t) const {
-    return silence_ + std::max(0.0, t - last_row_t_ - options_.max_row_interval);
+    return silence_ + std::max<double>(0.0, t - last_row_t_ - options_.max_row_interval);
   }
   /// Rows accepted so far.
   std::int64_t rows() const { return rows_; }
