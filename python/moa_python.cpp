@@ -145,9 +145,9 @@ class Options {
 };
 
 const std::set<std::string> kOdometryOptions{
-    "sensors",          "rate",    "no_wheels", "no_imu",      "fuse_camera", "camera_latency",
-    "camera_sigma",     "e_th",    "r_th",      "alpha",       "initial_pose",
-    "max_row_interval", "max_gap", "ekf_scale"};
+    "sensors",      "rate",     "no_wheels", "no_imu", "fuse_camera",  "camera_latency",
+    "camera_sigma", "e_th",     "r_th",      "alpha",  "initial_pose", "max_row_interval",
+    "max_gap",      "ekf_scale"};
 
 /// `moa odometry`'s flags as keywords, resolved as the command line does.
 OdometryOptions odometry_options(const std::string& estimator, const py::kwargs& kwargs,

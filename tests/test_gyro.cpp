@@ -15,9 +15,9 @@
 #include "moa/core/consensus.hpp"
 #include "moa/core/gyro.hpp"
 #include "moa/core/kalman.hpp"
-#include "moa/formats/error.hpp"
 #include "moa/formats/config.hpp"
 #include "moa/formats/diagnostics_csv.hpp"
+#include "moa/formats/error.hpp"
 #include "moa/formats/log.hpp"
 #include "moa/formats/odometry_csv.hpp"
 #include "support/run.hpp"
@@ -280,8 +280,8 @@ TEST(GyroCli, BumpsAreBridgedByTheGyrosRotation) {
     std::size_t k = 0;
     while (const auto o = odometry.next()) {
       while (k + 1 < truth.size() && truth[k + 1].t <= o->t + 1e-9) ++k;
-      errors.emplace_back(o->t, std::remainder(o->pose.theta - truth[k].pose.theta,
-                                               2.0 * std::numbers::pi));
+      errors.emplace_back(
+          o->t, std::remainder(o->pose.theta - truth[k].pose.theta, 2.0 * std::numbers::pi));
     }
     return errors;
   };
