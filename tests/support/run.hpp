@@ -23,9 +23,20 @@ struct BoundedRunResult : RunResult {
   bool file_too_big = false;  ///< killed by SIGXFSZ: a file beyond the output limit
 };
 
+/// The wall-time scale of the moa the tests run: the bounds below are the
+/// Release program's; built for AddressSanitizer (Debug, CI's second pass)
+/// moa runs about ten times slower (writing 360 000 epochs: 0.5 s against
+/// more than 15 s), so its time bound is ten times the Release one. Memory
+/// and output bounds are not scaled.
+#if defined(__SANITIZE_ADDRESS__)
+inline constexpr double kBuildTimeScale = 10.0;
+#else
+inline constexpr double kBuildTimeScale = 1.0;
+#endif
+
 /// The limits the issue's cases must hold (issue #28): 15 s, 1 GB, 50 MB.
 struct RunLimits {
-  double seconds = 15.0;
+  double seconds = 15.0 * kBuildTimeScale;
   long max_rss_kb = 1L << 20;                 ///< checked after the run
   unsigned long max_file_bytes = 50UL << 20;  ///< RLIMIT_FSIZE: no file, stdout or stderr larger
 };
