@@ -153,30 +153,31 @@ bool ConsensusEstimator::common_mode(const Candidate& best, const References& re
   return refs.size > 0 && !(tests.wheels <= 1.0) && !(tests.prior <= 1.0);
 }
 
-void ConsensusEstimator::fuse_gyro(const GyroRate& rate, bool gated, RobustEstimate& out) const {
-  Vec3 x = out.estimate.twist.vector();
-  Mat3 p = out.estimate.covariance;
-  const Mat<1, 1> y(rate.omega - x(2));
-  const Mat<1, 3> h(real(0), real(0), real(1));
-  const Mat<1, 1> r(rate.variance);
-  if (gated) {
-    out.tests.gyro_fused = gated_update<3, 1>(x, p, y, h, r, gyro_threshold_).fused;
-  } else {
-    joseph_update<3, 1>(x, p, y, h, r);
-    out.tests.gyro_fused = true;
-  }
-  out.estimate.twist = Twist2::from_vector(x);
-  out.estimate.covariance = p;
+void ConsensusEstimator::take_gyro_rotation(const GyroRate& rate, real omega,
+                                            RobustEstimate& out) const {
+  // The translation stays the array's (or the bridge's); the rotation is the
+  // gyro's, independent of it.
+  out.estimate.twist.omega = omega;
+  out.estimate.covariance.row(2).setZero();
+  out.estimate.covariance.col(2).setZero();
+  out.estimate.covariance(2, 2) = rate.variance;
+  out.tests.gyro_fused = true;
 }
 
-void ConsensusEstimator::teach_gyro(real g, const ArraySample& sample, const RobustEstimate& out) {
-  const SensorMask used = out.estimate.used;
-  for (int i = 0; i < n_; ++i) {
+void ConsensusEstimator::teach_gyro(real g, const ArraySample& sample, const RobustEstimate& out,
+                                    bool still) {
+  // At rest (the wheels' encoders read nothing and the array agrees with
+  // them) the robot's rotation is zero exactly: the gyro's window then
+  // measures its bias alone, to its own noise d^2 T, not to the array's.
+  constexpr SensorMask kStill = ~SensorMask{0};
+  const SensorMask used = still ? kStill : out.estimate.used;
+  for (int i = 0; i < n_ && !still; ++i) {
     // Low SQUAL or an overflow: counts that may be lost (near the rated speed
     // the variance is grown, the counts are still whole).
     if (contains(used, i) &&
         (out.noise_flags[static_cast<std::size_t>(i)] & (kNoiseLowSqual | kNoiseOverflow)) != 0) {
       (void)gyro_.close(gyro_threshold_);  // not a clean window
+      gyro_mask_ = 0;
       return;
     }
   }
@@ -184,10 +185,14 @@ void ConsensusEstimator::teach_gyro(real g, const ArraySample& sample, const Rob
     (void)gyro_.close(gyro_threshold_);
     gyro_mask_ = used;
     Mat3 q = Mat3::Zero();
-    for (int i = 0; i < n_; ++i) {
+    for (int i = 0; i < n_ && !still; ++i) {
       if (contains(used, i)) q += noise_.quantisation_information(i);
     }
     gyro_q_ = q.determinant() > 0 ? q.inverse()(2, 2) : real(0);
+  }
+  if (still) {
+    (void)gyro_.teach(g, sample.dt, Vec3::Zero(), real(0), real(0), gyro_threshold_);
+    return;
   }
   // The epoch's rotation variance less its quantisation (which the window
   // counts once): the sensors' noise and the resolution's variation.
@@ -247,8 +252,11 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
   const auto best = search(screened, refs);
   if (best) test_references(*best, refs, out.tests);
   if (best && rate) {
-    const real d = best->fit.twist.omega - rate->omega;
-    out.tests.gyro = d * d / (best->fit.covariance(2, 2) + rate->variance) / gyro_threshold_;
+    Vec3 x = best->fit.twist.vector();
+    Mat3 c = best->fit.covariance;
+    gyro_.decouple(x, c);
+    const real d = x(2) - rate->omega;
+    out.tests.gyro = d * d / (c(2, 2) + rate->variance) / gyro_threshold_;
   }
   const bool common = best && common_mode(*best, refs, out.tests, sample.t);
   if (best && !common) {
@@ -262,15 +270,15 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
         out.excluded[static_cast<std::size_t>(i)] = Exclusion::kInconsistent;
       }
     }
+    const bool still = wheels && wheels->vector().isZero(real(0)) && out.tests.wheels <= real(1);
     if (rate) {
-      // The array's own rotation teaches the gyro, then the gyro's joins it.
-      teach_gyro(*gyro, sample, out);
-      if (const auto taught = gyro_.rate(*gyro, sample.dt)) {
-        Vec3 x = out.estimate.twist.vector();
-        gyro_.decouple(x, out.estimate.covariance);
-        out.estimate.twist = Twist2::from_vector(x);
-        fuse_gyro(*taught, true, out);
-      }
+      // The gyro drives the heading (gyro.hpp); the array's own rotation
+      // teaches it.
+      const real omega = gyro_.drive(*rate, static_cast<real>(sample.dt));
+      teach_gyro(*gyro, sample, out, still);
+      take_gyro_rotation(*rate, omega, out);
+    } else if (gyro) {
+      gyro_.release();
     }
     fallback_.good(out.estimate.twist, out.estimate.covariance, sample.t);
     prior_.trust(out.estimate.twist, out.estimate.covariance, sample.t);
@@ -287,7 +295,11 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
   }
   fallback_.apply(out, wheels, options_.wheels, options_.hold, sample.t);
   if (gyro) (void)gyro_.close(gyro_threshold_);
-  if (rate) fuse_gyro(*rate, false, out);
+  if (rate) {
+    take_gyro_rotation(*rate, gyro_.drive(*rate, static_cast<real>(sample.dt)), out);
+  } else if (gyro) {
+    gyro_.release();
+  }
   if (out.source == Source::kWheels) {
     prior_.trust(out.estimate.twist, out.estimate.covariance, sample.t);
   }

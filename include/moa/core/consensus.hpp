@@ -40,11 +40,12 @@
 // With a gyro (gyro.hpp) its calibrated rate omega_g is one more reference,
 // on the rotation only: the array is also common-mode wrong when the gyro
 // alone rejects its rotation, (omega_a - omega_g)^2 / (Cov_ww + var_g) >
-// q(1 - alpha, 1) (a translation reference cannot vouch for a rotation). An
-// accepted array twist first teaches the gyro's bias and scale, then takes
-// the gyro's rate in by the gated update (kalman.hpp); a bridge (step 3, 4)
-// takes it in whatever it says: its rotation is the gyro's, weighed against
-// the wheels' or the hold's own.
+// q(1 - alpha, 1) (a translation reference cannot vouch for a rotation).
+// Whenever the gyro reads (not saturated) the rotation reported is the
+// gyro's, with the heading's error its calibration leaves taken back as the
+// array teaches it (gyro.hpp): an accepted array twist teaches the gyro's
+// bias and scale and gives the translation; a bridge (step 3, 4) takes its
+// translation from the wheels or the hold.
 // The prior is the twist of step 2, or of the wheels in step 3; a hold does
 // not renew it (its covariance keeps growing). With motion_prior off the
 // estimator is the one before the prior: no prior, and the wheel test of a
@@ -135,10 +136,12 @@ class ConsensusEstimator {
   /// Step 3: every reference rejects the majority candidate's twist.
   bool common_mode(const Candidate& best, const References& refs, const SourceTests& tests,
                    double t) const;
-  /// The gyro's rate into out's twist: gated (an accepted array) or not (a bridge).
-  void fuse_gyro(const GyroRate& rate, bool gated, RobustEstimate& out) const;
+  /// The gyro's rotation `omega` (GyroModel::drive) as out's, with the
+  /// rate's variance.
+  void take_gyro_rotation(const GyroRate& rate, real omega, RobustEstimate& out) const;
   /// An accepted epoch into the gyro's calibration window (gyro.hpp).
-  void teach_gyro(real g, const ArraySample& sample, const RobustEstimate& out);
+  /// `still`: the robot at rest (the wheels read nothing, the array agrees).
+  void teach_gyro(real g, const ArraySample& sample, const RobustEstimate& out, bool still);
   /// Each sensor's residual against the epoch's twist x: tests.sensor.
   void test_sensors(const Twist2& x, SourceTests& tests) const;
 

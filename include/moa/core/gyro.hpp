@@ -25,25 +25,52 @@
 // run it is linear in the robot's velocity: omega_a = omega + a . v, so
 // a = (a_x, a_y) (rad/m) are two more states, with initial sd
 // mount_yaw_sigma / r_rms, r_rms the sensors' rms distance from the centre.
-// The states: x = (b, s, a_x, a_y).
+// The states: x = (b, s, a_x, a_y), and below e and delta.
 //
 // Calibration over windows: where the array's twist is trusted, with the
 // same sensors and no noise inflation, epoch after epoch, the gyro's angle
 // G = sum g dt over a window of T s (at most window_time) measures the
 // states against the array's angle A = sum omega_a dt and displacement
-// D = sum v_a dt (robot frame):
+// D = sum v_a dt (robot frame). The counts' quantisation does not average
+// out over a window, but it does not grow either: the array's angle summed
+// since a chain of windows began is the true one plus e, the residual of
+// the counts not yet whole (variance q / 2 at any instant, q the angle
+// variance of a difference of two such residuals, noise_model.hpp). Over a
+// window the angle is off by e' - e, e' the residual at its end. So e is a
+// fifth state, and a window, with e' appended as a
+// fresh state of variance q / 2, measures
 //   y = G - (k (1 + s) (A - a . D) + (c + b) T),
-//   H = (T, k (A - a . D), -k (1 + s) D_x, -k (1 + s) D_y),
-//   R = d^2 T + (k (1 + s))^2 (q + sum dt^2 n),
-// q the angle variance of the counts' quantisation, which a sum of counts
-// carries once whatever its length (its two end residuals), n an epoch's
-// rotation variance less its quantisation (the sensors' noise and the
-// resolution's variation, noise_model.hpp). The per-epoch model counts the
-// quantisation every epoch: at rest on a 1.5 cm array 0.04 rad/s per epoch
-// where the window's sum is known to 0.6 mrad. Fused by the one gated update
-// (kalman.hpp) at the estimator's alpha. The array's twist fused with the
-// gyro each epoch is decoupled the same way: omega_a - a . v_a, its
-// variance grown by v_a^T P_aa v_a.
+//   H = (T, k (A - a . D), -k (1 + s) D_x, -k (1 + s) D_y, k (1 + s), 0, -k (1 + s)),
+//   R = d^2 T + (k (1 + s))^2 sum dt^2 n,
+// n an epoch's rotation variance less its quantisation (the sensors' noise
+// and the resolution's variation); after the update e' is the new e.
+// Consecutive windows share their end residuals, which telescope: over a
+// chain of total length T_c the bias is learnt to about sqrt(q) / T_c, not
+// sqrt(q) / T per window of T (on a 1.5 cm array sqrt(q) is 0.6 mrad: 2 mrad/s
+// from one window of 0.3 s, 0.06 mrad/s over 10 s). A break (other sensors,
+// an untrusted epoch, a window rejected) starts a new chain: e unknown,
+// variance q / 2, uncorrelated. Fused by the one gated update (kalman.hpp) at
+// the estimator's alpha; a rejected window breaks the chain. The array's
+// rotation tested against the gyro each epoch is decoupled the same way:
+// omega_a - a . v_a, its variance grown by v_a^T P_aa v_a.
+//
+// The heading. The gyro's rate is smooth but its bias error is the same
+// epoch after epoch: taken in as if it were white, an error of 3 mrad/s in b
+// turns the heading by 1.7 deg in 10 s, where the array alone on a 1.5 cm
+// base drifts by less. So the rotation an epoch reports is the gyro's,
+// omega_g, and the heading's error it leaves, delta (rad, the reported
+// heading minus the true one), is a sixth state, x = (b, s, a_x, a_y, e,
+// delta), propagated each epoch the gyro drives the heading by
+//   delta <- delta + dt (omega_g - omega) = delta + dt (b, s)-linear + dt n_g,
+// so it is correlated with the bias and scale states. A window that corrects
+// b and s corrects delta through that correlation: the heading reported with
+// the old bias is taken back (the optimal filter for the heading with an
+// unknown bias: no worse than the array's own heading, and the gyro's
+// smoothness between windows). The correction is reported as rotation,
+// spread over window_time: an epoch reports omega_g - c / dt, c = delta
+// min(1, dt / window_time), and delta's estimate drops by c (the reported
+// heading moved by -c); its variance and correlations stay. An epoch whose rotation is not the
+// gyro's (a saturated reading) forgets delta.
 #pragma once
 
 #include <optional>
@@ -65,7 +92,7 @@ struct GyroOptions {
   real mount_yaw_sigma = 0.0035;  ///< rad, sd of a sensor's yaw mount error (0.2 deg)
   real max_rate = 8.7;            ///< rad/s, the full scale (500 deg/s)
   double latency = 0.0;           ///< s: a row's t minus the true end of its interval
-  real window_time = 0.5;         ///< s, longest calibration window
+  real window_time = 0.1;         ///< s, longest calibration window
   /// nullopt when usable, else the first field out of its bounds.
   OptionCheck validate() const;
 };
@@ -96,25 +123,36 @@ class GyroModel {
   /// reaches window_time; returns the status of a window closed.
   std::optional<AidStatus> teach(real g, real dt, const Vec3& x_a, real q, real n, real gate);
   /// Closes the window now (the array not trusted, other sensors, an
-  /// inflated noise): fused when it holds anything.
-  std::optional<AidStatus> close(real gate);
+  /// inflated noise): fused when it holds anything; the next window starts a
+  /// new chain.
+  std::optional<AidStatus> close(real gate) { return close(gate, false); }
+  /// The rotation of an epoch the gyro drives the heading with its rate
+  /// `r` (from rate()): omega_g less the heading's error estimated so far,
+  /// delta / dt; delta propagated and its estimate reset (above).
+  real drive(const GyroRate& r, real dt);
+  /// An epoch whose rotation is not the gyro's: delta is forgotten.
+  void release();
   /// The array's twist with its rotation's coupling to its velocity removed:
-  /// omega_a - a . v_a, the variance grown by v_a^T P_aa v_a.
+  /// omega_a - a . v_a, the variance grown by v_a^T P_aa v_a (for the gyro's
+  /// test of the array's rotation).
   void decouple(Vec3& x_a, Mat3& c_a) const;
 
   real bias() const { return options_.bias + x_(0); }                ///< c + b, rad/s
   real scale() const { return options_.scale * (real(1) + x_(1)); }  ///< k (1 + s)
-  const Vec2 coupling() const { return x_.tail<2>(); }               ///< a, rad/m
-  const Mat4& covariance() const { return p_; }                      ///< of (b, s, a_x, a_y)
+  Vec2 coupling() const { return x_.segment<2>(2); }                 ///< a, rad/m
+  const Mat<6, 6>& covariance() const { return p_; }  ///< of (b, s, a_x, a_y, e, delta)
 
  private:
   GyroOptions options_;
-  Vec4 x_ = Vec4::Zero();
-  Mat4 p_ = Mat4::Zero();
+  Mat<6, 1> x_ = Mat<6, 1>::Zero();
+  Mat<6, 6> p_ = Mat<6, 6>::Zero();
+  bool chained_ = false;  ///< e is the residual at the open window's start
   struct Window {
     real t = 0, gyro = 0, array = 0, noise = 0, q = 0;  ///< s, rad, rad, rad^2, rad^2
     Vec2 displacement = Vec2::Zero();                   ///< m, robot frame
   } window_;
+  /// Fuses the window; `chain`: the next window begins where it ends.
+  std::optional<AidStatus> close(real gate, bool chain);
 };
 
 }  // namespace moa
