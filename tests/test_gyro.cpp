@@ -380,5 +380,53 @@ TEST(GyroCli, BumpsAreBridgedByTheGyrosRotation) {
   EXPECT_GE(imu_fused, bridged);
 }
 
+// One sensor and a gyro (scenario gyro-one, an OTOS-class robot): the
+// sensor gives the translation, the gyro every rotation. The same log run
+// with the gyro's true scale (robot.true.yaml: 1.02) and with the believed
+// one (robot.yaml: 1): the rotation is the gyro's reading over its scale in
+// both, and the bias is learnt at the same rests (omega = 0 there, whatever
+// the scale), so the believed run turns 2 % more: its final heading exceeds
+// the other's by 0.02 times the latter's, up to the two bias priors' pull
+// (centred on 0.01 and 0 rad/s, sd 0.05, against readings that pin the bias
+// to about 0.3 mrad/s: 1e-5 of the difference). Without the gyro one sensor
+// is refused, saying why.
+TEST(GyroCli, OneSensorTakesItsRotationFromTheGyro) {
+  namespace fs = std::filesystem;
+  const fs::path dir = test::scratch_dir("gyro-one");
+  const std::string log = (dir / "log").string();
+  ASSERT_EQ(test::run_moa("simulate --scenario gyro-one --seed 102 --out " + log).exit_code, 0);
+  const auto final_heading = [&](const std::string& config) {
+    const std::string out = (dir / (config + ".csv")).string();
+    const auto r = test::run_moa("odometry --config " + log + "/" + config + ".yaml --log " + log +
+                                 " --out " + out);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    const io::RobotConfig c = io::read_config(log + "/" + config + ".yaml");
+    io::OdometryCsvReader odometry(out, c, log + "/" + config + ".yaml");
+    double theta = 0.0;
+    std::size_t rows = 0;
+    while (const auto o = odometry.next()) {
+      theta = o->pose.theta;
+      ++rows;
+    }
+    EXPECT_GT(rows, 14000u);
+    return theta;
+  };
+  const double believed = final_heading("robot"), known = final_heading("robot.true");
+  const auto truth = io::read_all<io::TruthRow>(log + "/truth.csv");
+  ASSERT_FALSE(truth.empty());
+  EXPECT_GT(known, 18.0);  // five and a half turns (unwrapped)
+  EXPECT_NEAR(believed - known, 0.02 * known, 1e-3 * 0.02 * known);
+  // With its scale known the gyro's heading is the truth's to its noise and
+  // bias (d sqrt(T) = 2 mrad; a bias known to 0.3 mrad/s over 144 s, 40 mrad).
+  EXPECT_NEAR(known, truth.back().pose.theta, 0.05);
+  const auto refused = test::run_moa("odometry --config " + log + "/robot.yaml --log " + log +
+                                     " --out " + (dir / "no.csv").string() + " --no-imu");
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_NE(refused.err.find("one sensor needs a gyro for its rotation: --no-imu given"),
+            std::string::npos)
+      << refused.err;
+  EXPECT_FALSE(fs::exists(dir / "no.csv"));
+}
+
 }  // namespace
 }  // namespace moa

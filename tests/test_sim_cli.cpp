@@ -176,7 +176,7 @@ TEST(SimCli, UnknownScenarioIsAnErrorAndWritesNothing) {
       HasSubstr("scenario 'sekimori-c': not a built-in scenario (calibration, "
                 "cruise, differential, faults-bump, faults-cruise, faults-dirty, "
                 "faults-drift, faults-floor, faults-liftoff, faults-spikes, "
-                "faults-stuck, faults-zero, guided, gyro-bump, kimlee, sekimori-a, sekimori-b, "
+                "faults-stuck, faults-zero, guided, gyro-bump, gyro-one, kimlee, sekimori-a, sekimori-b, "
                 "selfcal-ramp, selfcal-step) and no "
                 "such file"));
   EXPECT_FALSE(fs::exists(dir));

@@ -177,7 +177,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"one sensor",
                 "version: 1\nname: t\nsensor_model: {preset: HDNS-2051}\nsensors: {layout: "
                 "radial, angles_deg: [0], distance: 0.1}\n",
-                "s.yaml:4: key 'sensors': 1 sensors, expected 2 to 16"},
+                "s.yaml:4: key 'sensors': 1 sensors, expected 2 to 16 (1 with an imu:)"},
         BadCase{"true sensor unknown", with("true_sensors: {m9: {yaw_error: 0.1}}\n"),
                 "s.yaml:6: key 'true_sensors': no sensor called 'm9' (sensors: m1, m2, m3)"},
         BadCase{"true sensor bad key", with("true_sensors: {m1: {yaw_err: 0.1}}\n"),
@@ -336,7 +336,7 @@ TEST(SimScenario, UnknownNameListsTheBuiltins) {
         "scenario 'sekimori-c': not a built-in scenario (calibration, cruise, differential, "
         "faults-bump, faults-cruise, faults-dirty, faults-drift, faults-floor, faults-liftoff, "
         "faults-spikes, "
-        "faults-stuck, faults-zero, guided, gyro-bump, kimlee, sekimori-a, sekimori-b, "
+        "faults-stuck, faults-zero, guided, gyro-bump, gyro-one, kimlee, sekimori-a, sekimori-b, "
         "selfcal-ramp, "
         "selfcal-step) and no such file");
   }

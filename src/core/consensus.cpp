@@ -23,6 +23,11 @@ OptionCheck ConsensusOptions::validate() const {
 
 std::variant<ConsensusEstimator, GeometryError> ConsensusEstimator::create(
     const SensorArray& array, ConsensusOptions options) {
+  // One sensor takes its rotation from the gyro (one_sensor()).
+  if (array.size() == 1 && options.gyro_fed) {
+    if (!valid_mount(array[0])) return GeometryError::kInvalidMount;
+    return ConsensusEstimator(array, options);
+  }
   // The same acceptance rules as the plain estimator over all sensors.
   const auto check = LsEstimator::create(array, all_sensors(array.size()), 0.01);
   if (const auto* error = std::get_if<GeometryError>(&check)) return *error;
@@ -201,6 +206,80 @@ void ConsensusEstimator::teach_gyro(real g, const ArraySample& sample, const Rob
   (void)gyro_.teach(g, sample.dt, out.estimate.twist.vector(), gyro_q_, n, gyro_threshold_);
 }
 
+RobustEstimate ConsensusEstimator::one_sensor(const ArraySample& sample, const References& refs,
+                                              const std::optional<Twist2>& wheels,
+                                              const std::optional<real>& gyro,
+                                              const std::optional<GyroRate>& rate,
+                                              RobustEstimate out) {
+  const bool lifted = (sample.flags[0] & kFlagLift) != 0;
+  const real dt = static_cast<real>(sample.dt);
+  bool accepted = false;
+  if (!lifted && rate) {
+    // v = u - omega (z x r): (z x r) is the column of A_0 for omega.
+    const Vec2 zr = solver_.jacobian(0).col(2);
+    const Mat2 s = measurements_.info[0].inverse();
+    Vec3 x;
+    x << measurements_.u[0] - zr * rate->omega, rate->omega;
+    Mat3 c;
+    c.topLeftCorner<2, 2>() = s + zr * zr.transpose() * rate->variance;
+    c.topRightCorner<2, 1>() = -zr * rate->variance;
+    c.bottomLeftCorner<1, 2>() = -zr.transpose() * rate->variance;
+    c(2, 2) = rate->variance;
+    // The translation against each reference, 2 dof.
+    bool any_passes = false;
+    for (int k = 0; k < refs.size; ++k) {
+      const Reference& ref = refs.r[static_cast<std::size_t>(k)];
+      const Vec2 d = x.head<2>() - ref.x.head<2>();
+      const Mat2 sum = c.topLeftCorner<2, 2>() + ref.covariance.topLeftCorner<2, 2>();
+      const real ratio = d.dot(sum.inverse() * d) / threshold_[2];
+      (k == refs.wheels ? out.tests.wheels : out.tests.prior) = ratio;
+      any_passes = any_passes || ratio <= real(1);
+    }
+    const bool bridge = options_.common_mode && options_.motion_prior && refs.size > 0 &&
+                        !any_passes && last_mice_t_ &&
+                        sample.t - *last_mice_t_ <= static_cast<double>(options_.max_bridge);
+    if (!bridge) {
+      accepted = true;
+      last_mice_t_ = sample.t;
+      out.source = Source::kMice;
+      out.estimate.twist = Twist2::from_vector(x);
+      out.estimate.covariance = c;
+      out.estimate.used = 1;
+      out.tests.sensor[0] = 0;  // no other sensor to test it against
+    }
+  }
+  if (accepted) {
+    const real omega = gyro_.drive(*rate, dt);
+    const bool still = wheels && wheels->vector().isZero(real(0)) && out.tests.wheels <= real(1);
+    if (still) {
+      teach_gyro(*gyro, sample, out, true);
+    } else {
+      (void)gyro_.close(gyro_threshold_);  // no rotation measured but the gyro's
+      gyro_mask_ = 0;
+    }
+    take_gyro_rotation(*rate, omega, out);
+    fallback_.good(out.estimate.twist, out.estimate.covariance, sample.t);
+    prior_.trust(out.estimate.twist, out.estimate.covariance, sample.t);
+    return out;
+  }
+  out.excluded[0] =
+      lifted ? Exclusion::kLift : (rate ? Exclusion::kCommonMode : Exclusion::kFallback);
+  fallback_.apply(out, wheels, options_.wheels, options_.hold, sample.t);
+  if (gyro) {
+    (void)gyro_.close(gyro_threshold_);
+    gyro_mask_ = 0;
+  }
+  if (rate) {
+    take_gyro_rotation(*rate, gyro_.drive(*rate, dt), out);
+  } else if (gyro) {
+    gyro_.release();
+  }
+  if (out.source == Source::kWheels) {
+    prior_.trust(out.estimate.twist, out.estimate.covariance, sample.t);
+  }
+  return out;
+}
+
 void ConsensusEstimator::test_sensors(const Twist2& x, SourceTests& tests) const {
   const real gate = threshold_[2];
   for (int i = 0; i < n_; ++i) {
@@ -247,6 +326,7 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
   if (options_.motion_prior && prior_.valid()) {
     add(prior_.twist(), prior_.covariance(sample.t, sample.dt));
   }
+  if (n_ == 1) return one_sensor(sample, refs, wheels, gyro, rate, out);
   const SensorMask screened =
       health_.screen(solver_, sample, fallback_.last_twist(), candidates, out.excluded);
   const auto best = search(screened, refs);

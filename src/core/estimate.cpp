@@ -10,7 +10,8 @@ namespace moa {
 const char* describe(GeometryError error) {
   switch (error) {
     case GeometryError::kTooFewSensors:
-      return "fewer than two sensors: a twist needs at least two";
+      return "fewer than two sensors: a twist needs at least two, or one with a gyro (the "
+             "consensus estimator, an imu: block in the config and imu.csv in the log)";
     case GeometryError::kTooManySensors:
       return "more sensors than moa::kMaxSensors, or a sensor index past the array";
     case GeometryError::kRankDeficient:
@@ -31,14 +32,12 @@ std::array<Vec2, kMaxSensors> point_velocities(const SensorArray& array,
   return u;
 }
 
-namespace {
 bool valid_mount(const SensorMount& m) {
   const auto positive = [](real x) { return std::isfinite(x) && x > 0.0; };
   return positive(m.cpi) && positive(m.scale.x()) && positive(m.scale.y()) &&
          m.position.allFinite() && std::isfinite(m.yaw) &&
          (!m.noise || (std::isfinite(*m.noise) && *m.noise >= 0.0));
 }
-}  // namespace
 
 std::variant<LsEstimator, GeometryError> LsEstimator::create(const SensorArray& array,
                                                              SensorMask used, real reference_dt) {

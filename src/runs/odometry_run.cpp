@@ -118,6 +118,7 @@ std::unique_ptr<Odometry> make_odometry(const RobotConfig& config, const std::st
   OdometryOptions options = given;
   if (config.limits) options.consensus.limits = *config.limits;
   if (config.imu) options.consensus.gyro = *config.imu;
+  options.consensus.gyro_fed = options.use_imu && config.imu.has_value();
   if (const auto e = options.validate()) {
     throw Error(fmt::format("invalid option: {}", e->message()));
   }
@@ -429,6 +430,12 @@ OdometryRun run_odometry(const RobotConfig& config, const std::string& config_pa
   std::unique_ptr<ImuReader> imu;
   if (options.use_imu && log.imu && options.estimator == EstimatorKind::kConsensus) {
     imu = std::make_unique<ImuReader>(*log.imu);
+  }
+  if (config.array.size() == 1 && !imu) {
+    throw Error(fmt::format("{}: one sensor needs a gyro for its rotation: {}", log.mice.string(),
+                            !options.use_imu ? "--no-imu given"
+                            : !log.imu       ? "no imu.csv in " + log.dir.string()
+                                             : "the estimator is not consensus"));
   }
   std::unique_ptr<CameraReader> camera;
   if (options.fuse_camera) {

@@ -98,7 +98,7 @@ std::vector<std::string> sensor_names(const Fields& f, std::size_t count) {
 
 // The nominal robot's sensors: a layout generator or an explicit list.
 io::RobotConfig parse_sensors(const Source& source, const YAML::Node& node,
-                              const SensorModel& model) {
+                              const SensorModel& model, bool gyro) {
   SensorMount prototype;
   prototype.cpi = model.cpi;
   prototype.max_speed = model.max_speed;
@@ -145,9 +145,11 @@ io::RobotConfig parse_sensors(const Source& source, const YAML::Node& node,
     }
     config.names = sensor_names(f, mounts.size());
   }
-  if (mounts.size() < 2 || mounts.size() > static_cast<std::size_t>(kMaxSensors)) {
-    source.fail(node, fmt::format("key 'sensors': {} sensors, expected 2 to {}", mounts.size(),
-                                  kMaxSensors));
+  // One sensor takes its rotation from a gyro (the scenario's imu:).
+  const std::size_t fewest = gyro ? 1 : 2;
+  if (mounts.size() < fewest || mounts.size() > static_cast<std::size_t>(kMaxSensors)) {
+    source.fail(node, fmt::format("key 'sensors': {} sensors, expected {} to {}{}", mounts.size(),
+                                  fewest, kMaxSensors, gyro ? "" : " (1 with an imu:)"));
   }
   for (std::size_t i = 0; i < config.names.size(); ++i) {
     const std::string& name = config.names[i];
@@ -625,7 +627,8 @@ Scenario parse_scenario(std::string_view yaml, std::string_view source_name) {
       {"preset", "cpi", "frame_rate", "max_speed", "packets_per_row", "frame_noise",
        "relative_noise", "delta_limit", "squal", "squal_jitter"});
   s.sensor_model = parse_sensor_model(model_fields);
-  s.nominal = parse_sensors(source, top.required("sensors"), s.sensor_model);
+  s.nominal =
+      parse_sensors(source, top.required("sensors"), s.sensor_model, top.get("imu").has_value());
   const auto noise = config_noise(s.sensor_model, model_fields);
   for (int i = 0; i < s.nominal.array.size(); ++i) s.nominal.array[i].noise = noise;
   s.truth = s.nominal;

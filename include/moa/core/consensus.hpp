@@ -85,6 +85,8 @@ struct ConsensusOptions {
   real max_bridge = 1.0;  ///< s, longest bridge over a common-mode rejection
   /// The gyro, when a gyro stream is fed (config `imu:`).
   GyroOptions gyro;
+  /// A gyro stream will be fed: then one sensor suffices (one_sensor below).
+  bool gyro_fed = false;
   /// nullopt when usable, else the first field out of its bounds, its path
   /// relative to this struct (options_check.hpp).
   OptionCheck validate() const;
@@ -142,6 +144,18 @@ class ConsensusEstimator {
   /// An accepted epoch into the gyro's calibration window (gyro.hpp).
   /// `still`: the robot at rest (the wheels read nothing, the array agrees).
   void teach_gyro(real g, const ArraySample& sample, const RobustEstimate& out, bool still);
+  /// One sensor and a gyro (an OTOS-class robot): the sensor measures its
+  /// point's velocity u = v + omega (z x r), two numbers for three; the
+  /// gyro's rate gives omega, so v = u - omega (z x r), with covariance
+  /// S + (z x r)(z x r)^T var_g. Nothing checks the sensor against another:
+  /// its translation is tested against the wheels and the motion prior
+  /// (2 dof, at alpha), and when every one there is rejects it (a lost
+  /// floor, within max_bridge) the epoch is bridged as in step 3. The gyro
+  /// learns its bias at rest only (the wheels read nothing), its scale not
+  /// at all: no rotation is measured but its own.
+  RobustEstimate one_sensor(const ArraySample& sample, const References& refs,
+                            const std::optional<Twist2>& wheels, const std::optional<real>& gyro,
+                            const std::optional<GyroRate>& rate, RobustEstimate out);
   /// Each sensor's residual against the epoch's twist x: tests.sensor.
   void test_sensors(const Twist2& x, SourceTests& tests) const;
 

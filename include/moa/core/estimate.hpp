@@ -37,6 +37,10 @@ enum class GeometryError {
 };
 const char* describe(GeometryError error);
 
+/// cpi and scale positive and finite, position and yaw finite, noise (when
+/// given) finite and not negative.
+bool valid_mount(const SensorMount& m);
+
 /// A twist estimate with its covariance.
 struct TwistEstimate {
   Twist2 twist;
