@@ -336,7 +336,9 @@ TEST(SimScenario, UnknownNameListsTheBuiltins) {
         "scenario 'sekimori-c': not a built-in scenario (calibration, cruise, differential, "
         "faults-bump, faults-cruise, faults-dirty, faults-drift, faults-floor, faults-liftoff, "
         "faults-spikes, "
-        "faults-stuck, faults-zero, guided, gyro-bump, kimlee, sekimori-a, sekimori-b, "
+        "faults-stuck, faults-zero, guided, gyro-bump, gyro-compact, gyro-papers, kimlee, "
+        "sekimori-a, "
+        "sekimori-b, "
         "selfcal-ramp, "
         "selfcal-step) and no such file");
   }
