@@ -336,7 +336,10 @@ TEST(SimScenario, UnknownNameListsTheBuiltins) {
         "scenario 'sekimori-c': not a built-in scenario (calibration, cruise, differential, "
         "faults-bump, faults-cruise, faults-dirty, faults-drift, faults-floor, faults-liftoff, "
         "faults-spikes, "
-        "faults-stuck, faults-zero, guided, gyro-bump, gyro-one, kimlee, sekimori-a, sekimori-b, "
+        "faults-stuck, faults-zero, guided, gyro-bump, gyro-compact, gyro-one, gyro-papers, "
+        "kimlee, "
+        "sekimori-a, "
+        "sekimori-b, "
         "selfcal-ramp, "
         "selfcal-step) and no such file");
   }

@@ -11,5 +11,6 @@ Result robust_faults(const Options& options);
 Result kimlee_example(const Options& options);
 Result calibration_crb(const Options& options);
 Result self_calibration(const Options& options);
+Result gyro(const Options& options);
 
 }  // namespace moa::experiments

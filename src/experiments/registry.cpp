@@ -11,6 +11,10 @@ constexpr Experiment kAll[] = {
      "Exact calibration against the Cramer-Rao bound: bias, spread and efficiency of each "
      "parameter (default 50 trials)",
      calibration_crb},
+    {"gyro",
+     "Heading error of the mouse array alone, the gyro alone and fused, on a compact array, the "
+     "papers' layout and one sensor (default 5 runs)",
+     gyro},
     {"kimlee-example",
      "Kim & Lee Section IV: calibration of the three-mouse example, eqs. (51)-(53), and the "
      "velocity estimates of Fig. 3 (default 200 runs)",

@@ -30,6 +30,7 @@ std::vector<std::string> odometry_flags(const OdometryOptions& o, const io::Robo
     flags.insert(flags.end(), {"--sensors", names});
   }
   if (!o.use_wheels) flags.emplace_back("--no-wheels");
+  if (!o.use_imu) flags.emplace_back("--no-imu");
   if (o.fuse_camera) flags.emplace_back("--fuse-camera");
   if (o.camera_latency != d.camera_latency) {
     flags.insert(flags.end(), {"--camera-latency", fmt::format("{}", o.camera_latency)});

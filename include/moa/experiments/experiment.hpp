@@ -9,6 +9,9 @@
 // them ($OUT a scratch directory; the last call is `moa evaluate --json`).
 // self-calibration also has "scale": per scenario the affected sensor's true
 // and estimated scale at each sample time, and each run's estimates.
+// gyro's rows are per case and method; the gyro-alone rows' runs have no
+// reproduce (no moa call integrates imu.csv alone) but the bias they used,
+// and a row the estimator refused has "refused" (its error) instead of figures.
 #pragma once
 
 #include <cstdint>

@@ -29,7 +29,7 @@ struct Method {
 Method method_of(std::string name, EstimatorKind estimator, bool self_calibrate = false);
 
 /// The `moa odometry` flags that give `options` (those that differ from
-/// the defaults: estimator, sensors, wheels, camera fusion and latency,
+/// the defaults: estimator, sensors, wheels, imu, camera fusion and latency,
 /// self-calibration on with its default options).
 /// Throws std::invalid_argument for an option the command line cannot say.
 std::vector<std::string> odometry_flags(const OdometryOptions& options,
