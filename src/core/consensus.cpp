@@ -206,20 +206,22 @@ void ConsensusEstimator::teach_gyro(real g, const ArraySample& sample, const Rob
   (void)gyro_.teach(g, sample.dt, out.estimate.twist.vector(), gyro_q_, n, gyro_threshold_);
 }
 
-RobustEstimate ConsensusEstimator::one_sensor(const ArraySample& sample, const References& refs,
+RobustEstimate ConsensusEstimator::one_sensor(int i, SensorMask candidates,
+                                              const ArraySample& sample, const References& refs,
                                               const std::optional<Twist2>& wheels,
                                               const std::optional<real>& gyro,
                                               const std::optional<GyroRate>& rate,
                                               RobustEstimate out) {
-  const bool lifted = (sample.flags[0] & kFlagLift) != 0;
+  const auto s_i = static_cast<std::size_t>(i);
+  const bool lifted = (sample.flags[s_i] & kFlagLift) != 0;
   const real dt = static_cast<real>(sample.dt);
   bool accepted = false;
   if (!lifted && rate) {
     // v = u - omega (z x r): (z x r) is the column of A_0 for omega.
-    const Vec2 zr = solver_.jacobian(0).col(2);
-    const Mat2 s = measurements_.info[0].inverse();
+    const Vec2 zr = solver_.jacobian(i).col(2);
+    const Mat2 s = measurements_.info[s_i].inverse();
     Vec3 x;
-    x << measurements_.u[0] - zr * rate->omega, rate->omega;
+    x << measurements_.u[s_i] - zr * rate->omega, rate->omega;
     Mat3 c;
     c.topLeftCorner<2, 2>() = s + zr * zr.transpose() * rate->variance;
     c.topRightCorner<2, 1>() = -zr * rate->variance;
@@ -244,8 +246,7 @@ RobustEstimate ConsensusEstimator::one_sensor(const ArraySample& sample, const R
       out.source = Source::kMice;
       out.estimate.twist = Twist2::from_vector(x);
       out.estimate.covariance = c;
-      out.estimate.used = 1;
-      out.tests.sensor[0] = 0;  // no other sensor to test it against
+      out.estimate.used = SensorMask{1} << i;
     }
   }
   if (accepted) {
@@ -260,9 +261,16 @@ RobustEstimate ConsensusEstimator::one_sensor(const ArraySample& sample, const R
     take_gyro_rotation(*rate, omega, out);
     fallback_.good(out.estimate.twist, out.estimate.covariance, sample.t);
     prior_.trust(out.estimate.twist, out.estimate.covariance, sample.t);
+    if (n_ > 1) {
+      // The others left out are still tested against this twist (and may
+      // come back).
+      health_.observe(solver_, sample, measurements_, out.estimate.twist, out.estimate.used,
+                      candidates, out.noise_flags);
+    }
+    test_sensors(out.estimate.twist, out.tests);
     return out;
   }
-  out.excluded[0] =
+  out.excluded[s_i] =
       lifted ? Exclusion::kLift : (rate ? Exclusion::kCommonMode : Exclusion::kFallback);
   fallback_.apply(out, wheels, options_.wheels, options_.hold, sample.t);
   if (gyro) {
@@ -326,9 +334,15 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
   if (options_.motion_prior && prior_.valid()) {
     add(prior_.twist(), prior_.covariance(sample.t, sample.dt));
   }
-  if (n_ == 1) return one_sensor(sample, refs, wheels, gyro, rate, out);
+  if (n_ == 1) return one_sensor(0, candidates, sample, refs, wheels, gyro, rate, out);
   const SensorMask screened =
       health_.screen(solver_, sample, fallback_.last_twist(), candidates, out.excluded);
+  // The health monitor left one sensor: with the gyro it is an array of one.
+  if (options_.gyro_fed && rate && count_sensors(screened) == 1) {
+    int i = 0;
+    while (!contains(screened, i)) ++i;
+    return one_sensor(i, candidates, sample, refs, wheels, gyro, rate, out);
+  }
   const auto best = search(screened, refs);
   if (best) test_references(*best, refs, out.tests);
   if (best && rate) {

@@ -153,9 +153,12 @@ class ConsensusEstimator {
   /// floor, within max_bridge) the epoch is bridged as in step 3. The gyro
   /// learns its bias at rest only (the wheels read nothing), its scale not
   /// at all: no rotation is measured but its own.
-  RobustEstimate one_sensor(const ArraySample& sample, const References& refs,
-                            const std::optional<Twist2>& wheels, const std::optional<real>& gyro,
-                            const std::optional<GyroRate>& rate, RobustEstimate out);
+  /// Sensor i alone (the array's only one, or the only one the health
+  /// monitor left among `candidates`, which it goes on testing).
+  RobustEstimate one_sensor(int i, SensorMask candidates, const ArraySample& sample,
+                            const References& refs, const std::optional<Twist2>& wheels,
+                            const std::optional<real>& gyro, const std::optional<GyroRate>& rate,
+                            RobustEstimate out);
   /// Each sensor's residual against the epoch's twist x: tests.sensor.
   void test_sensors(const Twist2& x, SourceTests& tests) const;
 
