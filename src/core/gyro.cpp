@@ -58,6 +58,10 @@ real GyroModel::drive(const GyroRate& r, real dt) {
   p_ = f * p_ * f.transpose();
   const real d = options_.noise_density;
   p_(5, 5) += d * d * dt / (k * k);
+  // Beyond 1 rad the heading's error is no longer small (the linearisation)
+  // and in single precision its variance would swamp the calibration's:
+  // the error is forgotten and tracked afresh.
+  if (p_(5, 5) > real(1)) release();
   // The heading's error estimated so far is taken back over window_time (a
   // rate, not a step: the twist is a controller's input too).
   const real correction = x_(5) * std::min(real(1), dt / options_.window_time);
