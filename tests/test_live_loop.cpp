@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "moa/formats/config.hpp"
+#include "support/http.hpp"
 #include "support/json_value.hpp"
 #include "support/run.hpp"
 #include "support/synth.hpp"
@@ -44,17 +45,6 @@ constexpr double kDuration = 3.0;  // s of log
 constexpr double kPeriod = 1e-3;   // s: rows, epochs, wheel and gyro lines at 1 kHz
 
 // A port of the loopback free a moment ago.
-int free_port() {
-  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a);
-  socklen_t size = sizeof a;
-  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &size);
-  ::close(fd);
-  return ntohs(a.sin_port);
-}
 
 // The rows of a CSV file as fields (comments and header skipped).
 std::vector<std::vector<std::string>> csv_rows(const fs::path& file) {
@@ -81,7 +71,7 @@ TEST(LiveLoop, PosesOverAStalledReaderAreTheRecordingsReplayAndDropsAreCounted) 
   const std::vector<std::string> names{"m1", "m2", "m3", "m4"};
   write_log(synthesise(array, mixed_motion, kDuration, kPeriod), array, names, dir / "log");
   const fs::path record = dir / "rec";
-  const int port = free_port();
+  const int port = test::free_port(true);
 
   // moa, its standard output a pipe to the reader.
   int out[2];

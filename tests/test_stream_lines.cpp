@@ -26,6 +26,7 @@
 #include "moa/runs/odometry_run.hpp"
 #include "moa/runs/run_loop.hpp"
 #include "moa/sources/stream_lines.hpp"
+#include "support/http.hpp"
 #include "support/synth.hpp"
 
 namespace moa::io {
@@ -165,18 +166,6 @@ void send_datagram(int port, std::string_view text) {
   ::close(fd);
 }
 
-// A port of the loopback free a moment ago.
-int free_port() {
-  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a);
-  socklen_t size = sizeof a;
-  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &size);
-  ::close(fd);
-  return ntohs(a.sin_port);
-}
 
 std::vector<StreamRow> take_until(StreamLineReader& reader, std::size_t rows, std::size_t bad) {
   std::vector<StreamRow> out;
@@ -188,7 +177,7 @@ std::vector<StreamRow> take_until(StreamLineReader& reader, std::size_t rows, st
 }
 
 TEST(StreamLines, UdpDatagramsCarryOneLineOrSeveral) {
-  const int port = free_port();
+  const int port = test::free_port(true);
   StreamLineReader reader("udp:" + std::to_string(port));  // 127.0.0.1 by default
   send_datagram(port, "wheels,1,0.5,0,0.25");              // one line, no newline
   send_datagram(port, "imu,1.5,0.125\n{\"stream\":\"camera\",\"t\":2,\"x\":1,\"y\":2}\n");
@@ -207,7 +196,7 @@ TEST(StreamLines, UdpDatagramsCarryOneLineOrSeveral) {
 }
 
 TEST(StreamLines, OnTheMonotonicClockTIsTheArrivalToMap) {
-  const int port = free_port();
+  const int port = test::free_port(true);
   StreamLineReader reader("udp:127.0.0.1:" + std::to_string(port), StreamClock::kMonotonic);
   send_datagram(port, "imu,1234.5,0.5\nimu,1234.25,0.5\n");  // the second goes back in time
   const auto rows = take_until(reader, 1, 1);
@@ -221,7 +210,7 @@ TEST(StreamLines, OnTheMonotonicClockTIsTheArrivalToMap) {
 TEST(StreamLines, AUdpAddressThatCannotBeUsedIsRefused) {
   EXPECT_THROW(StreamLineReader("udp:127.0.0.1:70000"), Error);
   EXPECT_THROW(StreamLineReader("udp:no-such-host.invalid:9000"), Error);
-  const int port = free_port();
+  const int port = test::free_port(true);
   StreamLineReader first("udp:" + std::to_string(port));
   EXPECT_THROW(StreamLineReader("udp:" + std::to_string(port)), Error);  // in use
 }

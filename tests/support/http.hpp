@@ -8,8 +8,8 @@
 
 namespace moa::test {
 
-/// A TCP port on 127.0.0.1 that was free a moment ago.
-int free_port();
+/// A TCP (or UDP) port on 127.0.0.1 that was free a moment ago.
+int free_port(bool udp = false);
 
 struct HttpResponse {
   int status = 0;  ///< 0: no connection or no answer
