@@ -168,27 +168,16 @@ const InputRow* LiveRunSource::next() {
     take_gyro();
   }
   const double limit = ended_ ? t_last_ : pending_->t;
-  if (!fixes_.empty() && fixes_.front().t <= limit) {
-    row_ = fixes_.front();
-    fixes_.pop_front();
-    from_streams_ = true;
-    return &row_;
-  }
-  if (!wheels_.empty() && wheels_.front().t <= limit) {
-    row_ = wheels_.front();
-    wheels_.pop_front();
-    from_streams_ = true;
-    return &row_;
-  }
-  if (!serial_gyro_.empty() && serial_gyro_.front().t <= limit) {
-    row_ = serial_gyro_.front();
-    serial_gyro_.pop_front();
-    return &row_;
-  }
-  if (!gyro_.empty() && gyro_.front().t <= limit) {
-    row_ = gyro_.front();
-    gyro_.pop_front();
-    from_streams_ = true;
+  // A row due from the first queue that has one, in this order: fixes, wheels, the
+  // serial device's gyro, the streamed gyro.
+  const auto take = [&](auto& queue, bool streamed) {
+    if (queue.empty() || queue.front().t > limit) return false;
+    row_ = queue.front();
+    queue.pop_front();
+    if (streamed) from_streams_ = true;
+    return true;
+  };
+  if (take(fixes_, true) || take(wheels_, true) || take(serial_gyro_, false) || take(gyro_, true)) {
     return &row_;
   }
   if (ended_) return nullptr;
