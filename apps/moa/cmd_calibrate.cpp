@@ -144,10 +144,10 @@ void add_calibrate(CLI::App& app, Action& action) {
                 "above the counts' noise, information not positive definite) with a warning "
                 "instead of refusing it");
   cmd->add_flag("--no-imu", args->no_imu,
-                "kimlee, exact: leave the gyro alone (by default, when the log has imu.csv, its "
-                "scale, bias and latency are calibrated into the config's imu: block)");
+                "Leave the gyro alone (by default, when the log, or guided's spin, has imu.csv, "
+                "its scale, bias and latency are calibrated into the config's imu: block)");
   cmd->add_option("--imu-reference", args->imu_reference,
-                  "kimlee, exact: the gyro's reference rotation: array (the mice at the "
+                  "The gyro's reference rotation: array (the mice at the "
                   "calibrated mounts; default), array-nominal (at the mounts of --config) or "
                   "wheels (wheels.csv's omega: slip biases the scale)")
       ->check(CLI::IsMember({"array", "array-nominal", "wheels"}))

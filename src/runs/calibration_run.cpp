@@ -683,8 +683,10 @@ CalibrationSummary calibrate_log(const RobotConfig& config, const std::string& c
       run_guided(r, config, config_path, options);
       break;
   }
-  if (method != CalibrationMethod::kGuided && options.imu) {
-    const LogFiles files = resolve_log(log);
+  // The gyro: against the log (kimlee, exact) or the spin's recording
+  // (guided: the array at the mounts the pushes and the spin gave).
+  if (options.imu) {
+    const LogFiles files = resolve_log(method == CalibrationMethod::kGuided ? options.spin : log);
     if (files.imu) run_gyro(r, config, files, options);
   }
   for (const auto& s : r.sensors) {

@@ -96,8 +96,8 @@ struct CalibrationOptions {
   /// exact: return a calibration whose model does not explain the data
   /// (ExactModelCheck::misfit()) with a warning instead of refusing it.
   bool force = false;
-  /// kimlee, exact: calibrate the gyro too when the log has imu.csv (its
-  /// scale, bias and latency into the config's imu: block).
+  /// Calibrate the gyro too when the log (guided: the spin's recording) has
+  /// imu.csv: its scale, bias and latency into the config's imu: block.
   bool imu = true;
   GyroReference imu_reference = GyroReference::kArray;
   /// nullopt when the numbers can be used, else the first field out of its
