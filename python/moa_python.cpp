@@ -457,7 +457,8 @@ io::CalibrationSummary calibrate(const py::object& config_path, const py::object
     const auto r = from_name<io::GyroReference>(*reference);
     if (!r) {
       throw io::Error(fmt::format(
-          "imu_reference: unknown reference '{}' (array, array-nominal, wheels)", *reference));
+          "imu_reference: unknown reference '{}' (array, array-nominal, wheels, camera)",
+          *reference));
     }
     options.imu_reference = *r;
   }

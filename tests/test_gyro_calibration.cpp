@@ -259,6 +259,43 @@ TEST(GyroCalibrationCli, RefusesAGyroOfAnotherMotion) {
   fs::remove_all(a.dir);
 }
 
+// Against the camera's heading: camera.csv written from truth.csv every
+// 0.1 s, theta with 2 mrad of noise (gyro-bump's simulated camera has no
+// theta); the camera's clock is the truth's, so L is the gyro's 5 ms.
+TEST(GyroCalibrationCli, CalibratesTheGyroAgainstTheCamerasHeading) {
+  const BumpLog bump("gyro-cal-camera", 12);
+  {
+    const auto truth = io::read_all<io::TruthRow>(bump.log / "truth.csv");
+    std::ofstream camera(bump.log / "camera.csv");
+    camera << "t,x,y,theta\n";
+    camera.precision(12);
+    std::mt19937_64 rng(5);
+    std::normal_distribution<double> gauss(0.0, 0.002);
+    for (std::size_t k = 0; k < truth.size(); k += 10) {
+      camera << truth[k].t << "," << truth[k].pose.t.x() << "," << truth[k].pose.t.y() << ","
+             << truth[k].pose.theta + gauss(rng) << "\n";
+    }
+  }
+  const auto r = test::run_moa(bump.calibrate("--imu-reference camera --json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto gyro = r.out.find("\"gyro\":");
+  ASSERT_NE(gyro, std::string::npos) << r.out;
+  EXPECT_THAT(r.out, HasSubstr("\"reference\": \"camera\""));
+  const auto sigma = r.out.find("\"sigma\":", gyro);
+  const double k = json_number(r.out, "scale", gyro), c = json_number(r.out, "bias_rad_s", gyro),
+               l = json_number(r.out, "latency_s", gyro);
+  const double sk = json_number(r.out, "scale", sigma),
+               sc = json_number(r.out, "bias_rad_s", sigma),
+               sl = json_number(r.out, "latency_s", sigma);
+  EXPECT_LT(std::abs(k - 1.02), 4.0 * sk) << k << " +- " << sk;
+  EXPECT_LT(std::abs(c - 0.01), 4.0 * sc) << c << " +- " << sc;
+  EXPECT_LT(std::abs(l - 0.005), 4.0 * sl) << l << " +- " << sl;
+  EXPECT_LT(sk, 0.002);
+  EXPECT_LT(sc, 0.001);
+  EXPECT_LT(sl, 0.002);
+  fs::remove_all(bump.dir);
+}
+
 // A guided session (docs/calibration.md): the gyro from the spin's
 // recording, against the array at the mounts the pushes and the spin gave.
 // The robot of tests/test_calibrate_simulated.cpp (errors up to 8 mm, 4 deg,

@@ -146,11 +146,13 @@ void add_calibrate(CLI::App& app, Action& action) {
   cmd->add_flag("--no-imu", args->no_imu,
                 "Leave the gyro alone (by default, when the log, or guided's spin, has imu.csv, "
                 "its scale, bias and latency are calibrated into the config's imu: block)");
-  cmd->add_option("--imu-reference", args->imu_reference,
-                  "The gyro's reference rotation: array (the mice at the "
-                  "calibrated mounts; default), array-nominal (at the mounts of --config) or "
-                  "wheels (wheels.csv's omega: slip biases the scale)")
-      ->check(CLI::IsMember({"array", "array-nominal", "wheels"}))
+  cmd->add_option(
+         "--imu-reference", args->imu_reference,
+         "The gyro's reference rotation: array (the mice at the "
+         "calibrated mounts; default), array-nominal (at the mounts of --config) or "
+         "wheels (wheels.csv's omega: slip biases the scale) or camera (camera.csv's theta, "
+         "differenced)")
+      ->check(CLI::IsMember({"array", "array-nominal", "wheels", "camera"}))
       ->capture_default_str();
   cmd->add_flag("--json", args->json, "Print the report as one JSON object (SI units)");
   cmd->add_flag("--quiet", args->quiet, "Print nothing on success");

@@ -8,6 +8,7 @@
 #include <initializer_list>
 #include <iterator>
 #include <numbers>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -528,7 +529,34 @@ void run_gyro(CalibrationSummary& r, const RobotConfig& config, const LogFiles& 
   }
   RateSeries reference;
   std::string source;
-  if (options.imu_reference != GyroReference::kWheels) {
+  if (options.imu_reference == GyroReference::kCamera) {
+    // The camera's heading differenced between consecutive fixes with theta:
+    // the average rate over (t[k], t[k + 1]] (rad/s), the step wrapped to
+    // (-pi, pi] (a camera at 10 Hz sees less than half a turn between fixes
+    // below 31 rad/s).
+    if (!files.camera) {
+      throw Error(fmt::format(
+          "{}: not found: the gyro against the camera needs camera.csv with a theta column",
+          (files.dir / "camera.csv").string()));
+    }
+    std::optional<double> last_theta;
+    for (const auto& row : read_all<CameraRow>(*files.camera)) {
+      if (!row.theta) continue;
+      if (!reference.t.empty() && !(row.t > reference.t.back())) continue;
+      if (last_theta) {
+        const double step = std::remainder(*row.theta - *last_theta, 2.0 * std::numbers::pi);
+        reference.rate.push_back(step / (row.t - reference.t.back()));
+      }
+      reference.t.push_back(row.t);
+      last_theta = row.theta;
+    }
+    if (reference.rate.empty()) {
+      throw Error(fmt::format(
+          "{}: fewer than two fixes with theta: the gyro against the camera needs its heading",
+          files.camera->string()));
+    }
+    source = fmt::format("the camera's heading ({}, differenced)", files.camera->string());
+  } else if (options.imu_reference != GyroReference::kWheels) {
     const bool nominal = options.imu_reference == GyroReference::kArrayNominal;
     reference =
         array_rates(nominal ? config : r.calibrated, files, t, options, report.reference_gaps);

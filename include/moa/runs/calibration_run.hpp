@@ -51,16 +51,20 @@ enum class CalibrationMethod { kKimLee, kExact, kGuided };
 ///                  reference twist is worse than the nominal mounts)
 ///   wheels         wheels.csv's omega (a slipping wheel over-reads its turns:
 ///                  the gyro's scale comes out low by the slip, several %)
-enum class GyroReference { kArray, kArrayNominal, kWheels };
+///   camera         camera.csv's theta, differenced between fixes (the
+///                  latency is then relative to the camera's clock: its
+///                  capture time t)
+enum class GyroReference { kArray, kArrayNominal, kWheels, kCamera };
 
 }  // namespace moa::io
 
 template <>
 struct moa::EnumNames<moa::io::GyroReference> {
-  static constexpr std::array<NameEntry<io::GyroReference>, 3> kTable{{
+  static constexpr std::array<NameEntry<io::GyroReference>, 4> kTable{{
       {io::GyroReference::kArray, "array"},
       {io::GyroReference::kArrayNominal, "array-nominal"},
       {io::GyroReference::kWheels, "wheels"},
+      {io::GyroReference::kCamera, "camera"},
   }};
 };
 
