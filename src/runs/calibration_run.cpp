@@ -595,10 +595,17 @@ void run_gyro(CalibrationSummary& r, const RobotConfig& config, const LogFiles& 
       c.residual_rms, c.rows_rejected, c.rows, c.reference_sd,
       c.blocks > 0 ? fmt::format("from the residual over {} blocks of 1 s (not white)", c.blocks)
                    : std::string("from the residual variance (white)")));
-  if (report.reference_gaps > 0) {
+  // The gyro's first and last rows usually lie just outside mice.csv: more
+  // than 1 % of the intervals without the array is worth a warning.
+  if (report.reference_gaps * 100 > reference.rate.size()) {
     r.warnings.push_back(fmt::format(
         "gyro: {} of {} intervals without a usable array twist (not covered, lift or overflow): "
         "read as 0 rad/s",
+        report.reference_gaps, reference.rate.size()));
+  } else if (report.reference_gaps > 0) {
+    r.facts.push_back(fmt::format(
+        "gyro: {} of {} intervals without a usable array twist (outside mice.csv, lift or "
+        "overflow), read as 0 rad/s",
         report.reference_gaps, reference.rate.size()));
   }
   if (c.rows_rejected * 10 > c.rows) {

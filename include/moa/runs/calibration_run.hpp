@@ -3,6 +3,9 @@
 //
 //   kimlee, exact   mice.csv against the reference twists of wheels.csv
 //   guided          count totals of a push along x (and y) and a spin
+//   the gyro        with imu.csv in the log (guided: the spin's), its scale,
+//                   bias and latency against a reference rotation
+//                   (calibration/gyro_calibration.hpp, GyroReference)
 //
 // Pairing of mice counts and reference (kimlee, exact): each wheels.csv row
 // is the twist averaged over the interval from the previous row to its t,
