@@ -426,7 +426,9 @@ const std::set<std::string> kCalibrationOptions{"max_row_interval",
                                                 "turn_sd",
                                                 "centre_sd",
                                                 "heading_sd",
-                                                "force"};
+                                                "force",
+                                                "no_imu",
+                                                "imu_reference"};
 
 io::CalibrationSummary calibrate(const py::object& config_path, const py::object& log,
                                  const std::string& method_name, const py::kwargs& kwargs) {
@@ -450,6 +452,16 @@ io::CalibrationSummary calibrate(const py::object& config_path, const py::object
   o.set("centre_sd", options.tolerances.centre_sd);
   o.set("heading_sd", options.tolerances.heading_sd);
   o.set("force", options.force);
+  options.imu = !o.get<bool>("no_imu").value_or(false);
+  if (const auto reference = o.get<std::string>("imu_reference")) {
+    const auto r = from_name<io::GyroReference>(*reference);
+    if (!r) {
+      throw io::Error(fmt::format(
+          "imu_reference: unknown reference '{}' (array, array-nominal, wheels, camera)",
+          *reference));
+    }
+    options.imu_reference = *r;
+  }
   const fs::path log_path = log.is_none() ? fs::path() : log.cast<fs::path>();
   io::check_calibration_options(*method, log_path, options);
   const Config config = load_config(config_path);

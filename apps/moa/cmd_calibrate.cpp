@@ -32,6 +32,8 @@ struct CalibrateArgs {
   std::string push_x;
   std::string push_y;
   std::string spin;
+  std::string imu_reference = "array";
+  bool no_imu = false;
   io::CalibrationOptions options;
   bool json = false;
   bool quiet = false;
@@ -43,6 +45,8 @@ int calibrate_with_options(CalibrateArgs args) {
   args.options.push_x = args.push_x;
   args.options.push_y = args.push_y;
   args.options.spin = args.spin;
+  args.options.imu = !args.no_imu;
+  args.options.imu_reference = *from_name<io::GyroReference>(args.imu_reference);
   // The options are checked before the config is read, so that a wrong flag is named first.
   io::check_calibration_options(*method, args.log, args.options);
   std::vector<std::filesystem::path> inputs{args.config};
@@ -139,6 +143,17 @@ void add_calibrate(CLI::App& app, Action& action) {
                 "exact: write a calibration whose model does not explain the data (residual far "
                 "above the counts' noise, information not positive definite) with a warning "
                 "instead of refusing it");
+  cmd->add_flag("--no-imu", args->no_imu,
+                "Leave the gyro alone (by default, when the log, or guided's spin, has imu.csv, "
+                "its scale, bias and latency are calibrated into the config's imu: block)");
+  cmd->add_option(
+         "--imu-reference", args->imu_reference,
+         "The gyro's reference rotation: array (the mice at the "
+         "calibrated mounts; default), array-nominal (at the mounts of --config) or "
+         "wheels (wheels.csv's omega: slip biases the scale) or camera (camera.csv's theta, "
+         "differenced)")
+      ->check(CLI::IsMember({"array", "array-nominal", "wheels", "camera"}))
+      ->capture_default_str();
   cmd->add_flag("--json", args->json, "Print the report as one JSON object (SI units)");
   cmd->add_flag("--quiet", args->quiet, "Print nothing on success");
   // --guided [--live]: the live, step-by-step guided calibration (calibrate_wizard.cpp).

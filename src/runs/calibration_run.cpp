@@ -8,11 +8,13 @@
 #include <initializer_list>
 #include <iterator>
 #include <numbers>
+#include <optional>
 #include <utility>
 #include <vector>
 
 #include "moa/calibration/guided_session.hpp"
 #include "moa/calibration/reference.hpp"
+#include "moa/core/estimate.hpp"
 #include "moa/core/odometry.hpp"
 #include "moa/formats/error.hpp"
 #include "moa/formats/json.hpp"
@@ -466,6 +468,160 @@ void run_guided(CalibrationSummary& r, const RobotConfig& config, const std::str
   r.result = cal;
 }
 
+// ------------------------------------------------------------ gyro
+
+// The array's rotation over the gyro's intervals (t[k], t[k + 1]]: mice.csv
+// spread over them (IntervalAccumulator) and the least-squares twist of
+// each at the calibrated mounts. An interval the array does not cover, or
+// with a lift or overflow flag, reads 0 rad/s (counted; the fit drops the
+// rows it spoils as outliers).
+RateSeries array_rates(const RobotConfig& config, const LogFiles& files,
+                       const std::vector<double>& t, const CalibrationOptions& options,
+                       std::size_t& gaps) {
+  RateSeries ref;
+  if (t.size() < 2) return ref;
+  std::vector<double> dts;
+  for (std::size_t k = 1; k < t.size(); ++k) dts.push_back(t[k] - t[k - 1]);
+  std::nth_element(dts.begin(), dts.begin() + static_cast<std::ptrdiff_t>(dts.size() / 2),
+                   dts.end());
+  const double dt = dts[dts.size() / 2];
+  const int n = config.array.size();
+  auto created = LsEstimator::create(config.array, all_sensors(n), dt);
+  if (const auto* e = std::get_if<GeometryError>(&created)) {
+    throw Error(fmt::format("gyro against the array: {}", describe(*e)));
+  }
+  const LsEstimator& ls = std::get<LsEstimator>(created);
+  MiceReader reader(files.mice, config);
+  IntervalAccumulator intervals(n, reader.start_time(), t, options.max_row_interval);
+  while (const auto row = reader.next()) {
+    if (const auto error = intervals.add(*row)) {
+      throw Error(fmt::format("{}: t = {} s: {}", reader.file(), row->t, describe(*error)));
+    }
+  }
+  ref.t = t;
+  ref.rate.assign(t.size() - 1, 0.0);
+  ref.velocity.assign(t.size() - 1, Eigen::Vector2d::Zero());
+  std::vector<bool> set(t.size() - 1, false);
+  for (const auto& iv : intervals.covered()) {
+    const CalibrationSample s{iv.sample, Twist2{}};
+    if (!usable_sample(s, n)) continue;
+    if (const auto x = ls.estimate(iv.sample)) {
+      ref.rate[static_cast<std::size_t>(iv.index)] = x->twist.omega;
+      ref.velocity[static_cast<std::size_t>(iv.index)] = x->twist.v.cast<double>();
+      set[static_cast<std::size_t>(iv.index)] = true;
+    }
+  }
+  gaps = static_cast<std::size_t>(std::count(set.begin(), set.end(), false));
+  return ref;
+}
+
+void run_gyro(CalibrationSummary& r, const RobotConfig& config, const LogFiles& files,
+              const CalibrationOptions& options) {
+  GyroCalibrationReport report;
+  report.reference = options.imu_reference;
+  report.imu = *files.imu;
+  report.nominal = config.imu.value_or(GyroOptions{});
+  const auto rows = read_all<ImuRow>(*files.imu);
+  std::vector<double> t, g;
+  for (const auto& row : rows) {
+    t.push_back(row.t);
+    g.push_back(row.gz);
+  }
+  RateSeries reference;
+  std::string source;
+  if (options.imu_reference == GyroReference::kCamera) {
+    // The camera's heading differenced between consecutive fixes with theta:
+    // the average rate over (t[k], t[k + 1]] (rad/s), the step wrapped to
+    // (-pi, pi] (a camera at 10 Hz sees less than half a turn between fixes
+    // below 31 rad/s).
+    if (!files.camera) {
+      throw Error(fmt::format(
+          "{}: not found: the gyro against the camera needs camera.csv with a theta column",
+          (files.dir / "camera.csv").string()));
+    }
+    std::optional<double> last_theta;
+    for (const auto& row : read_all<CameraRow>(*files.camera)) {
+      if (!row.theta) continue;
+      if (!reference.t.empty() && !(row.t > reference.t.back())) continue;
+      if (last_theta) {
+        const double step = std::remainder(*row.theta - *last_theta, 2.0 * std::numbers::pi);
+        reference.rate.push_back(step / (row.t - reference.t.back()));
+      }
+      reference.t.push_back(row.t);
+      last_theta = row.theta;
+    }
+    if (reference.rate.empty()) {
+      throw Error(fmt::format(
+          "{}: fewer than two fixes with theta: the gyro against the camera needs its heading",
+          files.camera->string()));
+    }
+    source = fmt::format("the camera's heading ({}, differenced)", files.camera->string());
+  } else if (options.imu_reference != GyroReference::kWheels) {
+    const bool nominal = options.imu_reference == GyroReference::kArrayNominal;
+    reference =
+        array_rates(nominal ? config : r.calibrated, files, t, options, report.reference_gaps);
+    source = fmt::format("the array's rotation ({} at the {} mounts, least squares)",
+                         files.mice.string(), nominal ? "nominal" : "calibrated");
+  } else {
+    if (!files.wheels) {
+      throw Error(fmt::format("{}: not found: the gyro against the wheels needs wheels.csv",
+                              (files.dir / "wheels.csv").string()));
+    }
+    const auto wheels = read_all<WheelRow>(*files.wheels);
+    for (const auto& w : wheels) {
+      if (!reference.t.empty() && !(w.t > reference.t.back())) continue;
+      if (!reference.t.empty()) {
+        reference.rate.push_back(w.twist.omega);
+        reference.velocity.push_back(w.twist.v.cast<double>());
+      }
+      reference.t.push_back(w.t);
+    }
+    source = fmt::format("the wheels' omega ({})", files.wheels->string());
+  }
+  const auto result = calibrate_gyro(t, g, reference);
+  if (const auto* e = std::get_if<GyroCalibrationError>(&result)) {
+    throw OptionError(fmt::format(
+        "{}: gyro calibration against {} refused: {}. Nothing written ({{no_imu}} calibrates the "
+        "mice alone)",
+        OptionError::literal(files.imu->string()), to_name(options.imu_reference), describe(*e)));
+  }
+  report.result = std::get<GyroCalibration>(result);
+  const GyroCalibration& c = report.result;
+  r.facts.push_back(fmt::format(
+      "gyro: {} ({} rows) against {}: correlation {:.4f} at {:.2f} ms (coarse), residual RMS "
+      "{:.4g} rad/s, {} of {} rows dropped as outliers, reference rate sd {:.3g} rad/s; 1-sigma "
+      "{}",
+      files.imu->string(), rows.size(), source, c.correlation, c.coarse_latency * 1e3,
+      c.residual_rms, c.rows_rejected, c.rows, c.reference_sd,
+      c.blocks > 0 ? fmt::format("from the residual over {} blocks of 1 s (not white)", c.blocks)
+                   : std::string("from the residual variance (white)")));
+  // The gyro's first and last rows usually lie just outside mice.csv: more
+  // than 1 % of the intervals without the array is worth a warning.
+  if (report.reference_gaps * 100 > reference.rate.size()) {
+    r.warnings.push_back(fmt::format(
+        "gyro: {} of {} intervals without a usable array twist (not covered, lift or overflow): "
+        "read as 0 rad/s",
+        report.reference_gaps, reference.rate.size()));
+  } else if (report.reference_gaps > 0) {
+    r.facts.push_back(fmt::format(
+        "gyro: {} of {} intervals without a usable array twist (outside mice.csv, lift or "
+        "overflow), read as 0 rad/s",
+        report.reference_gaps, reference.rate.size()));
+  }
+  if (c.rows_rejected * 10 > c.rows) {
+    r.warnings.push_back(fmt::format(
+        "gyro: {} of {} rows disagree with the reference beyond 5 sigma (slip, the array reading "
+        "nothing, a saturated gyro)",
+        c.rows_rejected, c.rows));
+  }
+  GyroOptions calibrated = report.nominal;
+  calibrated.scale = static_cast<real>(c.scale);
+  calibrated.bias = static_cast<real>(c.bias);
+  calibrated.latency = c.latency;
+  r.calibrated.imu = calibrated;
+  r.gyro = report;
+}
+
 // ------------------------------------------------------------ JSON
 
 void json_vector(JsonWriter& json, std::initializer_list<double> xs) {
@@ -562,6 +718,12 @@ CalibrationSummary calibrate_log(const RobotConfig& config, const std::string& c
       run_guided(r, config, config_path, options);
       break;
   }
+  // The gyro: against the log (kimlee, exact) or the spin's recording
+  // (guided: the array at the mounts the pushes and the spin gave).
+  if (options.imu) {
+    const LogFiles files = resolve_log(method == CalibrationMethod::kGuided ? options.spin : log);
+    if (files.imu) run_gyro(r, config, files, options);
+  }
   for (const auto& s : r.sensors) {
     // A fit that ran away (a scale through zero: a flipped axis) gives no
     // sensor a config can hold: refused, --force or not.
@@ -633,6 +795,18 @@ std::string CalibrationSummary::full_report() const {
                      fmt::join(*s.information_eigenvalues, " "));
     }
   }
+  if (gyro) {
+    const GyroCalibration& c = gyro->result;
+    fmt::format_to(out, "\ngyro against the {}\n", to_name(gyro->reference));
+    fmt::format_to(out, "  {:<14} {:>12} {:>12} {:>12}\n", "parameter", "nominal", "calibrated",
+                   "1-sigma");
+    fmt::format_to(out, "  {:<14} {:>12.5f} {:>12.5f} {:>12.5f}\n", "scale", gyro->nominal.scale,
+                   c.scale, c.scale_sigma());
+    fmt::format_to(out, "  {:<14} {:>12.6f} {:>12.6f} {:>12.6f}\n", "bias rad/s",
+                   gyro->nominal.bias, c.bias, c.bias_sigma());
+    fmt::format_to(out, "  {:<14} {:>12.3f} {:>12.3f} {:>12.3f}\n", "latency ms",
+                   gyro->nominal.latency * 1e3, c.latency * 1e3, c.latency_sigma() * 1e3);
+  }
   fmt::format_to(out, "\n");
   if (warnings.empty()) {
     fmt::format_to(out, "warnings: none\n");
@@ -702,7 +876,32 @@ std::string CalibrationSummary::to_json(std::string_view out) const {
     }
     json.end_object();
   }
-  json.end_array().key("warnings").begin_array();
+  json.end_array();
+  if (gyro) {
+    const GyroCalibration& c = gyro->result;
+    json.key("gyro")
+        .begin_object()
+        .member("reference", to_name(gyro->reference))
+        .member("imu", gyro->imu.string())
+        .member("scale", c.scale)
+        .member("bias_rad_s", c.bias)
+        .member("latency_s", c.latency)
+        .key("sigma")
+        .begin_object()
+        .member("scale", c.scale_sigma())
+        .member("bias_rad_s", c.bias_sigma())
+        .member("latency_s", c.latency_sigma())
+        .end_object()
+        .member("correlation", c.correlation)
+        .member("coarse_latency_s", c.coarse_latency)
+        .member("residual_rms_rad_s", c.residual_rms)
+        .member("reference_sd_rad_s", c.reference_sd)
+        .member("rows", c.rows)
+        .member("rows_rejected", c.rows_rejected)
+        .member("reference_gaps", gyro->reference_gaps)
+        .end_object();
+  }
+  json.key("warnings").begin_array();
   for (const auto& w : warnings) json.value(w);
   json.end_array().end_object();
   return json.str();

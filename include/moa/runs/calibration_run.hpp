@@ -3,6 +3,9 @@
 //
 //   kimlee, exact   mice.csv against the reference twists of wheels.csv
 //   guided          count totals of a push along x (and y) and a spin
+//   the gyro        with imu.csv in the log (guided: the spin's), its scale,
+//                   bias and latency against a reference rotation
+//                   (calibration/gyro_calibration.hpp, GyroReference)
 //
 // Pairing of mice counts and reference (kimlee, exact): each wheels.csv row
 // is the twist averaged over the interval from the previous row to its t,
@@ -32,6 +35,7 @@
 #include "moa/calibration/calibrate.hpp"
 #include "moa/calibration/exact.hpp"
 #include "moa/calibration/guided.hpp"
+#include "moa/calibration/gyro_calibration.hpp"
 #include "moa/calibration/kimlee.hpp"
 #include "moa/core/names.hpp"
 #include "moa/formats/config.hpp"
@@ -40,7 +44,32 @@ namespace moa::io {
 
 enum class CalibrationMethod { kKimLee, kExact, kGuided };
 
+/// What the gyro is calibrated against (kimlee, exact; docs/calibration.md).
+///   array          the array's rotation: mice.csv over the gyro's rows,
+///                  least squares at the mounts this run calibrated (default:
+///                  the gyro then agrees with the array the config written
+///                  describes, which is what the consensus fuses it with; the
+///                  mice do not slip)
+///   array-nominal  the same at the mounts of the config given (when the
+///                  reference twist is worse than the nominal mounts)
+///   wheels         wheels.csv's omega (a slipping wheel over-reads its turns:
+///                  the gyro's scale comes out low by the slip, several %)
+///   camera         camera.csv's theta, differenced between fixes (the
+///                  latency is then relative to the camera's clock: its
+///                  capture time t)
+enum class GyroReference { kArray, kArrayNominal, kWheels, kCamera };
+
 }  // namespace moa::io
+
+template <>
+struct moa::EnumNames<moa::io::GyroReference> {
+  static constexpr std::array<NameEntry<io::GyroReference>, 4> kTable{{
+      {io::GyroReference::kArray, "array"},
+      {io::GyroReference::kArrayNominal, "array-nominal"},
+      {io::GyroReference::kWheels, "wheels"},
+      {io::GyroReference::kCamera, "camera"},
+  }};
+};
 
 template <>
 struct moa::EnumNames<moa::io::CalibrationMethod> {
@@ -74,6 +103,10 @@ struct CalibrationOptions {
   /// exact: return a calibration whose model does not explain the data
   /// (ExactModelCheck::misfit()) with a warning instead of refusing it.
   bool force = false;
+  /// Calibrate the gyro too when the log (guided: the spin's recording) has
+  /// imu.csv: its scale, bias and latency into the config's imu: block.
+  bool imu = true;
+  GyroReference imu_reference = GyroReference::kArray;
   /// nullopt when the numbers can be used, else the first field out of its
   /// bounds (core/options_check.hpp): max_row_interval positive,
   /// min_interval and measurements not negative, distance positive, turns
@@ -124,6 +157,15 @@ struct moa::EnumNames<moa::io::CalibrationTermination> {
 
 namespace moa::io {
 
+/// The gyro's calibration (imu.csv against `reference`).
+struct GyroCalibrationReport {
+  GyroReference reference = GyroReference::kArray;
+  std::filesystem::path imu;  ///< imu.csv
+  GyroOptions nominal;        ///< the config's imu: block (defaults when it had none)
+  GyroCalibration result;
+  std::size_t reference_gaps = 0;  ///< array: gyro intervals without a usable array twist
+};
+
 /// A calibration's result and report, as Ceres' Solver::Summary.
 struct CalibrationSummary {
   CalibrationMethod method = CalibrationMethod::kExact;
@@ -144,6 +186,8 @@ struct CalibrationSummary {
   std::vector<std::string> warnings;
   /// The method's own result.
   std::variant<KimLeeCalibration, ExactCalibration, GuidedCalibration> result;
+  /// The gyro's, when the log has imu.csv and options.imu (kimlee, exact).
+  std::optional<GyroCalibrationReport> gyro;
 
   /// One line: method, sensors, the largest 1-sigma, warnings.
   std::string brief_report() const;
