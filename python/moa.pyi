@@ -43,6 +43,9 @@ class RunSummary:
     epochs_by_source: dict[str, int]  # mice, wheels, hold
     sensor_epochs: dict[str, int]  # used, or the reason of the exclusion
     fixes: dict[str, int]  # applied, rejected, too_old, invalid
+    gyro_epochs: int  # epochs with a gyro reading (imu rows of diagnostics.csv)
+    heading_from_gyro: int  # epochs whose heading (rotation) was the gyro's
+    gyro: dict[str, float] | None  # bias, bias_sd (rad/s), scale, scale_sd after the last epoch
     warnings: list[str]
     usable: bool  # at least one epoch, at most 1 % of them held
     def verdict(self) -> str: ...
@@ -65,6 +68,8 @@ class Steps(TypedDict, total=False):
     sd_vy: FloatArray  # m/s
     sd_omega: FloatArray  # rad/s
     source: npt.NDArray[np.str_]  # mice, wheels, hold
+    heading: npt.NDArray[np.str_]  # gyro (the rotation was the gyro's), else the source
+    gyro_test: FloatArray  # the gyro's test ratio (1: the gate); NaN: not tested
     used: npt.NDArray[np.bool_]  # (K, N)
     excluded: npt.NDArray[np.str_]  # (K, N): '' when used, else e.g. 'inconsistent/over-speed'
     noise_flags: npt.NDArray[np.uint8]  # (K, N): 1 over-speed, 2 low-squal, 4 overflow

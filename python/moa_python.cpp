@@ -205,6 +205,8 @@ class Steps {
     }
     scaled_ = scaled_ || step.scaled;
     source_.emplace_back(to_name(e.source));
+    heading_.emplace_back(io::heading_source(e));
+    gyro_test_.push_back(e.tests.gyro);
     for (int i = 0; i < n_; ++i) {
       const bool used = contains(e.estimate.used, i);
       const auto u = static_cast<std::size_t>(i);
@@ -226,6 +228,8 @@ class Steps {
     const auto n = static_cast<py::ssize_t>(n_);
     for (std::size_t c = 0; c < kColumns; ++c) d[kNames[c]] = to_numpy(std::move(numbers_[c]));
     d["source"] = to_numpy_str(source_);
+    d["heading"] = to_numpy_str(heading_);
+    d["gyro_test"] = to_numpy(std::move(gyro_test_));
     py::array_t<bool> used({k, n});
     for (py::ssize_t j = 0; j < k * n; ++j)
       used.mutable_data()[j] = used_[static_cast<std::size_t>(j)];
@@ -263,6 +267,8 @@ class Steps {
   std::vector<double> scale_;  ///< scale_v, scale_omega, sd_scale_v, sd_scale_omega per step
   bool scaled_ = false;
   std::vector<std::string> source_;
+  std::vector<std::string> heading_;  ///< gyro, or the source
+  std::vector<double> gyro_test_;     ///< the gyro's test ratio (NaN: not tested)
   std::vector<bool> used_;
   std::vector<std::string> excluded_;
   std::vector<std::uint8_t> noise_flags_;
@@ -788,6 +794,23 @@ a dict of arrays like moa.odometry's (possibly empty).)")
                                d["invalid"] = s.fixes.invalid;
                                return d;
                              })
+      .def_readonly("gyro_epochs", &io::RunSummary::gyro_epochs,
+                    "Epochs with a gyro reading (an imu row of diagnostics.csv).")
+      .def_readonly("heading_from_gyro", &io::RunSummary::heading_from_gyro,
+                    "Epochs whose heading (rotation) was the gyro's.")
+      .def_property_readonly(
+          "gyro",
+          [](const io::RunSummary& s) -> py::object {
+            if (!s.gyro) return py::none();
+            py::dict d;
+            d["bias"] = s.gyro->bias;
+            d["bias_sd"] = s.gyro->bias_sd;
+            d["scale"] = s.gyro->scale;
+            d["scale_sd"] = s.gyro->scale_sd;
+            return d;
+          },
+          "The gyro's calibration after the last epoch: bias, bias_sd (rad/s), scale, scale_sd; "
+          "None without a gyro.")
       .def_readonly("warnings", &io::RunSummary::warnings)
       .def_property_readonly("usable", &io::RunSummary::usable,
                              "At least one epoch, at most 1 % of them held.")

@@ -10,6 +10,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -496,6 +497,10 @@ TEST(LiveDashboard, ChromiumDrawsTheChartsUpdatingWhileAReplayRuns) {
   ASSERT_NE(warnings, std::string::npos) << dom;
   EXPECT_THAT(dom.substr(warnings, 400), HasSubstr("skipped: counts imply a speed far beyond"));
   EXPECT_THAT(test::tag_of(dom, "moa-errors"), HasSubstr("hidden"));
+  // The heading's source, drawn: no gyro in this log, so the twist's.
+  EXPECT_TRUE(
+      std::regex_search(dom, std::regex("id=\"heading-source\">heading: (mice|wheels|hold)</p>")))
+      << dom.substr(std::min(dom.find("heading-source"), dom.size()), 200);
   EXPECT_EQ(console.find("CONSOLE"), std::string::npos) << console;
   // About 20 events a second for the seconds after the page loaded (Chromium
   // takes a few to start): every chart

@@ -22,6 +22,7 @@ struct ReportArgs {
   std::string truth;
   std::string calibration;
   std::string self_calibration;
+  std::string diagnostics;
   std::string title;
   std::string out;
   std::size_t max_points = io::ReportOptions{}.max_points;
@@ -35,10 +36,14 @@ int run_report(const ReportArgs& args) {
   if (!args.truth.empty()) inputs.truth = args.truth;
   if (!args.calibration.empty()) inputs.calibration = args.calibration;
   if (!args.self_calibration.empty()) inputs.self_calibration = args.self_calibration;
+  if (!args.diagnostics.empty()) inputs.diagnostics = args.diagnostics;
   inputs.title = args.title;
-  std::vector<std::filesystem::path> read{inputs.config, inputs.odometry, inputs.truth.value_or(""),
+  std::vector<std::filesystem::path> read{inputs.config,
+                                          inputs.odometry,
+                                          inputs.truth.value_or(""),
                                           inputs.calibration.value_or(""),
-                                          inputs.self_calibration.value_or("")};
+                                          inputs.self_calibration.value_or(""),
+                                          inputs.diagnostics.value_or("")};
   try {
     const auto log_files = io::resolve_log(inputs.log).files();
     read.insert(read.end(), log_files.begin(), log_files.end());
@@ -71,6 +76,9 @@ void add_report(CLI::App& app, Action& action) {
   cmd->add_option("--self-calibration", args->self_calibration,
                   "self-calibration.csv (moa odometry --self-calibration): each sensor's "
                   "estimated scale over time");
+  cmd->add_option("--diagnostics", args->diagnostics,
+                  "diagnostics.csv (moa odometry --diagnostics): with a gyro, where each "
+                  "epoch's heading came from");
   cmd->add_option("--title", args->title, "Page title (default: after the log directory)");
   cmd->add_option("--max-points", args->max_points,
                   "Most points per plotted series; longer runs are binned in time")

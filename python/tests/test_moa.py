@@ -121,6 +121,51 @@ def test_odometry_summary_counts_are_the_columns(logs):
     assert s.verdict() in s.text()
 
 
+def test_odometry_gyro_summary_and_heading_are_those_of_diagnostics_csv(tmp_path):
+    """gyro-bump has imu.csv: the heading column and the summary's gyro fields
+    against the imu rows of the command's diagnostics.csv (fused = 1: the
+    epoch's heading was the gyro's)."""
+    log = tmp_path / "gyro"
+    code, _, err = run("simulate", "--scenario", "gyro-bump", "--seed", 101, "--out", log,
+                       "--quiet")
+    assert code == 0, err
+    diagnostics = tmp_path / "diagnostics.csv"
+    code, out, err = run("odometry", "--config", log / "robot.yaml", "--log", log, "--out",
+                         tmp_path / "odometry.csv", "--diagnostics", diagnostics)
+    assert code == 0, err
+    with open(diagnostics, newline="") as f:
+        imu = [r for r in csv.DictReader(f) if r["source"] == "imu"]
+    fused = sum(r["fused"] == "1" for r in imu)
+    assert fused > 0
+    py = moa.odometry(log / "robot.yaml", log)
+    s = py["summary"]
+    assert s.heading_from_gyro == fused
+    assert s.gyro_epochs == len(imu)
+    assert list(py["heading"]).count("gyro") == fused
+    # Not the gyro's: the twist's source.
+    other = py["heading"] != "gyro"
+    assert (py["heading"][other] == py["source"][other]).all()
+    # A test ratio where diagnostics.csv has one.
+    tested = [r["test_ratio"] for r in imu if r["test_ratio"] != ""]
+    assert int(np.isfinite(py["gyro_test"]).sum()) == len(tested)
+    np.testing.assert_allclose(np.sort(py["gyro_test"][np.isfinite(py["gyro_test"])]),
+                               np.sort(np.array(tested, dtype=float)), rtol=1e-12)
+    # The calibration: the simulated gyro's (bias 0.01 rad/s, scale 1.02)
+    # within a few sd, as `moa odometry` printed it.
+    g = s.gyro
+    assert set(g) == {"bias", "bias_sd", "scale", "scale_sd"}
+    assert abs(g["bias"] - 0.01) < 4 * g["bias_sd"] + 1e-3
+    assert abs(g["scale"] - 1.02) < 4 * g["scale_sd"] + 5e-3
+    assert f"gyro: bias {g['bias']:.5f} rad/s" in out
+    assert f"heading from the gyro in {fused} of {s.epochs} epochs" in out
+    # no_imu: the rotation is the array's.
+    bare = moa.odometry(log / "robot.yaml", log, no_imu=True)
+    assert bare["summary"].gyro is None
+    assert bare["summary"].heading_from_gyro == 0
+    assert "gyro" not in set(bare["heading"])
+    assert np.isnan(bare["gyro_test"]).all()
+
+
 def test_odometry_object_in_bulk_and_row_by_row_equals_the_file_pipeline(logs):
     d = logs["calibration"]
     expected = moa.odometry(d / "robot.yaml", d, "ls", no_wheels=True)

@@ -419,6 +419,11 @@ void Odometry::process(const ArraySample& sample, StepSink sink) {
     step.calibration = &calibration_;
     step.calibration_filter = &calibration_filter_;
   }
+  if (options_.use_imu && gyro_seen_) {
+    if (const auto* consensus = std::get_if<ConsensusEstimator>(&estimator_)) {
+      step.gyro = &consensus->gyro();
+    }
+  }
   if (!estimate(sample, wheels, gyro, step.estimate)) {
     deferred_error_ = OdometryError::kNoInterval;
     return;

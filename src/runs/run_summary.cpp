@@ -2,6 +2,8 @@
 
 #include <fmt/core.h>
 
+#include <cmath>
+
 namespace moa::io {
 
 void RunSummary::add(const OdometryStep& step, int sensors) {
@@ -9,6 +11,13 @@ void RunSummary::add(const OdometryStep& step, int sensors) {
   ++epochs_by_source[static_cast<std::size_t>(step.estimate.source)];
   for (int i = 0; i < sensors && i < kMaxSensors; ++i) {
     ++sensor_epochs[static_cast<std::size_t>(step.estimate.excluded[static_cast<std::size_t>(i)])];
+  }
+  const SourceTests& tests = step.estimate.tests;
+  if (!std::isnan(tests.gyro) || tests.gyro_fused || tests.gyro_saturated) ++gyro_epochs;
+  if (tests.gyro_fused) ++heading_from_gyro;
+  if (step.gyro != nullptr) {
+    gyro = GyroCalibration{step.gyro->bias(), step.gyro->bias_sd(), step.gyro->scale(),
+                           step.gyro->scale_sd()};
   }
 }
 
@@ -63,8 +72,23 @@ std::string RunSummary::text() const {
     out += fmt::format("pose stream: {} lines, {} dropped (reader absent, slow or gone)\n",
                        pose_lines, pose_lines_dropped);
   }
+  out += gyro_line();
   out += verdict() + "\n";
   return out;
+}
+
+std::string RunSummary::gyro_line() const {
+  if (gyro_epochs == 0) return {};
+  std::string out = "gyro: ";
+  if (gyro) {
+    out += fmt::format("bias {:.5f} rad/s (sd {:.2g}), scale {:.4f} (sd {:.2g}), ", gyro->bias,
+                       gyro->bias_sd, gyro->scale, gyro->scale_sd);
+  }
+  const double percent =
+      epochs > 0 ? 100.0 * static_cast<double>(heading_from_gyro) / static_cast<double>(epochs)
+                 : 0.0;
+  return out + fmt::format("heading from the gyro in {} of {} epochs ({:.1f} %)\n",
+                           heading_from_gyro, epochs, percent);
 }
 
 }  // namespace moa::io

@@ -11,6 +11,7 @@
 #include <condition_variable>
 #include <deque>
 #include <mutex>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -18,6 +19,7 @@
 #include "moa/formats/error.hpp"
 #include "moa/formats/json.hpp"
 #include "moa/formats/odometry_csv.hpp"
+#include "moa/runs/run_summary.hpp"
 #include "report_assets.hpp"
 
 namespace moa::io {
@@ -118,7 +120,7 @@ std::string dashboard_page(const RobotConfig& config, std::string_view title) {
       "<th>used (last 10 s)</th><th>left out "
       "because</th></tr></thead><tbody></tbody></table></section>\n"
       "<section><h2>Twist</h2><div class=\"plot\"><canvas id=\"chart-twist\"></canvas></div>"
-      "</section>\n"
+      "<p id=\"heading-source\">heading: -</p></section>\n"
       "<section><h2>Warnings</h2><ul id=\"warnings\"><li>none</li></ul></section>\n"
       "</main>\n";
   page += "<script id=\"moa-config\" type=\"application/json\">" + script_safe(j.str()) +
@@ -147,6 +149,10 @@ struct Pending {
   Pose2 pose;
   Twist2 twist;
   Source source = Source::kMice;
+  const char* heading = "mice";                     ///< heading_source() of the last epoch
+  int heading_gyro = 0;                             ///< epochs whose heading was the gyro's
+  std::optional<RunSummary::GyroCalibration> gyro;  ///< the last epoch's, with a gyro
+  double gyro_test = 0.0;                           ///< the last epoch's test ratio (NaN: none)
   SensorMask used_now = 0;
   std::vector<Eigen::Vector2d> scales;
   std::vector<Eigen::Vector2d> counts;
@@ -156,6 +162,7 @@ struct Pending {
   std::vector<std::string> excluded;
   void reset(int n) {
     epochs = 0;
+    heading_gyro = 0;
     counts.assign(static_cast<std::size_t>(n), Eigen::Vector2d::Zero());
     squal.assign(static_cast<std::size_t>(n), 255);
     flags.assign(static_cast<std::size_t>(n), 0u);
@@ -211,6 +218,8 @@ std::string Dashboard::Impl::event_json() const {
       .member("vy", v.v.y())
       .member("omega", v.omega)
       .member("source", to_name(pending.source))
+      .member("heading", pending.heading)
+      .member("heading_gyro", pending.heading_gyro)
       .member("epochs", pending.epochs)
       .key("sensors")
       .begin_array();
@@ -242,6 +251,20 @@ std::string Dashboard::Impl::event_json() const {
     j.key("scales").begin_array();
     for (const auto& s : pending.scales) j.begin_array().value(s.x()).value(s.y()).end_array();
     j.end_array();
+  }
+  if (const auto& g = pending.gyro) {
+    j.key("gyro")
+        .begin_object()
+        .member("bias", g->bias)
+        .member("bias_sd", g->bias_sd)
+        .member("scale", g->scale)
+        .member("scale_sd", g->scale_sd);
+    if (std::isnan(pending.gyro_test)) {
+      j.key("test").null();
+    } else {
+      j.member("test", pending.gyro_test);
+    }
+    j.end_object();
   }
   j.end_object();
   return j.str();
@@ -444,6 +467,15 @@ void Dashboard::publish(const OdometryStep& step, std::span<const Eigen::Vector2
   p.pose = step.pose;
   p.twist = e.estimate.twist;
   p.source = e.source;
+  p.heading = heading_source(e);
+  if (e.tests.gyro_fused) ++p.heading_gyro;
+  if (step.gyro != nullptr) {
+    p.gyro = RunSummary::GyroCalibration{step.gyro->bias(), step.gyro->bias_sd(),
+                                         step.gyro->scale(), step.gyro->scale_sd()};
+    p.gyro_test = e.tests.gyro;
+  } else {
+    p.gyro.reset();
+  }
   p.used_now = e.estimate.used;
   p.scales.assign(scales.begin(), scales.end());
   const auto now = Clock::now();

@@ -6,7 +6,8 @@
 // twist and the warnings so far ("event: history", "event: warning").
 // For tests: <body data-moa-status> is loading | live | ended, each canvas
 // carries data-updates (times redrawn) and data-points, <body data-events>
-// the events received, #warnings one <li> per warning; errors go to
+// the events received, #warnings one <li> per warning, #heading-source the
+// heading source and the gyro's calibration (with a gyro); errors go to
 // #moa-errors (not the console).
 (function () {
   'use strict';
@@ -197,6 +198,34 @@
     counted(twist);
   }
 
+  // ---------------------------------------------------------------- heading
+  // The share of the last window_s seconds' epochs whose heading was the
+  // gyro's (e.heading_gyro of e.epochs), and the gyro's calibration now.
+  const heading_text = document.getElementById('heading-source');
+  const heading_log = [];  // {t, epochs, gyro: epochs with the gyro's heading}
+  function draw_heading(e) {
+    heading_log.push({ t: e.t, epochs: e.epochs, gyro: e.heading_gyro });
+    while (heading_log.length > 0 && heading_log[0].t <= e.t - window_s) heading_log.shift();
+    let epochs = 0;
+    let gyro = 0;
+    for (const h of heading_log) {
+      epochs += h.epochs;
+      gyro += h.gyro;
+    }
+    let text = 'heading: ' + e.heading;
+    if (e.gyro !== undefined || gyro > 0) {
+      text += '   gyro ' + (epochs > 0 ? (100 * gyro) / epochs : 0).toFixed(0) +
+        ' % (last ' + window_s + ' s)';
+    }
+    if (e.gyro !== undefined) {
+      const g = e.gyro;
+      text += '   bias ' + g.bias.toFixed(5) + ' rad/s (sd ' + g.bias_sd.toFixed(5) +
+        ')   scale ' + g.scale.toFixed(4) + ' (sd ' + g.scale_sd.toFixed(4) + ')   test ' +
+        (g.test === null ? '-' : g.test.toFixed(2));
+    }
+    heading_text.textContent = text;
+  }
+
   // ----------------------------------------------------------------- stream
   const status = document.getElementById('status');
   let events = 0;
@@ -223,6 +252,7 @@
     draw_robot(e);
     draw_health(e);
     draw_twist(e);
+    draw_heading(e);
     show_status(e, 'live');
   }
 

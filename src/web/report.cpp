@@ -15,6 +15,7 @@
 
 #include "moa/formats/atomic_file.hpp"
 #include "moa/formats/csv.hpp"
+#include "moa/formats/diagnostics_csv.hpp"
 #include "moa/formats/error.hpp"
 #include "moa/formats/log.hpp"
 #include "moa/formats/self_calibration_csv.hpp"
@@ -253,7 +254,23 @@ ReportModel build_report(const ReportInputs& inputs, const ReportOptions& option
     }
   }
 
+  if (inputs.diagnostics) {
+    GyroCounts g;
+    for (const auto& row : read_diagnostics_csv(*inputs.diagnostics)) {
+      if (row.source == "prior") ++g.epochs;
+      if (row.source != "imu") continue;
+      ++g.readings;
+      if (row.fused) ++g.heading;
+      if (row.reason == "saturated") ++g.saturated;
+      if (row.reason == "inconsistent") ++g.inconsistent;
+      if (row.test_ratio > 1.0) ++g.over_gate;
+      if (!std::isnan(row.test_ratio)) g.max_test = std::max(g.max_test, row.test_ratio);
+    }
+    m.gyro = g;
+  }
+
   std::error_code ec;
+  m.has_imu = fs::exists(inputs.log / "imu.csv", ec);
   if (!fs::exists(inputs.log, ec)) {
     throw Error(fmt::format("{}: no such log directory", inputs.log.string()));
   }

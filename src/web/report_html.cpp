@@ -229,6 +229,34 @@ std::string percent(std::size_t part, std::size_t whole) {
   return fmt::format("{:.1f}%", 100.0 * static_cast<double>(part) / static_cast<double>(whole));
 }
 
+/// The gyro: where the heading came from (diagnostics.csv's imu rows).
+std::string gyro_section(const ReportModel& m) {
+  std::string s = "<section id=\"gyro\">\n<h2>Gyro</h2>\n";
+  if (!m.gyro) {
+    return s +
+           "<p class=\"note\">The log has imu.csv. <code>--diagnostics DIAGNOSTICS.csv</code> "
+           "(<code>moa odometry --diagnostics</code>) adds where each epoch's heading came "
+           "from.</p>\n</section>\n";
+  }
+  const GyroCounts& g = *m.gyro;
+  s += "<table class=\"summary\" id=\"gyro-table\">\n";
+  const auto row = [&s](std::string_view name, const std::string& value) {
+    s += fmt::format("<tr><th>{}</th><td>{}</td></tr>\n", name, value);
+  };
+  row("heading from the gyro",
+      fmt::format("{} of {} epochs ({})", g.heading, g.epochs, percent(g.heading, g.epochs)));
+  row("gyro readings", fmt::format("{} epochs: {} saturated, {} not used (inconsistent)",
+                                   g.readings, g.saturated, g.inconsistent));
+  row("test ratio", fmt::format("over 1 (the gate: the array's rotation disagreed) in {} epochs "
+                                "({}), largest {:.3g}",
+                                g.over_gate, percent(g.over_gate, g.readings), g.max_test));
+  s += "</table>\n";
+  s += "<p>From the <code>imu</code> rows of diagnostics.csv: an epoch whose heading was not the "
+       "gyro's took it from its twist's source (mice, wheels, hold). The gyro's calibration at "
+       "the end (bias, scale) is printed by <code>moa odometry</code>.</p>\n</section>\n";
+  return s;
+}
+
 std::string summary_table(const ReportModel& m) {
   std::string t = "<table class=\"summary\">\n";
   const auto row = [&t](std::string_view name, const std::string& value) {
@@ -241,6 +269,7 @@ std::string summary_table(const ReportModel& m) {
   if (in.truth) row("truth", html(in.truth->string()));
   if (in.calibration) row("calibration", html(in.calibration->string()));
   if (in.self_calibration) row("self-calibration", html(in.self_calibration->string()));
+  if (in.diagnostics) row("diagnostics", html(in.diagnostics->string()));
   row("time span",
       fmt::format("{:.6g} s to {:.6g} s ({:.6g} s)", m.t_first, m.t_last, m.t_last - m.t_first));
   row("epochs", fmt::format("{}", m.epochs));
@@ -421,6 +450,8 @@ std::string render_report(const ReportModel& m) {
         "x axis solid, y axis dashed. An estimate within the deadband of 1 is not applied.</p>\n";
     page += chart("chart-self-calibration", "wide") + std::string(kHint) + "</section>\n";
   }
+
+  if (m.has_imu || (m.gyro && m.gyro->readings > 0)) page += gyro_section(m);
 
   page += "<section id=\"sensors\">\n<h2>Sensors</h2>\n" + sensor_table(m) + "</section>\n";
 

@@ -73,6 +73,7 @@
 // gyro's (a saturated reading) forgets delta.
 #pragma once
 
+#include <cmath>
 #include <optional>
 
 #include "moa/core/kalman.hpp"
@@ -140,7 +141,9 @@ class GyroModel {
   real bias() const { return options_.bias + x_(0); }                ///< c + b, rad/s
   real scale() const { return options_.scale * (real(1) + x_(1)); }  ///< k (1 + s)
   Vec2 coupling() const { return x_.segment<2>(2); }                 ///< a, rad/m
-  const Mat<6, 6>& covariance() const { return p_; }  ///< of (b, s, a_x, a_y, e, delta)
+  const Mat<6, 6>& covariance() const { return p_; }    ///< of (b, s, a_x, a_y, e, delta)
+  real bias_sd() const { return std::sqrt(p_(0, 0)); }  ///< rad/s, sd of bias()
+  real scale_sd() const { return options_.scale * std::sqrt(p_(1, 1)); }  ///< sd of scale()
 
  private:
   GyroOptions options_;

@@ -140,6 +140,10 @@ struct OdometryStep {
   /// behind it (SelfCalibration::calibration; equal outside the deadbands).
   const std::array<SelfCalibrationEstimate, kMaxSensors>* calibration = nullptr;
   const std::array<SelfCalibrationEstimate, kMaxSensors>* calibration_filter = nullptr;
+  /// With the consensus estimator and a gyro stream (use_imu, gyro rows
+  /// fed), the gyro's model after this epoch (its calibration: bias() rad/s,
+  /// scale(), covariance()), else null; valid during the sink call.
+  const GyroModel* gyro = nullptr;
   double t() const { return sample->t; }
 };
 

@@ -25,7 +25,7 @@ namespace moa::io {
 /// One row of diagnostics.csv.
 struct DiagnosticsRow {
   double t = 0.0;           ///< s
-  std::string source;       ///< sensor name, "wheels" or "prior"
+  std::string source;       ///< sensor name, "wheels", "prior" or "imu" (the gyro)
   double test_ratio = 0.0;  ///< NaN where empty
   bool fused = false;
   std::string reason;

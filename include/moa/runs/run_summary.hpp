@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,12 @@ namespace moa::io {
 /// Values of Source and of Exclusion (kNone, "used", included).
 inline constexpr std::size_t kSourceCount = static_cast<std::size_t>(Source::kHold) + 1;
 inline constexpr std::size_t kExclusionCount = static_cast<std::size_t>(Exclusion::kCommonMode) + 1;
+
+/// An epoch's heading source: "gyro" when its rotation was the gyro's
+/// (SourceTests::gyro_fused), else its twist's source (mice, wheels, hold).
+inline const char* heading_source(const RobustEstimate& e) {
+  return e.tests.gyro_fused ? "gyro" : to_name(e.source);
+}
 
 struct RunSummary {
   /// Epochs written (rows of odometry.csv).
@@ -34,6 +41,19 @@ struct RunSummary {
   /// `moa live --pose-out`: lines made and, of them, dropped (the reader
   /// absent, slow or gone; runs/pose_stream.hpp). Both 0 without a stream.
   std::size_t pose_lines = 0, pose_lines_dropped = 0;
+  /// The gyro (imu.csv with the consensus estimator): epochs with a gyro
+  /// reading (an `imu` row of diagnostics.csv) and, of all epochs, those
+  /// whose heading (rotation) was the gyro's (SourceTests::gyro_fused; the
+  /// others take it from their `source`). Both 0 without a gyro.
+  std::size_t gyro_epochs = 0, heading_from_gyro = 0;
+  /// The gyro's calibration after the last epoch (GyroModel): bias c + b
+  /// (rad/s) and scale k (1 + s), each with its sd.
+  struct GyroCalibration {
+    double bias = 0, bias_sd = 0;    ///< rad/s
+    double scale = 1, scale_sd = 0;  ///< reading per true rate
+  };
+  /// Set by add(step) when the step carries the gyro's model.
+  std::optional<GyroCalibration> gyro;
   /// What the caller should tell the user (a selected sensor that never
   /// reported, a self-calibration that ran away), one sentence each.
   std::vector<std::string> warnings;
@@ -56,8 +76,13 @@ struct RunSummary {
   void add(const OdometryRow& row, int sensors);
   /// Lines (each ending in '\n'): epochs by source, exclusions by reason
   /// (the reasons that occurred), fixes when any, the pose stream's lines
-  /// when any, the verdict.
+  /// when any, the gyro when any epoch had a reading (gyro_line()), the
+  /// verdict.
   std::string text() const;
+  /// "gyro: bias B rad/s (sd D), scale S (sd D), heading from the gyro in N
+  /// of M epochs (P %)" (the calibration's part only when gyro is set);
+  /// empty when no epoch had a gyro reading.
+  std::string gyro_line() const;
 };
 
 }  // namespace moa::io

@@ -6,6 +6,9 @@
 //   {"t", "x", "y", "theta",              s, m, m, rad: pose at the event
 //    "vx", "vy", "omega",                 m/s, rad/s: twist of the last epoch
 //    "source",                            "mice" | "wheels" | "hold"
+//    "heading",                           heading source of the last epoch: "gyro"
+//                                         (its rotation was the gyro's), else "source"
+//    "heading_gyro",                      of the epochs, those whose heading was the gyro's
 //    "epochs",                            epochs summed into this event
 //    "sensors": [{"name", "dx", "dy",     counts summed over those epochs
 //                 "squal",                lowest SQUAL (null: none reported)
@@ -13,7 +16,11 @@
 //                 "used",                 used in the last epoch
 //                 "used_share",           share of the epochs it was used in
 //                 "excluded"}],           last reason it was left out (null: never)
-//    "scales": [[sx, sy], ...]}           only when self-calibration estimates exist
+//    "scales": [[sx, sy], ...],           only when self-calibration estimates exist
+//    "gyro": {"bias", "bias_sd",          only with a gyro stream (imu.csv rows): its
+//             "scale", "scale_sd",        calibration after the last epoch (rad/s; reading
+//             "test"}}                    per true rate) and that epoch's test ratio
+//                                         (1: the gate; null: not tested)
 //
 // A client that connects first gets "event: history" (the trajectory and
 // the twist so far, {"points": [[t, x, y, vx, vy, omega], ...]}, the last

@@ -43,6 +43,9 @@ struct ReportInputs {
   /// self-calibration.csv of `moa odometry --self-calibration`: adds the plot
   /// of each sensor's estimated scale over time.
   std::optional<std::filesystem::path> self_calibration;
+  /// diagnostics.csv of `moa odometry --diagnostics`: with a gyro (imu rows),
+  /// adds the heading's source to the gyro section.
+  std::optional<std::filesystem::path> diagnostics;
   std::string title;  ///< page title; empty: named after the log directory
   std::string note;   ///< a paragraph under the title (plain text), e.g. how the run was made
 };
@@ -91,6 +94,17 @@ struct ScaleSeries {
   std::vector<double> yaw_offset;        ///< rad
 };
 
+/// The gyro over a run, from the `imu` rows of diagnostics.csv.
+struct GyroCounts {
+  std::size_t epochs = 0;        ///< epochs of the file (its `prior` rows: one per epoch)
+  std::size_t readings = 0;      ///< epochs with a gyro reading (`imu` rows)
+  std::size_t heading = 0;       ///< of them, the heading was the gyro's (fused = 1)
+  std::size_t saturated = 0;     ///< reading at full scale: not used
+  std::size_t inconsistent = 0;  ///< tested beyond the gate against the array: not used
+  std::size_t over_gate = 0;     ///< test ratio above 1: the array's rotation disagreed
+  double max_test = 0.0;         ///< largest test ratio (1: the gate); 0 when none tested
+};
+
 /// Everything the page shows, computed from the inputs.
 struct ReportModel {
   std::string title;
@@ -126,6 +140,10 @@ struct ReportModel {
   /// With a self-calibration input: per config sensor (empty series for a
   /// sensor the file has no row of), at most max_points samples each.
   std::vector<ScaleSeries> self_calibration;
+  /// The log has imu.csv: the page has a gyro section.
+  bool has_imu = false;
+  /// With a diagnostics input.
+  std::optional<GyroCounts> gyro;
 };
 
 /// Reads and checks the inputs. Throws io::Error "FILE:LINE: what" (or
