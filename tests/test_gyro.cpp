@@ -429,6 +429,15 @@ TEST(GyroCli, OneSensorTakesItsRotationFromTheGyro) {
             std::string::npos)
       << refused.err;
   EXPECT_FALSE(fs::exists(dir / "no.csv"));
+  // An imu.csv with one data row gives no rotation at all: refused too.
+  std::ofstream(log + "/imu.csv") << "t,gz\n0,0\n";
+  const auto empty = test::run_moa("odometry --config " + log + "/robot.yaml --log " + log +
+                                   " --out " + (dir / "no.csv").string());
+  EXPECT_EQ(empty.exit_code, 1);
+  EXPECT_NE(empty.err.find("imu.csv has 1 data row (the first only opens an interval)"),
+            std::string::npos)
+      << empty.err;
+  EXPECT_FALSE(fs::exists(dir / "no.csv"));
 }
 
 // Two sensors and a gyro, m2 reading nothing for 20 s in a cruise (no lift

@@ -96,11 +96,13 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
                   "applied, then the filter's filter_scale_x,filter_scale_y,filter_yaw_offset)")
       ->type_name("FILE")
       ->check(output_file_name());
-  cmd->add_option("--diagnostics", f.diagnostics_out,
-                  "Write every source's status per epoch to this CSV (t,source,test_ratio,fused,"
-                  "reason: each sensor's, the wheels' and the motion prior's test statistic over "
-                  "its gate, whether the epoch's twist used it, and why not; "
-                  "docs/formats/log.md)")
+  cmd->add_option(
+         "--diagnostics", f.diagnostics_out,
+         "Write every source's status per epoch to this CSV (t,source,test_ratio,fused,"
+         "reason: each sensor's, the wheels', the motion prior's and the gyro's (imu) test "
+         "statistic over "
+         "its gate, whether the epoch's twist used it, and why not; "
+         "docs/formats/log.md)")
       ->type_name("FILE")
       ->check(output_file_name());
   cmd->add_option("--self-calibration-gauge", f.self_calibration_gauge,

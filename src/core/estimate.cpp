@@ -11,7 +11,7 @@ const char* describe(GeometryError error) {
   switch (error) {
     case GeometryError::kTooFewSensors:
       return "fewer than two sensors: a twist needs at least two, or one with a gyro (the "
-             "consensus estimator, an imu: block in the config and imu.csv in the log)";
+             "consensus estimator and imu.csv in the log)";
     case GeometryError::kTooManySensors:
       return "more sensors than moa::kMaxSensors, or a sensor index past the array";
     case GeometryError::kRankDeficient:

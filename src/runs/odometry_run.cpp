@@ -118,7 +118,9 @@ std::unique_ptr<Odometry> make_odometry(const RobotConfig& config, const std::st
   OdometryOptions options = given;
   if (config.limits) options.consensus.limits = *config.limits;
   if (config.imu) options.consensus.gyro = *config.imu;
-  options.consensus.gyro_fed = options.use_imu && config.imu.has_value();
+  // A log's imu.csv is used with the defaults of GyroOptions when the config
+  // has no imu: block; one sensor then takes its rotation from it.
+  options.consensus.gyro_fed = options.use_imu;
   if (const auto e = options.validate()) {
     throw Error(fmt::format("invalid option: {}", e->message()));
   }
@@ -431,11 +433,23 @@ OdometryRun run_odometry(const RobotConfig& config, const std::string& config_pa
   if (options.use_imu && log.imu && options.estimator == EstimatorKind::kConsensus) {
     imu = std::make_unique<ImuReader>(*log.imu);
   }
-  if (config.array.size() == 1 && !imu) {
-    throw Error(fmt::format("{}: one sensor needs a gyro for its rotation: {}", log.mice.string(),
-                            !options.use_imu ? "--no-imu given"
-                            : !log.imu       ? "no imu.csv in " + log.dir.string()
-                                             : "the estimator is not consensus"));
+  if (config.array.size() == 1 && options.estimator != EstimatorKind::kWheels) {
+    if (!imu) {
+      throw Error(fmt::format("{}: one sensor needs a gyro for its rotation: {}", log.mice.string(),
+                              !options.use_imu ? "--no-imu given"
+                              : !log.imu       ? "no imu.csv in " + log.dir.string()
+                                               : "the estimator is not consensus"));
+    }
+    // Two rows at least: the first only opens the gyro's first interval.
+    ImuReader peek(*log.imu);
+    int rows = 0;
+    while (rows < 2 && peek.next()) ++rows;
+    if (rows < 2) {
+      throw Error(
+          fmt::format("{}: one sensor needs a gyro for its rotation: {} has {} data row{} "
+                      "(the first only opens an interval)",
+                      log.mice.string(), log.imu->string(), rows, rows == 1 ? "" : "s"));
+    }
   }
   std::unique_ptr<CameraReader> camera;
   if (options.fuse_camera) {
