@@ -741,6 +741,15 @@ CalibrationSummary calibrate_log(const RobotConfig& config, const std::string& c
     }
   }
   r.usable = r.termination == CalibrationTermination::kConverged;
+  // An optimiser stopped before converging gives mounts nobody should drive
+  // on: refused unless --force, as a misfit is.
+  if (r.termination == CalibrationTermination::kNotConverged && !options.force) {
+    throw OptionError(fmt::format(
+        "{}: {{method}} {}: refused, the fit did not converge (its mounts would be arbitrary). "
+        "Nothing written ({{force}} writes it anyway)",
+        OptionError::literal(method == CalibrationMethod::kGuided ? config_path : log.string()),
+        to_name(method)));
+  }
   return r;
 }
 
