@@ -25,7 +25,7 @@ GyroModel::GyroModel(const GyroOptions& options, real r_rms) : options_(options)
   // A sensor at the centre (one sensor unit, r_rms -> 0) reads rotation not at
   // all; 5 mm bounds the coupling's prior.
   const real a = options.mount_yaw_sigma / std::max(r_rms, real(0.005));
-  p_.diagonal() << options.bias_sigma * options.bias_sigma,
+  p_.diagonal().head<4>() << options.bias_sigma * options.bias_sigma,
       options.scale_sigma * options.scale_sigma, a * a, a * a;
 }
 
