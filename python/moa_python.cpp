@@ -156,7 +156,7 @@ OdometryOptions odometry_options(const std::string& estimator, const py::kwargs&
   OdometryOptions options;
   o.set("rate", options.rate);
   o.set("fuse_camera", options.fuse_camera);
-  o.set("camera_latency", options.camera_latency);
+  if (const auto latency = o.get<double>("camera_latency")) options.camera_latency = *latency;
   o.set("camera_sigma", options.camera_sigma);
   o.set("ekf_scale", options.ekf.estimate_scale);
   o.set("e_th", options.sekimori.e_th);

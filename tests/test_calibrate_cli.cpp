@@ -15,6 +15,7 @@
 #include "moa/formats/config.hpp"
 #include "support/calibration_data.hpp"
 #include "support/run.hpp"
+#include "support/synth.hpp"
 
 namespace moa {
 namespace {
@@ -89,6 +90,41 @@ TEST(CalibrateCli, ExactMeetsTheLimitsOnNoisyMixedMotion) {
     EXPECT_EQ(m.cpi, nominal[i].cpi);
   }
   fs::remove_all(dir);
+}
+
+// camera.csv (t,x,y,theta) of a synthesised log's truth, the fixes at its
+// row times, stamped `late` s after capture.
+void write_camera(const fs::path& dir, const SensorArray& truth, double duration, double late) {
+  const test::SynthLog log = test::synthesise(truth, test::mixed_motion, duration, 0.01);
+  std::ofstream camera(dir / "camera.csv");
+  camera.precision(9);
+  camera << "t,x,y,theta\n";
+  for (const auto& p : log.truth) {
+    camera << p.t + late << "," << p.pose.t.x() << "," << p.pose.t.y() << ","
+           << wrap_angle(p.pose.theta) << "\n";
+  }
+}
+
+TEST(CalibrateCli, ExactAgainstTheCameraWritesMountsAndLatencies) {
+  // Poses exact, stamped 40 ms late; no wheels.csv: the camera is the default.
+  const CheckRobot robot("cal-camera");
+  fs::remove(robot.dir / "wheels.csv");
+  write_camera(robot.dir, robot.truth, 20.0, 0.04);
+  const auto r = test::run_moa(calibrate_args(robot.dir, "exact"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("coarse alignment: camera latency"));
+  const io::RobotConfig cal = io::read_config(robot.dir / "cal.yaml");
+  ASSERT_TRUE(cal.camera_latency.has_value());
+  // The sensors' rows are on time (latency 0, the gauge); 0.1 ms is the
+  // tolerance of the exact data's constant-twist windows.
+  EXPECT_NEAR(*cal.camera_latency, 0.04, 1e-4);
+  for (int i = 0; i < 4; ++i) {
+    EXPECT_LT((cal.array[i].position - robot.truth[i].position).cwiseAbs().maxCoeff(), 0.3e-3)
+        << kNames[i];
+    EXPECT_NEAR(cal.array[i].latency, 0.0, 1e-4) << kNames[i];
+    EXPECT_EQ(cal.array[i].mirrored, robot.truth[i].mirrored) << kNames[i];
+  }
+  fs::remove_all(robot.dir);
 }
 
 // wheels.csv with its omega column zeroed: a reference that is not the
@@ -295,6 +331,39 @@ TEST_F(CalibrateCliBadInput, MalformedWheelsRowNamesFileAndLine) {
   expect_one_line_error(r, "wheels.csv:");
   EXPECT_THAT(r.err, HasSubstr("abc"));
   EXPECT_FALSE(fs::exists(out()));
+}
+
+TEST_F(CalibrateCliBadInput, CameraReferenceWithoutCameraCsvIsAnError) {
+  const auto r = test::run_moa(calibrate_args(dir_, "exact") + " --reference camera");
+  expect_one_line_error(r,
+                        "camera.csv: not found: --method exact --reference camera needs the poses");
+  EXPECT_FALSE(fs::exists(out()));
+}
+
+TEST_F(CalibrateCliBadInput, CameraWithoutThetaIsAnError) {
+  std::ofstream(dir_ / "camera.csv") << "t,x,y\n0,0,0\n0.1,0.01,0\n";
+  const auto r = test::run_moa(calibrate_args(dir_, "exact") + " --reference camera");
+  expect_one_line_error(r, "camera.csv: 2 data rows and none with theta");
+  EXPECT_FALSE(fs::exists(out()));
+}
+
+TEST_F(CalibrateCliBadInput, CameraWithTooFewFixesIsAnError) {
+  std::ofstream(dir_ / "camera.csv") << "t,x,y,theta\n0,0,0,0\n0.1,0.01,0,0.01\n";
+  const auto r = test::run_moa(calibrate_args(dir_, "exact") + " --reference camera");
+  expect_one_line_error(r, "fewer than 20 windows between fixes");
+  EXPECT_FALSE(fs::exists(out()));
+}
+
+TEST_F(CalibrateCliBadInput, CameraWithNanNamesFileAndLine) {
+  std::ofstream(dir_ / "camera.csv") << "t,x,y,theta\n0,0,0,0\n0.1,nan,0,0.01\n";
+  const auto r = test::run_moa(calibrate_args(dir_, "exact") + " --reference camera");
+  expect_one_line_error(r, "camera.csv:3");
+  EXPECT_FALSE(fs::exists(out()));
+}
+
+TEST_F(CalibrateCliBadInput, ReferenceIsForExactOnly) {
+  expect_one_line_error(test::run_moa(calibrate_args(dir_, "kimlee") + " --reference camera"),
+                        "--reference is used by --method exact only");
 }
 
 TEST_F(CalibrateCliBadInput, GuidedFlagsWithAReferenceMethodAreErrors) {

@@ -212,7 +212,7 @@ TEST(CarelessCalls, InfinityAndOutOfRangeNumbersGetOneShortMessage) {
   const std::vector<std::pair<std::string, std::string>> cases{
       {odometry_args + "--rate inf", "--rate: inf is not a finite number\n"},
       {odometry_args + "--rate 0", "--rate: 0: must be within [0.1, 10000]\n"},
-      {odometry_args + "--camera-latency -0.5", "--camera-latency: -0.5: must be >= 0\n"},
+      {odometry_args + "--camera-latency -61", "--camera-latency: -61: must be within [-60, 60]\n"},
       {guided + "--turn-sd inf", "--turn-sd: inf is not a finite number\n"},
       {guided + "--max-row-interval -1", "--max-row-interval: -1: must be > 0\n"},
       {"live --config " + kExample + "/robot.yaml --replay " + kExample + " --speed -1",
@@ -294,6 +294,11 @@ TEST(CarelessCalls, UnknownCommandAndUnknownOptionAreNamed) {
   const auto s = test::run_moa("odometry --bogus");
   EXPECT_EQ(s.exit_code, cli::kExitUsage);
   EXPECT_THAT(s.err, HasSubstr("unknown option or argument '--bogus'"));
+  // A missing --method is a usage error too, before anything is read.
+  const auto m = test::run_moa("calibrate --config " + kExample + "/robot.yaml --log " + kExample +
+                               " --out " + (test::scratch_dir("careless-method") / "c.yaml").string());
+  EXPECT_EQ(m.exit_code, cli::kExitUsage) << m.err;
+  EXPECT_THAT(m.err, HasSubstr("--method"));
 }
 
 TEST(CarelessCalls, ExitCodesAreDocumentedInHelp) {

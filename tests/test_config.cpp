@@ -103,7 +103,10 @@ void expect_identical(const RobotConfig& a, const RobotConfig& b) {
     if (x.noise) {
       EXPECT_TRUE(same_bits(*x.noise, *y.noise));
     }
+    EXPECT_TRUE(same_value(x.latency, y.latency));
   }
+  EXPECT_EQ(a.camera_latency, b.camera_latency);
+  EXPECT_EQ(a.wheels_latency, b.wheels_latency);
 }
 
 // A double from anywhere in [lo, hi) with random low-order bits, so that
@@ -132,12 +135,15 @@ RobotConfig random_config(std::mt19937_64& rng) {
     m.mirrored = rng() % 2 == 0;
     if (rng() % 2 == 0) m.max_speed = random_double(rng, 1e-6, 10.0);
     if (rng() % 3 == 0) m.noise = rng() % 4 == 0 ? 0.0 : random_double(rng, 0.0, 0.1);
+    if (rng() % 2 == 0) m.latency = random_double(rng, -1.0, 1.0);
     mounts.push_back(m);
     config.names.push_back(static_cast<std::size_t>(i) < pool.size()
                                ? pool[static_cast<std::size_t>(i)]
                                : "s" + std::to_string(i));
   }
   config.array = SensorArray(std::move(mounts));
+  if (rng() % 2 == 0) config.camera_latency = random_double(rng, -60.0, 60.0);
+  if (rng() % 3 == 0) config.wheels_latency = rng() % 4 == 0 ? 0.0 : random_double(rng, -1.0, 1.0);
   return config;
 }
 
@@ -210,7 +216,32 @@ TEST(Config, LimitsAreOptionalAndRead) {
   EXPECT_EQ(back.limits->angular_accel, 12.0);
 }
 
+TEST(Config, LatenciesAreOptionalAndRead) {
+  const RobotConfig none = parse_config(two_sensors(), "robot.yaml");
+  EXPECT_EQ(none.array[0].latency, 0.0);
+  EXPECT_FALSE(none.camera_latency);
+  EXPECT_FALSE(none.wheels_latency);
+  const RobotConfig c = parse_config(
+      two_sensors("    latency: 0.004\n") + "camera:\n  latency: 0.06\nwheels: {latency: -0.002}\n",
+      "robot.yaml");
+  EXPECT_EQ(c.array[0].latency, 0.004);
+  EXPECT_EQ(c.array[1].latency, 0.0);
+  EXPECT_EQ(c.camera_latency, 0.06);
+  EXPECT_EQ(c.wheels_latency, -0.002);
+}
+
 // ---------------------------------------------------------------- rejections
+
+TEST(ConfigErrors, LatenciesAreBoundedAndFinite) {
+  EXPECT_EQ(parse_error(two_sensors("    latency: 1.5\n")),
+            "robot.yaml:7: sensor 'm1': key 'latency': must be within [-1, 1] (found 1.5)");
+  EXPECT_EQ(parse_error(two_sensors("", "    latency: .nan\n")),
+            "robot.yaml:11: sensor 'm2': key 'latency': '.nan' is not a finite number");
+  EXPECT_EQ(parse_error(two_sensors() + "camera: {latency: 61}\n"),
+            "robot.yaml:11: key 'camera.latency': must be within [-60, 60] (found 61)");
+  EXPECT_EQ(parse_error(two_sensors() + "wheels: {delay: 1}\n"),
+            "robot.yaml:11: unknown key 'wheels.delay' (known here: latency)");
+}
 
 TEST(ConfigErrors, LimitsMustBePositiveAndFinite) {
   EXPECT_EQ(parse_error(two_sensors() + "limits: {accel: .nan}\n"),
@@ -237,12 +268,12 @@ TEST(ConfigErrors, MissingNameNamesSensorByPosition) {
 TEST(ConfigErrors, UnknownSensorKeyIsRejected) {
   EXPECT_EQ(parse_error(two_sensors("", "    cip: 800\n")),
             "robot.yaml:11: sensor 'm2': unknown key 'cip' (known here: name, position, yaw, cpi, "
-            "scale, mirrored, max_speed, noise)");
+            "scale, mirrored, max_speed, noise, latency)");
 }
 
 TEST(ConfigErrors, UnknownTopLevelKeyIsRejected) {
   EXPECT_EQ(parse_error(two_sensors() + "sensorz: []\n"),
-            "robot.yaml:11: unknown key 'sensorz' (known here: version, sensors, limits, imu)");
+            "robot.yaml:11: unknown key 'sensorz' (known here: version, sensors, limits, imu, camera, wheels)");
 }
 
 TEST(ConfigErrors, DuplicateKeyIsRejected) {
@@ -435,7 +466,7 @@ TEST(ConfigFile, ErrorsNameTheFile) {
   EXPECT_EQ(error_of([&] { read_config(path); }),
             path.string() +
                 ":11: sensor 'm2': unknown key 'cip' (known here: name, position, yaw, cpi, scale, "
-                "mirrored, max_speed, noise)");
+                "mirrored, max_speed, noise, latency)");
 }
 
 TEST(ConfigFile, WriteThenReadReproducesConfig) {

@@ -127,6 +127,10 @@ TEST(Evaluate, DescribesTheTranslationErrorInMillimetresOverTheDistance) {
   EXPECT_EQ(describe_translation(e), "max 15.4 mm over 2.5 m travelled (0.62 %), rms 6.76 mm");
   e.distance = 0.0;
   EXPECT_EQ(describe_translation(e), "max 15.4 mm over 0 m travelled, rms 6.76 mm");
+  // Large numbers in plain notation, not 1.23e+03 mm nor 1.2e+02 %.
+  e.max_translation = 1.234;
+  e.distance = 1.0;
+  EXPECT_EQ(describe_translation(e), "max 1234 mm over 1 m travelled (123 %), rms 6.76 mm");
 }
 
 TEST(Evaluate, VerdictFollowsTheRatioToTheReference) {

@@ -37,7 +37,8 @@ TEST(FusionCli, CameraFixesBoundTheDriftOfWrongMounts) {
     believed.array[i].position += Eigen::Vector2d(0.004, -0.004);
   }
   io::write_config(believed, dir / "robot.yaml");
-  // 10 Hz fixes with 5 mm noise, captured 50 ms before they arrive.
+  // 10 Hz fixes with 5 mm noise, captured 50 ms before they arrive and
+  // stamped on arrival (the config's camera latency, here --camera-latency).
   {
     std::mt19937_64 rng(60);
     std::normal_distribution<double> noise(0.0, 0.005);
@@ -45,7 +46,7 @@ TEST(FusionCli, CameraFixesBoundTheDriftOfWrongMounts) {
     camera << "t,x,y\n";
     for (std::size_t k = 0; k < log.truth.size(); k += 10) {
       const auto& s = log.truth[k];
-      camera << s.t << ',' << s.pose.t.x() + noise(rng) << ',' << s.pose.t.y() + noise(rng) << '\n';
+      camera << s.t + 0.05 << ',' << s.pose.t.x() + noise(rng) << ',' << s.pose.t.y() + noise(rng) << '\n';
     }
   }
   const std::string common = "odometry --config " + (dir / "robot.yaml").string() + " --log " +

@@ -97,7 +97,8 @@ TEST(OdometryOptions, EveryFieldIsCheckedNamingPathBoundAndValue) {
          o.initial = Pose2{{0, 0}, nan};
        },
        finite_nan},
-      {"camera_latency", [](auto& o) { o.camera_latency = -0.5; }, "must be >= 0, is -0.5"},
+      {"camera_latency", [](auto& o) { o.camera_latency = -61; }, "must be in [-60, 60], is -61"},
+      {"wheels_latency", [](auto& o) { o.wheels_latency = 60.5; }, "must be in [-60, 60], is 60.5"},
       {"camera_latency", [&](auto& o) { o.camera_latency = inf; }, finite_inf},
       {"camera_sigma", [](auto& o) { o.camera_sigma = 0; }, "must be > 0, is 0"},
       {"camera_heading_sigma", [&](auto& o) { o.camera_heading_sigma = nan; }, finite_nan},

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <limits>
 #include <random>
 #include <vector>
@@ -185,6 +187,64 @@ TEST(Synchroniser, SilencesSummedBeyondMaxGapPlusAnEpochPerRowAreRefused) {
                "the sensors' silences add up to more than --max-gap plus one epoch per row: "
                "sparse rows would write an epoch per period over every gap (raise --max-gap if "
                "the log is meant so)");
+}
+
+TEST(Synchroniser, LatentRowsGiveTheEpochsOfTheirTrueTimes) {
+  // Each sensor's rows stamped latency_i after the true end of their
+  // interval, fed in the order of their stamps, must give the epochs that
+  // the same rows at their true times give a synchroniser without latency.
+  const std::array<double, 4> latency{0.002, 0.0071, -0.003, 0.012};
+  std::mt19937_64 rng(31);
+  std::uniform_real_distribution<double> gap(0.001, 0.02);
+  std::uniform_int_distribution<int> counts(-40, 40);
+  struct Timed {
+    double t_true;
+    SensorRow row;
+  };
+  std::vector<Timed> rows;
+  for (int i = 0; i < 4; ++i) {
+    for (double t = 1.02 + gap(rng); t < 4.0; t += gap(rng)) {
+      rows.push_back({t, row(t + latency[static_cast<std::size_t>(i)], i, counts(rng), counts(rng))});
+    }
+  }
+  SynchroniserOptions shifted{0.01, 0.05};
+  std::copy(latency.begin(), latency.end(), shifted.latency.begin());
+  Synchroniser late(4, 1.0, shifted), plain(4, 1.0, {0.01, 0.05});
+  Collected from_late, from_plain;
+  std::stable_sort(rows.begin(), rows.end(),
+                   [](const Timed& a, const Timed& b) { return a.row.t < b.row.t; });
+  for (const Timed& r : rows) ASSERT_FALSE(late.push(r.row, std::ref(from_late)));
+  std::stable_sort(rows.begin(), rows.end(),
+                   [](const Timed& a, const Timed& b) { return a.t_true < b.t_true; });
+  double t_end = 0.0;
+  for (const Timed& r : rows) {
+    SensorRow at_truth = r.row;
+    at_truth.t = r.t_true;
+    ASSERT_FALSE(plain.push(at_truth, std::ref(from_plain)));
+    t_end = r.t_true;
+  }
+  late.finish(t_end, std::ref(from_late));
+  plain.finish(t_end, std::ref(from_plain));
+  ASSERT_EQ(from_late.samples.size(), from_plain.samples.size());
+  for (std::size_t k = 0; k < from_plain.samples.size(); ++k) {
+    EXPECT_NEAR(from_late.samples[k].t, from_plain.samples[k].t, 1e-12);
+    for (std::size_t i = 0; i < 4; ++i) {
+      // Stamp minus latency differs from the true time by rounding only.
+      EXPECT_LT((from_late.samples[k].counts[i] - from_plain.samples[k].counts[i]).norm(), 1e-6)
+          << "epoch " << k << " sensor " << i;
+    }
+  }
+}
+
+TEST(Synchroniser, LatenciesSpreadBeyondThePendingEpochsAreRefused) {
+  SynchroniserOptions o{0.01, 0.05};
+  o.latency[0] = 0.3;
+  o.latency[1] = -0.3;  // 0.05 + 0.6 s > 61 epochs of 10 ms
+  EXPECT_TRUE(o.validate());
+  o.latency[1] = -0.2;  // 0.55 s
+  EXPECT_FALSE(o.validate());
+  o.latency[2] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_TRUE(o.validate());
 }
 
 }  // namespace

@@ -33,6 +33,7 @@ struct CalibrateArgs {
   std::string push_y;
   std::string spin;
   std::string imu_reference = "array";
+  std::string reference;
   bool no_imu = false;
   io::CalibrationOptions options;
   bool json = false;
@@ -47,6 +48,13 @@ int calibrate_with_options(CalibrateArgs args) {
   args.options.spin = args.spin;
   args.options.imu = !args.no_imu;
   args.options.imu_reference = *from_name<io::GyroReference>(args.imu_reference);
+  if (!args.reference.empty()) {
+    if (*method != io::CalibrationMethod::kExact) {
+      throw io::Error(fmt::format("--reference is used by --method exact only, not by --method {}",
+                                  args.method));
+    }
+    args.options.reference = from_name<io::ExactReference>(args.reference);
+  }
   // The options are checked before the config is read, so that a wrong flag is named first.
   io::check_calibration_options(*method, args.log, args.options);
   std::vector<std::filesystem::path> inputs{args.config};
@@ -154,6 +162,20 @@ void add_calibrate(CLI::App& app, Action& action) {
          "differenced)")
       ->check(CLI::IsMember({"array", "array-nominal", "wheels", "camera"}))
       ->capture_default_str();
+  cmd->add_option("--reference", args->reference,
+                  "exact: wheels (wheels.csv's twists) or camera (camera.csv's poses with theta: "
+                  "the mounts, every sensor's latency and the camera's); default wheels when the "
+                  "log has wheels.csv, else camera")
+      ->check(CLI::IsMember({"wheels", "camera"}));
+  cmd->add_option("--max-offset", args->options.max_offset,
+                  "exact against the camera: s, range of the coarse latency search around the "
+                  "configured camera latency")
+      ->check(kPositive)
+      ->capture_default_str();
+  cmd->add_option("--window", args->options.window,
+                  "exact against the camera: s, least window between two fixes")
+      ->check(kPositive)
+      ->capture_default_str();
   cmd->add_flag("--json", args->json, "Print the report as one JSON object (SI units)");
   cmd->add_flag("--quiet", args->quiet, "Print nothing on success");
   // --guided [--live]: the live, step-by-step guided calibration (calibrate_wizard.cpp).
@@ -170,8 +192,9 @@ void add_calibrate(CLI::App& app, Action& action) {
       return;
     }
     if (wizard->guided && args->method.empty()) args->method = "guided";
+    // A usage error (exit 2), as CLI11's own for a required option.
+    if (args->method.empty()) throw CLI::RequiredError("--method (or --guided)");
     action = [args, wizard] {
-      if (args->method.empty()) throw io::Error("--method is required (or --guided)");
       refuse_live_flags(*wizard);
       return run_calibrate(*args);
     };

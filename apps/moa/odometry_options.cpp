@@ -143,10 +143,10 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
       cmd->add_flag("--fuse-camera", o.fuse_camera,
                     "Fuse camera.csv position fixes with an EKF (adds pose covariance columns)");
   cmd->add_option("--camera-latency", o.camera_latency,
-                  "Delay from a fix's capture (camera.csv t) to its arrival, s: late fixes are "
-                  "applied at their capture time")
-      ->check(kNonNegative)
-      ->capture_default_str();
+                  "camera.csv's t minus the true capture time, s (a stamp at arrival: the delay): "
+                  "the fix is applied at t - S once the epochs reach t [default: the config's "
+                  "camera: {latency}, else 0]")
+      ->check(finite_within(-60.0, 60.0));
   cmd->add_option("--camera-sigma", o.camera_sigma,
                   "Std. dev. of a camera fix, m, when camera.csv has no sx, sy")
       ->check(kPositive)

@@ -107,14 +107,22 @@ std::optional<TrajectoryError> quantisation_floor(const SensorArray& array,
   return acc.result();
 }
 
+namespace {
+// `digits` significant digits in plain notation: 1100, not 1.1e+03.
+std::string plain(double x, int digits) {
+  if (std::abs(x) >= std::pow(10.0, digits)) return fmt::format("{:.0f}", x);
+  return fmt::format("{:.{}g}", x, digits);
+}
+}  // namespace
+
 std::string describe_translation(const TrajectoryError& error) {
   const std::string share =
       error.distance > 0.0
-          ? fmt::format(" ({:.2g} %)", 100.0 * error.max_translation / error.distance)
+          ? fmt::format(" ({} %)", plain(100.0 * error.max_translation / error.distance, 2))
           : "";
-  return fmt::format("max {:.3g} mm over {:.3g} m travelled{}, rms {:.3g} mm",
-                     error.max_translation * 1e3, error.distance, share,
-                     error.rms_translation * 1e3);
+  return fmt::format("max {} mm over {} m travelled{}, rms {} mm",
+                     plain(error.max_translation * 1e3, 3), plain(error.distance, 3), share,
+                     plain(error.rms_translation * 1e3, 3));
 }
 
 std::string verdict(const TrajectoryError& error, const ErrorReference& reference) {

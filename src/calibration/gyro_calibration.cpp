@@ -1,5 +1,7 @@
 #include "moa/calibration/gyro_calibration.hpp"
 
+#include "moa/calibration/lag_search.hpp"
+
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <algorithm>
@@ -106,19 +108,14 @@ double residual_of(const Integral& gyro, const Row& r, const Vec5& x, Vec5* grad
 }
 
 double correlation(const std::vector<Row>& rows, const Integral& gyro, double latency) {
-  double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
+  std::vector<double> x, y;
+  x.reserve(rows.size());
+  y.reserve(rows.size());
   for (const Row& r : rows) {
-    const double x = gyro_rate(gyro, r, latency);
-    sx += x;
-    sy += r.w;
-    sxx += x * x;
-    syy += r.w * r.w;
-    sxy += x * r.w;
+    x.push_back(gyro_rate(gyro, r, latency));
+    y.push_back(r.w);
   }
-  const double n = static_cast<double>(rows.size());
-  const double vx = sxx - sx * sx / n, vy = syy - sy * sy / n;
-  if (!(vx > 0.0) || !(vy > 0.0)) return 0.0;
-  return (sxy - sx * sy / n) / std::sqrt(vx * vy);
+  return pearson_correlation(x, y);
 }
 
 double median(std::vector<double> v) {
@@ -270,20 +267,10 @@ std::variant<GyroCalibration, GyroCalibrationError> calibrate_gyro(
   for (int j = -lags; j <= lags; ++j) {
     c[static_cast<std::size_t>(j + lags)] = correlation(rows, gyro, j * step);
   }
-  const auto peak = static_cast<int>(std::max_element(c.begin(), c.end()) - c.begin());
-  out.correlation = c[static_cast<std::size_t>(peak)];
-  if (peak == 0 || peak == 2 * lags || !(out.correlation >= options.min_correlation)) {
-    return GyroCalibrationError::kNoCorrelation;
-  }
-  {
-    const double cm = c[static_cast<std::size_t>(peak - 1)];
-    const double c0 = c[static_cast<std::size_t>(peak)];
-    const double cp = c[static_cast<std::size_t>(peak + 1)];
-    const double curvature = cm - 2.0 * c0 + cp;
-    const double offset =
-        curvature < 0.0 ? std::clamp(0.5 * (cm - cp) / curvature, -0.5, 0.5) : 0.0;
-    out.coarse_latency = (peak - lags + offset) * step;
-  }
+  const auto peak = correlation_peak(c, step, options.min_correlation);
+  out.correlation = *std::max_element(c.begin(), c.end());
+  if (!peak) return GyroCalibrationError::kNoCorrelation;
+  out.coarse_latency = peak->lag;
 
   // 2. The fit, rows beyond outlier_sigmas robust sigmas dropped.
   std::vector<bool> in(rows.size(), true);

@@ -18,6 +18,9 @@ const char* describe(GeometryError error) {
       return "rank-deficient geometry: the sensors sit at one point, so rotation is not observable";
     case GeometryError::kInvalidMount:
       return "a sensor has cpi, scale or noise that is not positive and finite";
+    case GeometryError::kLatencySpread:
+      return "the sensors' latencies spread too wide: max_row_interval plus the largest latency "
+             "minus the smallest (0 included) must be at most 61 epochs";
   }
   return "unknown geometry error";
 }

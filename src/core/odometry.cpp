@@ -49,7 +49,8 @@ OptionCheck OdometryOptions::validate() const {
         .require(std::isfinite(initial->t.y()), "initial.y", "finite", initial->t.y())
         .require(std::isfinite(initial->theta), "initial.theta", "finite", initial->theta);
   }
-  c.non_negative("camera_latency", camera_latency)
+  if (camera_latency) c.closed("camera_latency", *camera_latency, -60.0, 60.0);
+  c.closed("wheels_latency", wheels_latency, -60.0, 60.0)
       .positive("camera_sigma", camera_sigma)
       .positive("camera_heading_sigma", camera_heading_sigma)
       .nested("sekimori", sekimori.validate())
@@ -66,17 +67,32 @@ OptionCheck OdometryOptions::validate() const {
   return c.result();
 }
 
+namespace {
+// The options' synchroniser with each sensor's latency (SensorMount::latency).
+SynchroniserOptions synchroniser_options(const SensorArray& array, const OdometryOptions& o) {
+  SynchroniserOptions s = o.synchroniser();
+  for (int i = 0; i < std::min(array.size(), kMaxSensors); ++i) {
+    s.latency[static_cast<std::size_t>(i)] = static_cast<double>(array[i].latency);
+  }
+  return s;
+}
+}  // namespace
+
 Odometry::Odometry(const SensorArray& array, double t0, const OdometryOptions& options)
     : options_(options),
       n_(array.size()),
       m_(0),
       noise_(array, options.consensus.noise),
-      sync_(array.size(), t0, options.synchroniser()),
+      sync_(array.size(), t0, synchroniser_options(array, options)),
       reckoner_(options.initial.value_or(Pose2{})),
       t0_(t0),
       period_(1.0 / options.rate) {
   if (n_ > kMaxSensors) {
     geometry_error_ = GeometryError::kTooManySensors;
+    return;
+  }
+  if (synchroniser_options(array, options).validate()) {
+    geometry_error_ = GeometryError::kLatencySpread;
     return;
   }
   for (int i = 0; i < n_; ++i) {
@@ -147,8 +163,9 @@ std::optional<OdometryError> Odometry::push(const SensorRow& row, StepSink sink)
   if (row.sensor >= 0 && row.sensor < n_ && std::isfinite(row.t) && row.counts.allFinite()) {
     // The row's interval as the synchroniser will take it, at least one epoch.
     const auto i = static_cast<std::size_t>(row.sensor);
-    const double begin = std::max(sync_.last_time(row.sensor), row.t - options_.max_row_interval);
-    const real dt = static_cast<real>(std::max(row.t - begin, period_));
+    const double end = sync_.end_of_row(row);
+    const double begin = std::max(sync_.last_time(row.sensor), end - options_.max_row_interval);
+    const real dt = static_cast<real>(std::max(end - begin, period_));
     if (counts_impossible(velocity_from_counts_[i], row.counts, impossible_speed_[i], dt)) {
       return OdometryError::kImpossibleCounts;
     }
@@ -163,6 +180,8 @@ std::optional<OdometryError> Odometry::push(const SensorRow& row, StepSink sink)
 
 std::optional<OdometryError> Odometry::push_wheels(double t, const Twist2& twist, StepSink sink) {
   if (!options_.use_wheels) return std::nullopt;
+  const double stamp = t;
+  t -= options_.wheels_latency;  // the true end of its interval
   if (!std::isfinite(t) || (wheels_seen_ && t < last_wheel_t_)) {
     return OdometryError::kWheelsBackwards;
   }
@@ -179,7 +198,7 @@ std::optional<OdometryError> Odometry::push_wheels(double t, const Twist2& twist
   drain(false, sink);
   // Mice silent while the wheels report: the epochs no mice row can reach
   // any more are final, so the wheel rows they need do not pile up.
-  sync_.advance(t, [&](const ArraySample& s) { on_epoch(s, sink); });
+  sync_.advance(stamp, [&](const ArraySample& s) { on_epoch(s, sink); });
   return deferred_error_;
 }
 
@@ -197,7 +216,7 @@ std::optional<OdometryError> Odometry::push_gyro(double t, double gz, StepSink s
   last_gyro_t_ = at;
   deferred_error_.reset();
   drain(false, sink);
-  sync_.advance(at, [&](const ArraySample& s) { on_epoch(s, sink); });
+  sync_.advance(t, [&](const ArraySample& s) { on_epoch(s, sink); });
   return deferred_error_;
 }
 
@@ -205,6 +224,7 @@ std::optional<OdometryError> Odometry::push_fix(const CameraFix& fix) {
   if (!options_.fuse_camera) return std::nullopt;
   if (pending_fixes_.full()) return OdometryError::kFixesFull;
   pending_fixes_.push_back(fix);
+  pending_fixes_.back().t -= options_.camera_latency.value_or(0.0);  // the capture time
   return std::nullopt;
 }
 
@@ -246,7 +266,8 @@ void Odometry::drain(bool all, StepSink sink) {
 void Odometry::apply_fixes(double t) {
   while (!pending_fixes_.empty()) {
     const CameraFix& f = pending_fixes_.front();
-    if (f.t + options_.camera_latency > t) return;
+    // Not before the epochs reach its stamp (capture + latency).
+    if (f.t + options_.camera_latency.value_or(0.0) > t) return;
     FixResult result;
     if (f.theta) {
       Mat3 r = Mat3::Zero();

@@ -37,10 +37,18 @@ OptionCheck SynchroniserOptions::validate() const {
   span.append_integer(kSpan);
   span.append(" periods");
   OptionsCheck c;
+  double earliest = 0.0, latest = 0.0;
+  for (const double l : latency) {
+    c.require(std::isfinite(l), "latency", "finite", l);
+    earliest = std::min(earliest, l);
+    latest = std::max(latest, l);
+  }
   c.positive("period", period)
       .positive("max_row_interval", max_row_interval)
       .at_most_named("max_row_interval", max_row_interval, span.message(),
-                     static_cast<double>(kSpan) * period);
+                     static_cast<double>(kSpan) * period)
+      .at_most_named("max_row_interval + latency spread", max_row_interval + latest - earliest,
+                     span.message(), static_cast<double>(kSpan) * period);
   c.positive_or_infinite("max_gap", max_gap);
   return c.result();
 }
@@ -48,6 +56,11 @@ OptionCheck SynchroniserOptions::validate() const {
 Synchroniser::Synchroniser(int n_sensors, double t0, SynchroniserOptions options)
     : n_(std::min(n_sensors, kMaxSensors)), t0_(t0), options_(options), last_row_t_(t0) {
   last_t_.fill(t0);
+  // Unused entries (sensors beyond n) take no part.
+  for (int i = 0; i < n_; ++i) {
+    const double l = options_.latency[static_cast<std::size_t>(i)];
+    latest_ = i == 0 ? l : std::max(latest_, l);
+  }
 }
 
 ArraySample& Synchroniser::slot(std::int64_t k) {
@@ -85,10 +98,10 @@ std::int64_t Synchroniser::epoch_of(double t) const {
 
 void Synchroniser::add(const SensorRow& row) {
   const auto i = static_cast<std::size_t>(row.sensor);
-  const double a = std::max(last_t_[i], row.t - options_.max_row_interval);
-  const double b = row.t;
+  const double b = end_of_row(row);
+  const double a = std::max(last_t_[i], b - options_.max_row_interval);
   last_t_[i] = b;
-  last_row_t_ = b;
+  last_row_t_ = row.t;
   const auto deposit = [&](std::int64_t k, double fraction) {
     // Rows are never older than the first pending epoch (see final_time()).
     ArraySample& s = slot(std::max(k, next_));
@@ -115,7 +128,8 @@ double Synchroniser::final_time(double t_row) const {
   // The first of the smallest, as std::min_element, without its branches.
   double oldest = last_t_[0];
   for (int i = 1; i < n_; ++i) oldest = std::min(oldest, last_t_[static_cast<std::size_t>(i)]);
-  return std::max(t_row - options_.max_row_interval, oldest);
+  // A later row, fed at t >= t_row, ends at t - latency >= t_row - latest_.
+  return std::max(t_row - latest_ - options_.max_row_interval, oldest);
 }
 
 }  // namespace moa

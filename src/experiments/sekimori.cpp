@@ -139,9 +139,11 @@ TrajectoryError camera_alone(const SimulatedRun& run) {
     truth.push_back({r.t, r.pose});
   }
   TrajectoryErrorAccumulator acc(truth);
+  // camera.csv stamps a fix at its arrival; it shows the robot camera.latency earlier.
   for (const auto& f : io::read_all<io::CameraRow>(run.dir() / "camera.csv")) {
-    const auto at = interpolate(truth, f.t);
-    if (at) acc.add(f.t, Pose2{f.position, at->theta});
+    const double captured = f.t - run.camera_latency();
+    const auto at = interpolate(truth, captured);
+    if (at) acc.add(captured, Pose2{f.position, at->theta});
   }
   return acc.result();
 }

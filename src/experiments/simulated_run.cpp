@@ -32,8 +32,8 @@ std::vector<std::string> odometry_flags(const OdometryOptions& o, const io::Robo
   if (!o.use_wheels) flags.emplace_back("--no-wheels");
   if (!o.use_imu) flags.emplace_back("--no-imu");
   if (o.fuse_camera) flags.emplace_back("--fuse-camera");
-  if (o.camera_latency != d.camera_latency) {
-    flags.insert(flags.end(), {"--camera-latency", fmt::format("{}", o.camera_latency)});
+  if (o.camera_latency) {
+    flags.insert(flags.end(), {"--camera-latency", fmt::format("{}", *o.camera_latency)});
   }
   if (o.rate != d.rate) flags.insert(flags.end(), {"--rate", fmt::format("{}", o.rate)});
   if (o.self_calibration.enabled) flags.emplace_back("--self-calibrate");

@@ -77,6 +77,10 @@ void check_mount(const Context& context, const SensorMount& m) {
   if (m.noise && (!std::isfinite(*m.noise) || *m.noise < 0.0)) {
     context.fail_key("noise", fmt::format("must be >= 0 (found {})", *m.noise));
   }
+  if (!(std::abs(m.latency) <= kMaxSensorLatency)) {
+    context.fail_key("latency", fmt::format("must be within -{0}..{0} s (found {1})",
+                                            kMaxSensorLatency, m.latency));
+  }
 }
 
 void check_count(const Context& context, std::size_t n) {
@@ -116,7 +120,7 @@ SensorMount parse_sensor(const YamlSource& source, const YAML::Node& node, std::
                          std::string& name) {
   name = sensor_name(source, node, index);
   const YamlFields f(source, node, "",
-                     {"name", "position", "yaw", "cpi", "scale", "mirrored", "max_speed", "noise"},
+                     {"name", "position", "yaw", "cpi", "scale", "mirrored", "max_speed", "noise", "latency"},
                      sensor_label(index, name));
   SensorMount m;
   const auto position = f.numbers("position", 2);
@@ -133,6 +137,7 @@ SensorMount parse_sensor(const YamlSource& source, const YAML::Node& node, std::
   m.mirrored = f.boolean("mirrored", m.mirrored);
   if (f.has("max_speed")) m.max_speed = f.positive("max_speed");
   if (f.has("noise")) m.noise = f.non_negative("noise", 0.0);
+  m.latency = static_cast<real>(f.bounded("latency", -kMaxSensorLatency, kMaxSensorLatency, 0.0));
   check_mount(Context(source.name(), sensor_label(index, name)), m);
   return m;
 }
@@ -172,6 +177,13 @@ RobotLimits parse_limits(const YamlSource& source, const YAML::Node& node) {
     source.fail(node, e->message());
   }
   return limits;
+}
+
+// `camera: {latency: S}` or `wheels: {latency: S}`: the stream's row t minus
+// the true time of what it reports (s).
+double parse_latency(const YamlSource& source, const YAML::Node& node, const char* key) {
+  const YamlFields f(source, node, key, {"latency"});
+  return f.bounded("latency", -kMaxStreamLatency, kMaxStreamLatency, 0.0);
 }
 
 // `imu: {scale, bias, noise_density, ...}`, each optional (GyroOptions'
@@ -230,7 +242,8 @@ RobotConfig parse_config(std::string_view yaml, std::string_view source_name) {
   }
   if (!has_version) source.fail(root, "missing key 'version'");
 
-  const YamlFields top(source, root, "", {"version", "sensors", "limits", "imu"});
+  const YamlFields top(source, root, "",
+                       {"version", "sensors", "limits", "imu", "camera", "wheels"});
   const YAML::Node sensors = top.required("sensors");
   if (!sensors.IsSequence()) {
     top.fail("sensors",
@@ -251,6 +264,8 @@ RobotConfig parse_config(std::string_view yaml, std::string_view source_name) {
   config.array = SensorArray(std::move(mounts));
   if (const auto limits = top.get("limits")) config.limits = parse_limits(source, *limits);
   if (const auto imu = top.get("imu")) config.imu = parse_imu(source, *imu);
+  if (const auto camera = top.get("camera")) config.camera_latency = parse_latency(source, *camera, "camera");
+  if (const auto wheels = top.get("wheels")) config.wheels_latency = parse_latency(source, *wheels, "wheels");
   return config;
 }
 
@@ -290,6 +305,7 @@ std::string format_config(const RobotConfig& config) {
     out += fmt::format("    mirrored: {}\n", m.mirrored);
     if (m.max_speed) out += fmt::format("    max_speed: {}\n", *m.max_speed);
     if (m.noise) out += fmt::format("    noise: {}\n", *m.noise);
+    if (m.latency != 0) out += fmt::format("    latency: {}\n", m.latency);
   }
   if (config.limits) {
     if (auto e = config.limits->validate()) {
@@ -312,6 +328,16 @@ std::string format_config(const RobotConfig& config) {
         g.scale, num(g.bias), g.noise_density, g.bias_random_walk, g.bias_sigma, g.scale_sigma,
         g.mount_yaw_sigma, g.max_rate, num(g.latency));
   }
+  const auto stream = [&](const char* key, const std::optional<double>& latency) {
+    if (!latency) return;
+    if (!(std::abs(*latency) <= kMaxStreamLatency)) {
+      context.fail(fmt::format("{0}: latency must be within -{1}..{1} s (found {2})", key,
+                               kMaxStreamLatency, *latency));
+    }
+    out += fmt::format("{}:\n  latency: {}\n", key, num(*latency));
+  };
+  stream("camera", config.camera_latency);
+  stream("wheels", config.wheels_latency);
   return out;
 }
 

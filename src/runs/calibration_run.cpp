@@ -320,13 +320,11 @@ void model_check(CalibrationSummary& r, const ExactModelCheck& check, const Robo
       OptionError::literal(log.string()), OptionError::literal(reason)));
 }
 
-void run_exact(CalibrationSummary& r, const RobotConfig& config, const fs::path& log,
-               const CalibrationOptions& options) {
-  const ReferenceData ref = read_reference(config, log, r.method, options);
-  check_sample_count(ref, r.method);
-  const ExactCalibration cal =
-      solved(calibrate_exact(config.array, ref.samples), log.string(), r.method);
-  common_sample_lines(r, ref, options);
+// The exact method's report and result, whatever its reference (`samples`:
+// how many intervals or windows it was given).
+void report_exact(CalibrationSummary& r, const RobotConfig& config, const fs::path& log,
+                  const CalibrationOptions& options, const ExactCalibration& cal,
+                  std::size_t samples) {
   const Eigen::Vector3d ref_sd = cal.noise.reference_covariance.diagonal().cwiseSqrt();
   r.facts.push_back(fmt::format(
       "reference noise (estimated, 1-sigma per interval): vx {:.4g} m/s, vy {:.4g} m/s, omega "
@@ -393,12 +391,123 @@ void run_exact(CalibrationSummary& r, const RobotConfig& config, const fs::path&
   }
   if (cal.model_misfit || cal.check.misfit()) r.termination = CalibrationTermination::kModelMisfit;
   model_check(r, cal.check, config, log, options.force);
-  if (ref.samples.size() < 30) {
-    r.warnings.push_back(fmt::format(
-        "only {} samples: the noise levels (and so the 1-sigma) are rough", ref.samples.size()));
+  if (samples < 30) {
+    r.warnings.push_back(
+        fmt::format("only {} samples: the noise levels (and so the 1-sigma) are rough", samples));
   }
   r.calibrated.array = cal.calibrated;
   r.result = cal;
+}
+
+void run_exact_wheels(CalibrationSummary& r, const RobotConfig& config, const fs::path& log,
+                      const CalibrationOptions& options) {
+  const ReferenceData ref = read_reference(config, log, r.method, options);
+  check_sample_count(ref, r.method);
+  const ExactCalibration cal =
+      solved(calibrate_exact(config.array, ref.samples), log.string(), r.method);
+  common_sample_lines(r, ref, options);
+  report_exact(r, config, log, options, cal, ref.samples.size());
+}
+
+// camera.csv's fixes with theta (motion capture) and mice.csv as one
+// CountsTrack per sensor; then calibrate_against_poses.
+void run_exact_camera(CalibrationSummary& r, const RobotConfig& config, const fs::path& log,
+                      const CalibrationOptions& options) {
+  const LogFiles files = resolve_log(log);
+  const fs::path camera = files.dir / "camera.csv";
+  if (!files.camera) {
+    throw OptionError(fmt::format(
+        "{}: not found: {{method}} exact {{reference}} camera needs the poses (t,x,y,theta) of "
+        "the robot",
+        OptionError::literal(camera.string())));
+  }
+  std::vector<PoseFix> fixes;
+  std::size_t rows = 0;
+  for (const auto& row : read_all<CameraRow>(camera)) {
+    ++rows;
+    if (!row.theta) continue;
+    if (!fixes.empty() && !(row.t > fixes.back().t)) {
+      throw Error(fmt::format("{}: data row {} (t = {} s): not after the previous fix (t = {} s)",
+                              camera.string(), rows, row.t, fixes.back().t));
+    }
+    fixes.push_back({row.t, Pose2{row.position, *row.theta}});
+  }
+  if (fixes.empty()) {
+    throw Error(fmt::format(
+        "{}: {} data rows and none with theta: the exact calibration against the camera needs "
+        "the heading (motion capture); positions only (a ceiling camera) is not supported yet",
+        camera.string(), rows));
+  }
+
+  const int n = config.array.size();
+  std::vector<CountsTrack> tracks(static_cast<std::size_t>(n),
+                                  CountsTrack(options.max_row_interval));
+  MiceReader reader(files.mice, config);
+  CountsCheck counts(config, reader.start_time(), options.max_row_interval);
+  while (const auto row = reader.next()) {
+    counts.check(*row, reader);
+    tracks[static_cast<std::size_t>(row->sensor)].add(
+        row->t, row->counts, (row->flags & (kFlagLift | kFlagOverflow)) != 0);
+  }
+  std::vector<double> latency;
+  for (int i = 0; i < n; ++i) latency.push_back(config.array[i].latency);
+  PoseReferenceOptions po;
+  po.max_offset = options.max_offset;
+  po.window = options.window;
+  const double camera_latency = config.camera_latency.value_or(0.0);
+  auto result =
+      calibrate_against_poses(config.array, tracks, latency, fixes, camera_latency, po);
+  if (const auto* f = std::get_if<PoseReferenceFailure>(&result)) {
+    std::string what = describe(f->error);
+    if (f->exact_error) what += fmt::format(": {}", describe(*f->exact_error));
+    if (f->error == PoseReferenceError::kNoCorrelation) {
+      what = fmt::format(
+          "{} (best correlation {:.3g} within {} s of the configured camera latency {} s)", what,
+          f->correlation, options.max_offset, camera_latency);
+    }
+    throw Error(fmt::format("{}: exact against {}: {}", log.string(), camera.string(), what));
+  }
+  const PoseReferenceCalibration& pr = std::get<PoseReferenceCalibration>(result);
+  r.facts.push_back(fmt::format(
+      "reference: {} ({} fixes with theta of {} rows), {} windows of at least {} s",
+      camera.string(), fixes.size(), rows, pr.windows, options.window));
+  r.facts.push_back(fmt::format(
+      "coarse alignment: camera latency {:.4f} s (speed correlation {:.3f}, searched {} s around "
+      "{} s)",
+      pr.coarse_latency, pr.correlation, options.max_offset, camera_latency));
+  std::vector<std::string> lat;
+  for (int i = 0; i < n; ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    lat.push_back(pr.latency_estimated[u]
+                      ? fmt::format("{} {:.2f} +- {:.2f} ms", config.names[u], 1e3 * pr.latency[u],
+                                    1e3 * pr.latency_sigma[u])
+                      : fmt::format("{} {:.2f} ms (kept: no acceleration)", config.names[u],
+                                    1e3 * pr.latency[u]));
+  }
+  r.facts.push_back(fmt::format(
+      "latencies (gauge: the sensors' mean as configured): {}; camera {:.2f} +- {:.2f} ms",
+      fmt::join(lat, ", "), 1e3 * pr.reference_latency, 1e3 * pr.reference_latency_sigma));
+  report_exact(r, config, log, options, pr.exact, static_cast<std::size_t>(pr.windows));
+  std::vector<SensorMount> mounts(r.calibrated.array.mounts().begin(),
+                                  r.calibrated.array.mounts().end());
+  for (int i = 0; i < n; ++i) mounts[static_cast<std::size_t>(i)].latency = pr.latency[static_cast<std::size_t>(i)];
+  r.calibrated.array = SensorArray(mounts);
+  r.calibrated.camera_latency = pr.reference_latency;
+  r.pose_reference = pr;
+}
+
+void run_exact(CalibrationSummary& r, const RobotConfig& config, const fs::path& log,
+               const CalibrationOptions& options) {
+  // Default: wheels.csv when the log has it, else camera.csv when it has
+  // that, else wheels (whose error names the missing file).
+  const LogFiles files = resolve_log(log);
+  const ExactReference reference = options.reference.value_or(
+      !files.wheels && files.camera ? ExactReference::kCamera : ExactReference::kWheels);
+  if (reference == ExactReference::kWheels) {
+    run_exact_wheels(r, config, log, options);
+  } else {
+    run_exact_camera(r, config, log, options);
+  }
 }
 
 void run_guided(CalibrationSummary& r, const RobotConfig& config, const std::string& config_path,
@@ -650,6 +759,8 @@ void json_array(JsonWriter& json, const Vector& xs) {
 OptionCheck CalibrationOptions::validate() const {
   OptionsCheck c;
   c.positive("max_row_interval", max_row_interval);
+  c.positive("max_offset", max_offset);
+  c.positive("window", window);
   if (min_interval) c.non_negative("min_interval", *min_interval);
   if (measurements) c.at_least("measurements", *measurements, 0);
   if (distance) c.positive("distance", *distance);
@@ -849,6 +960,22 @@ std::string CalibrationSummary::to_json(std::string_view out) const {
         .key("reference_noise_sd");
     json_array(json, ref_sd);
     json.member("converged", e->converged);
+    if (pose_reference) {
+      // Against the camera: the latencies (s), gauge the sensors' configured mean.
+      const PoseReferenceCalibration& p = *pose_reference;
+      json.key("camera")
+          .begin_object()
+          .member("latency_s", p.reference_latency)
+          .member("latency_sigma_s", p.reference_latency_sigma)
+          .member("coarse_latency_s", p.coarse_latency)
+          .member("correlation", p.correlation)
+          .member("windows", p.windows)
+          .key("sensor_latency_s");
+      json_array(json, p.latency);
+      json.key("sensor_latency_sigma_s");
+      json_array(json, p.latency_sigma);
+      json.end_object();
+    }
   } else if (const auto* g = std::get_if<GuidedCalibration>(&result)) {
     json.member("isotropic_scale", g->isotropic_scale)
         .member("push_x_reversed", g->push_x_reversed)

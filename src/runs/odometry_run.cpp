@@ -118,6 +118,9 @@ std::unique_ptr<Odometry> make_odometry(const RobotConfig& config, const std::st
   OdometryOptions options = given;
   if (config.limits) options.consensus.limits = *config.limits;
   if (config.imu) options.consensus.gyro = *config.imu;
+  // --camera-latency overrides the config's; the wheels' has no flag.
+  if (!options.camera_latency) options.camera_latency = config.camera_latency.value_or(0.0);
+  if (config.wheels_latency) options.wheels_latency = *config.wheels_latency;
   // A log's imu.csv is used with the defaults of GyroOptions when the config
   // has no imu: block; one sensor then takes its rotation from it.
   options.consensus.gyro_fed = options.use_imu;

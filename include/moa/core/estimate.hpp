@@ -34,6 +34,9 @@ enum class GeometryError {
   kTooManySensors,  ///< more than kMaxSensors, or a mask bit past the array
   kRankDeficient,   ///< A^T A singular: the sensors do not observe rotation
   kInvalidMount,    ///< cpi, scale or noise not positive and finite
+  /// the sensors' latencies spread wider than the synchroniser's pending
+  /// epochs hold (SynchroniserOptions::validate)
+  kLatencySpread,
 };
 const char* describe(GeometryError error);
 

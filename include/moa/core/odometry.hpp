@@ -21,7 +21,10 @@
 // wheels are used, once a wheel row at or after t has been fed (or finish()
 // is called), so the wheel twist averaged over the epoch is complete. A
 // camera fix captured at t_c is applied at the first epoch ending at or after
-// t_c + camera_latency, at its capture time (PoseEkf handles late fixes).
+// its stamp t (captured at t - camera_latency, PoseEkf handles late fixes).
+// Every stream is shifted by its latency (a row's t minus the true time of
+// what it reports): the mice per sensor in the synchroniser
+// (SensorMount::latency), the wheels, the gyro and the fixes here.
 //
 // Heap-free: fixed-size state and rings (kMaxSensors, kMaxPendingEpochs,
 // PoseEkf::kHistory); the sink is a non-owning callable reference.
@@ -89,7 +92,14 @@ struct OdometryOptions {
   /// fuse_camera the first fix fed before the first epoch is processed.
   std::optional<Pose2> initial;
   bool fuse_camera = false;          ///< EKF with camera fixes
-  double camera_latency = 0.0;       ///< s from a fix's capture to its arrival
+  /// s, a fix's t minus its true capture time (the camera's stamp is its
+  /// arrival, or another clock's): the fix is taken as captured at
+  /// t - camera_latency and applied once the epochs reach t. nullopt: the
+  /// config's `camera: {latency}`, else 0 (io::make_odometry resolves it).
+  std::optional<double> camera_latency;
+  /// s, a wheel row's t minus the true end of its interval (the config's
+  /// `wheels: {latency}`).
+  double wheels_latency = 0.0;
   real camera_sigma = 0.005;         ///< m, fix sd when the fix gives none
   real camera_heading_sigma = 0.02;  ///< rad, sd of a fix's heading
   SekimoriOptions sekimori;

@@ -28,6 +28,9 @@ struct SensorMount {
   bool mirrored = false;          ///< sensor y axis clockwise from x
   std::optional<real> max_speed;  ///< m/s, rated tracking speed
   std::optional<real> noise;      ///< m/s, std. dev. of each velocity axis
+  /// s, a row's t minus the true end of its interval (USB polling, the
+  /// firmware's K-frame accumulation); the synchroniser shifts the rows back.
+  real latency = 0.0;
 
   /// k = cpi / 0.0254: counts per metre before the per-axis scale.
   real counts_per_metre() const { return cpi / kMetresPerInch; }

@@ -95,11 +95,17 @@ struct SynchroniserOptions {
   /// It also bounds the silences summed over the stream (see
   /// Synchroniser::silence_allowed).
   double max_gap = 3600.0;
+  /// s per sensor, a row's t minus the true end of its interval
+  /// (SensorMount::latency): sensor i's row at t covers an interval ending at
+  /// t - latency[i], clamped to t0. Rows are still fed in the order of their
+  /// t; the epochs wait for max(latency) - min(latency) more.
+  std::array<double, kMaxSensors> latency{};
 
   /// nullopt when usable, else the first field out of its bounds
   /// (options_check.hpp): period and max_row_interval positive and finite,
-  /// max_row_interval at most kMaxPendingEpochs - 3 periods, max_gap
-  /// positive (infinite: no limit).
+  /// max_row_interval plus the latencies' spread at most
+  /// kMaxPendingEpochs - 3 periods, max_gap positive (infinite: no limit),
+  /// latencies finite.
   OptionCheck validate() const;
 };
 
@@ -132,7 +138,15 @@ class Synchroniser {
   /// t - max_row_interval, so the epochs that end by then are final.
   template <class Sink>
   void advance(double t, Sink&& sink) {
-    if (std::isfinite(t) && t >= last_row_t_) emit_until(t - options_.max_row_interval, sink);
+    if (std::isfinite(t) && t >= last_row_t_) {
+      emit_until(t - latest_ - options_.max_row_interval, sink);
+    }
+  }
+
+  /// s, the true end of a row's interval: t - latency of its sensor, not
+  /// before t0.
+  double end_of_row(const SensorRow& row) const {
+    return std::max(row.t - options_.latency[static_cast<std::size_t>(row.sensor)], t0_);
   }
 
   /// Emits every remaining epoch up to t_end (the last epoch is cut at
@@ -205,6 +219,7 @@ class Synchroniser {
   std::array<double, kMaxSensors> last_t_{};        // per sensor, end of its previous row
   std::int64_t next_ = 0;                           // first epoch not yet emitted
   double last_row_t_;
+  double latest_ = 0.0;    // s, the largest latency of the n sensors
   double silence_ = 0.0;   // s, see silence()
   std::int64_t rows_ = 0;  // rows accepted
 };

@@ -23,6 +23,10 @@
 //     mount_yaw_sigma: 0.0035    # rad, sd of a sensor's yaw mount error
 //     max_rate: 8.7              # rad/s, full scale
 //     latency: 0.0               # s, a row's t minus the true end of its interval
+//   camera:                      # optional (moa extension)
+//     latency: 0.06              # s, a camera.csv t minus the true capture time
+//   wheels:                      # optional (moa extension)
+//     latency: 0.0               # s, a wheels.csv t minus the true end of its interval
 //
 // Unknown keys and missing required keys are errors that name the line,
 // the key and the sensor; so are wrong types, non-finite numbers, cpi or
@@ -42,6 +46,12 @@
 
 namespace moa::io {
 
+/// s, the largest |latency| of a sensor (the synchroniser holds the rows of
+/// the latencies' spread) and of the camera or wheels (another computer's
+/// clock may be further off: moa calibrate --max-offset).
+inline constexpr double kMaxSensorLatency = 1.0;
+inline constexpr double kMaxStreamLatency = 60.0;
+
 struct RobotConfig {
   std::vector<std::string> names;  ///< one per sensor, in array order
   SensorArray array;
@@ -52,6 +62,11 @@ struct RobotConfig {
   /// The gyro (key `imu`); unset: the defaults of GyroOptions, used when a
   /// log has imu.csv.
   std::optional<GyroOptions> imu = std::nullopt;
+  /// s, camera.csv's t minus the true capture time (key `camera: {latency}`);
+  /// unset: 0, or --camera-latency.
+  std::optional<double> camera_latency = std::nullopt;
+  /// s, wheels.csv's t minus the true end of its interval (`wheels: {latency}`).
+  std::optional<double> wheels_latency = std::nullopt;
 
   /// Index of the sensor called `name`, nullopt if there is none.
   std::optional<int> index_of(std::string_view name) const;

@@ -37,6 +37,7 @@
 #include "moa/calibration/guided.hpp"
 #include "moa/calibration/gyro_calibration.hpp"
 #include "moa/calibration/kimlee.hpp"
+#include "moa/calibration/pose_reference.hpp"
 #include "moa/core/names.hpp"
 #include "moa/formats/config.hpp"
 
@@ -59,6 +60,14 @@ enum class CalibrationMethod { kKimLee, kExact, kGuided };
 ///                  capture time t)
 enum class GyroReference { kArray, kArrayNominal, kWheels, kCamera };
 
+/// What the exact method calibrates the mounts against.
+///   wheels   wheels.csv's twists (the default when the log has wheels.csv)
+///   camera   camera.csv's poses with theta (motion capture): the mounts,
+///            every sensor's latency and the camera's latency relative to the
+///            array (calibration/pose_reference.hpp; the default without
+///            wheels.csv)
+enum class ExactReference { kWheels, kCamera };
+
 }  // namespace moa::io
 
 template <>
@@ -68,6 +77,14 @@ struct moa::EnumNames<moa::io::GyroReference> {
       {io::GyroReference::kArrayNominal, "array-nominal"},
       {io::GyroReference::kWheels, "wheels"},
       {io::GyroReference::kCamera, "camera"},
+  }};
+};
+
+template <>
+struct moa::EnumNames<moa::io::ExactReference> {
+  static constexpr std::array<NameEntry<io::ExactReference>, 2> kTable{{
+      {io::ExactReference::kWheels, "wheels"},
+      {io::ExactReference::kCamera, "camera"},
   }};
 };
 
@@ -107,8 +124,15 @@ struct CalibrationOptions {
   /// imu.csv: its scale, bias and latency into the config's imu: block.
   bool imu = true;
   GyroReference imu_reference = GyroReference::kArray;
+  /// exact: the reference; unset: wheels when the log has wheels.csv, else camera.
+  std::optional<ExactReference> reference;
+  /// exact against the camera: s, the coarse latency search's range around
+  /// the configured camera latency (clocks further apart need more).
+  double max_offset = 1.0;
+  /// exact against the camera: s, least window between two fixes.
+  double window = 0.2;
   /// nullopt when the numbers can be used, else the first field out of its
-  /// bounds (core/options_check.hpp): max_row_interval positive,
+  /// bounds (core/options_check.hpp): max_row_interval, max_offset and window positive,
   /// min_interval and measurements not negative, distance positive, turns
   /// finite and not 0, every tolerance positive. Which options a method
   /// needs is check_calibration_options'.
@@ -186,6 +210,8 @@ struct CalibrationSummary {
   std::vector<std::string> warnings;
   /// The method's own result.
   std::variant<KimLeeCalibration, ExactCalibration, GuidedCalibration> result;
+  /// exact against the camera: the latencies (the mounts are in `result`).
+  std::optional<PoseReferenceCalibration> pose_reference;
   /// The gyro's, when the log has imu.csv and options.imu (kimlee, exact).
   std::optional<GyroCalibrationReport> gyro;
 
