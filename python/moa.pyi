@@ -88,7 +88,8 @@ def read_config(path: PathLike) -> dict[str, Any]:
 
     Returns names (list of str), position (N, 2) m robot frame, yaw (N,) rad,
     cpi (N,), scale (N, 2), mirrored (N,) bool, max_speed (N,) m/s and noise
-    (N,) m/s (NaN where the config gives none).
+    (N,) m/s (NaN where the config gives none), latency (N,) s, camera_latency
+    and wheels_latency (s, None where the config gives none).
     """
 
 def read_log(config: ConfigLike, log_dir: PathLike) -> dict[str, Any]:
@@ -234,8 +235,15 @@ def calibrate(
     centre_sd: float = 0.001,
     heading_sd: float = 0.0044,
     force: bool = False,
+    no_imu: bool = False,
+    imu_reference: Optional[str] = None,
+    reference: Optional[str] = None,
+    max_offset: float = 1.0,
+    window: float = 0.2,
 ) -> Calibration:
-    """Runs `moa calibrate`: exact, kimlee (log_dir with wheels.csv) or guided (recordings)."""
+    """Runs `moa calibrate`: exact (against wheels.csv, or camera.csv with
+    reference="camera": motion capture or a ceiling camera's positions, with
+    every stream's latency), kimlee (log_dir with wheels.csv) or guided."""
 
 def simulate(scenario: str, seed: int = 1, out: Optional[PathLike] = None) -> dict[str, Any]:
     """Runs the simulator; with out, also writes the log there. Returns arrays:

@@ -87,7 +87,7 @@ Config load_config(const py::handle& config) {
 
 py::dict config_dict(const io::RobotConfig& c) {
   const auto n = static_cast<std::size_t>(c.array.size());
-  std::vector<double> position, yaw, cpi, scale, max_speed, noise;
+  std::vector<double> position, yaw, cpi, scale, max_speed, noise, latency;
   py::array_t<bool> mirrored(static_cast<py::ssize_t>(n));
   for (std::size_t i = 0; i < n; ++i) {
     const SensorMount& m = c.array[static_cast<int>(i)];
@@ -98,6 +98,7 @@ py::dict config_dict(const io::RobotConfig& c) {
     mirrored.mutable_at(static_cast<py::ssize_t>(i)) = m.mirrored;
     max_speed.push_back(m.max_speed.value_or(std::nan("")));
     noise.push_back(m.noise.value_or(std::nan("")));
+    latency.push_back(m.latency);
   }
   const auto rows = static_cast<py::ssize_t>(n);
   py::dict d;
@@ -109,6 +110,10 @@ py::dict config_dict(const io::RobotConfig& c) {
   d["mirrored"] = mirrored;
   d["max_speed"] = to_numpy(std::move(max_speed));
   d["noise"] = to_numpy(std::move(noise));
+  d["latency"] = to_numpy(std::move(latency));  // s, per sensor
+  // s, None when the config does not say
+  d["camera_latency"] = c.camera_latency ? py::cast(*c.camera_latency) : py::none();
+  d["wheels_latency"] = c.wheels_latency ? py::cast(*c.wheels_latency) : py::none();
   return d;
 }
 
@@ -434,7 +439,10 @@ const std::set<std::string> kCalibrationOptions{"max_row_interval",
                                                 "heading_sd",
                                                 "force",
                                                 "no_imu",
-                                                "imu_reference"};
+                                                "imu_reference",
+                                                "reference",
+                                                "max_offset",
+                                                "window"};
 
 io::CalibrationSummary calibrate(const py::object& config_path, const py::object& log,
                                  const std::string& method_name, const py::kwargs& kwargs) {
@@ -468,6 +476,13 @@ io::CalibrationSummary calibrate(const py::object& config_path, const py::object
     }
     options.imu_reference = *r;
   }
+  if (const auto reference = o.get<std::string>("reference")) {
+    const auto r = from_name<io::ExactReference>(*reference);
+    if (!r) throw io::Error(fmt::format("reference: unknown reference '{}' (wheels, camera)", *reference));
+    options.reference = *r;
+  }
+  o.set("max_offset", options.max_offset);
+  o.set("window", options.window);
   const fs::path log_path = log.is_none() ? fs::path() : log.cast<fs::path>();
   io::check_calibration_options(*method, log_path, options);
   const Config config = load_config(config_path);
@@ -881,7 +896,11 @@ method: exact (all extrinsics against wheels.csv), kimlee (positions, Kim &
 Lee) or guided (log_dir None; push_x, push_y, spin recordings). Options, as
 the command's flags: max_row_interval (s), min_interval (s), measurements;
 guided: push_x, push_y, spin (paths), distance (m), turns, distance_sd (m),
-turn_sd (rad), centre_sd (m), heading_sd (rad). Returns a moa.Calibration.)");
+turn_sd (rad), centre_sd (m), heading_sd (rad); exact: reference ("wheels" or
+"camera": camera.csv with theta from motion capture, or positions only from a
+ceiling camera; default wheels when the log has wheels.csv), max_offset (s,
+the latency search's range), window (s, least window between fixes).
+Returns a moa.Calibration; its config carries the latencies found.)");
 
   m.def("simulate", &simulate, py::arg("scenario"), py::arg("seed") = 1,
         py::arg("out") = py::none(), R"(Runs the simulator (`moa simulate`).

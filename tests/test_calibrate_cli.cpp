@@ -94,14 +94,19 @@ TEST(CalibrateCli, ExactMeetsTheLimitsOnNoisyMixedMotion) {
 
 // camera.csv (t,x,y,theta) of a synthesised log's truth, the fixes at its
 // row times, stamped `late` s after capture.
-void write_camera(const fs::path& dir, const SensorArray& truth, double duration, double late) {
+// With `positions_only`, a ceiling camera's t,x,y every fourth row (25 Hz).
+void write_camera(const fs::path& dir, const SensorArray& truth, double duration, double late,
+                  bool positions_only = false) {
   const test::SynthLog log = test::synthesise(truth, test::mixed_motion, duration, 0.01);
   std::ofstream camera(dir / "camera.csv");
   camera.precision(9);
-  camera << "t,x,y,theta\n";
-  for (const auto& p : log.truth) {
-    camera << p.t + late << "," << p.pose.t.x() << "," << p.pose.t.y() << ","
-           << wrap_angle(p.pose.theta) << "\n";
+  camera << (positions_only ? "t,x,y\n" : "t,x,y,theta\n");
+  for (std::size_t k = 0; k < log.truth.size(); ++k) {
+    const auto& p = log.truth[k];
+    if (positions_only && k % 4 != 0) continue;
+    camera << p.t + late << "," << p.pose.t.x() << "," << p.pose.t.y();
+    if (!positions_only) camera << "," << wrap_angle(p.pose.theta);
+    camera << "\n";
   }
 }
 
@@ -122,6 +127,43 @@ TEST(CalibrateCli, ExactAgainstTheCameraWritesMountsAndLatencies) {
     EXPECT_LT((cal.array[i].position - robot.truth[i].position).cwiseAbs().maxCoeff(), 0.3e-3)
         << kNames[i];
     EXPECT_NEAR(cal.array[i].latency, 0.0, 1e-4) << kNames[i];
+    EXPECT_EQ(cal.array[i].mirrored, robot.truth[i].mirrored) << kNames[i];
+  }
+  fs::remove_all(robot.dir);
+}
+
+TEST(CalibrateCli, ExactAgainstACeilingCameraKeepsTheMeanYawAsItsGauge) {
+  // Positions only at 25 Hz, exact, 60 ms late: the robot frame's
+  // orientation is not seen, the sensors' mean yaw stays nominal and the
+  // rest is compared in that frame (the truth turned by its mean yaw change).
+  const CheckRobot robot("cal-ceiling");
+  fs::remove(robot.dir / "wheels.csv");
+  write_camera(robot.dir, robot.truth, 20.0, 0.06, true);
+  const auto r = test::run_moa(calibrate_args(robot.dir, "exact"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("positions only"));
+  EXPECT_THAT(r.out, HasSubstr("gauge: the robot frame's orientation is not seen"));
+  const io::RobotConfig cal = io::read_config(robot.dir / "cal.yaml");
+  ASSERT_TRUE(cal.camera_latency.has_value());
+  EXPECT_NEAR(*cal.camera_latency, 0.06, 1e-3);
+  // The gauge's mean is over the sensors whose mirroring the data kept (b's
+  // flip changes what its yaw means).
+  double sn = 0.0, cs = 0.0, sn_cal = 0.0, cs_cal = 0.0;
+  for (int i = 0; i < 4; ++i) {
+    if (robot.truth[i].mirrored != robot.nominal[i].mirrored) continue;
+    sn += std::sin(wrap_angle(robot.truth[i].yaw - robot.nominal[i].yaw));
+    cs += std::cos(wrap_angle(robot.truth[i].yaw - robot.nominal[i].yaw));
+    sn_cal += std::sin(wrap_angle(cal.array[i].yaw - robot.nominal[i].yaw));
+    cs_cal += std::cos(wrap_angle(cal.array[i].yaw - robot.nominal[i].yaw));
+  }
+  EXPECT_NEAR(std::atan2(sn_cal, cs_cal), 0.0, 1e-6);
+  const double delta = std::atan2(sn, cs);
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Vector2d p = rotation(-delta) * robot.truth[i].position;
+    EXPECT_LT((cal.array[i].position - p).cwiseAbs().maxCoeff(), 1e-3) << kNames[i];
+    EXPECT_LT(std::abs(wrap_angle(cal.array[i].yaw - (robot.truth[i].yaw - delta))),
+              0.1 * std::numbers::pi / 180.0)
+        << kNames[i];
     EXPECT_EQ(cal.array[i].mirrored, robot.truth[i].mirrored) << kNames[i];
   }
   fs::remove_all(robot.dir);
@@ -336,14 +378,15 @@ TEST_F(CalibrateCliBadInput, MalformedWheelsRowNamesFileAndLine) {
 TEST_F(CalibrateCliBadInput, CameraReferenceWithoutCameraCsvIsAnError) {
   const auto r = test::run_moa(calibrate_args(dir_, "exact") + " --reference camera");
   expect_one_line_error(r,
-                        "camera.csv: not found: --method exact --reference camera needs the poses");
+                        "camera.csv: not found: --method exact --reference camera needs the camera's "
+                        "fixes");
   EXPECT_FALSE(fs::exists(out()));
 }
 
-TEST_F(CalibrateCliBadInput, CameraWithoutThetaIsAnError) {
+TEST_F(CalibrateCliBadInput, CameraPositionsWithTooFewFixesAreAnError) {
   std::ofstream(dir_ / "camera.csv") << "t,x,y\n0,0,0\n0.1,0.01,0\n";
   const auto r = test::run_moa(calibrate_args(dir_, "exact") + " --reference camera");
-  expect_one_line_error(r, "camera.csv: 2 data rows and none with theta");
+  expect_one_line_error(r, "fewer than 20 windows between fixes");
   EXPECT_FALSE(fs::exists(out()));
 }
 

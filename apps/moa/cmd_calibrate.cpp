@@ -163,9 +163,10 @@ void add_calibrate(CLI::App& app, Action& action) {
       ->check(CLI::IsMember({"array", "array-nominal", "wheels", "camera"}))
       ->capture_default_str();
   cmd->add_option("--reference", args->reference,
-                  "exact: wheels (wheels.csv's twists) or camera (camera.csv's poses with theta: "
-                  "the mounts, every sensor's latency and the camera's); default wheels when the "
-                  "log has wheels.csv, else camera")
+                  "exact: wheels (wheels.csv's twists) or camera (camera.csv's poses with theta, "
+                  "or its positions only with the sensors' mean yaw as the gauge: the mounts, "
+                  "every sensor's latency and the camera's); default wheels when the log has "
+                  "wheels.csv, else camera")
       ->check(CLI::IsMember({"wheels", "camera"}));
   cmd->add_option("--max-offset", args->options.max_offset,
                   "exact against the camera: s, range of the coarse latency search around the "

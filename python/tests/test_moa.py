@@ -333,6 +333,29 @@ def test_calibrate_refuses_a_misfit_unless_forced(logs, tmp_path):
     assert good.usable and good.termination == "converged"
 
 
+def test_calibrate_against_a_ceiling_camera_equals_the_command(logs, tmp_path):
+    # camera.csv from truth.csv: the centre's positions at every fourth row,
+    # stamped 50 ms late; no wheels.csv.
+    d = tmp_path / "ceiling"
+    d.mkdir()
+    for f in ["mice.csv", "robot.yaml"]:
+        (d / f).write_bytes((logs["calibration"] / f).read_bytes())
+    truth = read_csv(logs["calibration"] / "truth.csv")
+    rows = [f"{float(t) + 0.05:.6f},{x},{y}"
+            for k, (t, x, y) in enumerate(zip(truth["t"], truth["x"], truth["y"])) if k % 4 == 0]
+    (d / "camera.csv").write_text("t,x,y\n" + "\n".join(rows) + "\n")
+    out = tmp_path / "ceiling.yaml"
+    code, stdout, err = run("calibrate", "--method", "exact", "--reference", "camera", "--config",
+                            d / "robot.yaml", "--log", d, "--out", out, "--force")
+    assert code == 0, err
+    cal = moa.calibrate(d / "robot.yaml", d, method="exact", reference="camera", force=True)
+    assert cal.to_yaml() == out.read_text()
+    assert "positions only" in " ".join(cal.facts)
+    assert abs(moa.read_config(out)["camera_latency"] - 0.05) < 0.005
+    with pytest.raises(moa.Error, match="reference: unknown reference 'mocap'"):
+        moa.calibrate(d / "robot.yaml", d, method="exact", reference="mocap")
+
+
 def as_keywords(message):
     """The CLI's message with each flag as the option's keyword (--no-wheels: no_wheels):
     the library names options by their field, the CLI renders them as flags."""

@@ -1,5 +1,6 @@
 #include "moa/calibration/pose_reference.hpp"
 
+#include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
@@ -268,12 +269,21 @@ double fit_common_offset(std::span<const CountsTrack> tracks, const SensorArray&
   return information;
 }
 
-}  // namespace
+bool valid_fix_times(std::span<const double> t) {
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    if (!std::isfinite(t[k]) || (k > 0 && !(t[k] > t[k - 1]))) return false;
+  }
+  return true;
+}
 
-std::variant<PoseReferenceCalibration, PoseReferenceFailure> calibrate_against_poses(
+// calibrate_against_poses; `positions`: the fixes' headings come from the
+// array (calibrate_against_positions), which has found L_r itself: no
+// coarse search, no common offset (the rotation is the array's own, the
+// translation's windows too few), only the mounts and the offsets d_i.
+std::variant<PoseReferenceCalibration, PoseReferenceFailure> fit_poses(
     const SensorArray& nominal, std::span<const CountsTrack> tracks,
     std::span<const double> latency, std::span<const PoseFix> fixes, double reference_latency,
-    const PoseReferenceOptions& options) {
+    const PoseReferenceOptions& options, bool positions) {
   const auto fail = [](PoseReferenceError e) { return PoseReferenceFailure{e, std::nullopt}; };
   const int n = nominal.size();
   if (static_cast<int>(tracks.size()) != n || static_cast<int>(latency.size()) != n) {
@@ -291,51 +301,54 @@ std::variant<PoseReferenceCalibration, PoseReferenceFailure> calibrate_against_p
   }
   const std::vector<Window> windows = windows_of(fixes, options.window);
 
-  // 1. Coarse: the reference's latency L_r by the speeds' correlation.
-  const double m = options.max_offset;
-  std::vector<const Window*> in_range;
-  for (const Window& w : windows) {
-    bool ok = true;
-    for (int i = 0; i < n && ok; ++i) {
-      const auto u = static_cast<std::size_t>(i);
-      ok = covered(tracks[u], w, latency[u] - reference_latency, m);
+  PoseReferenceCalibration out;
+  out.coarse_latency = reference_latency;
+  if (!positions) {
+    // 1. Coarse: the reference's latency L_r by the speeds' correlation.
+    const double m = options.max_offset;
+    std::vector<const Window*> in_range;
+    for (const Window& w : windows) {
+      bool ok = true;
+      for (int i = 0; i < n && ok; ++i) {
+        const auto u = static_cast<std::size_t>(i);
+        ok = covered(tracks[u], w, latency[u] - reference_latency, m);
+      }
+      if (ok) in_range.push_back(&w);
     }
-    if (ok) in_range.push_back(&w);
-  }
-  if (static_cast<int>(in_range.size()) < kMinWindows) return fail(PoseReferenceError::kTooFewFixes);
-  // Per window and sensor: the sensor point's speed by the reference at the
-  // nominal position, |z_xy + z_theta J p_i| / dt, against the sensor's own,
-  // |c_i| / (k_i dt) (neither yaw nor mirroring changes it).
-  const int lags = static_cast<int>(std::ceil(m / kLagStep));
-  std::vector<double> ref_speed, array_speed, c;
-  for (const Window* w : in_range) {
-    for (int i = 0; i < n; ++i) {
-      const Eigen::Vector2d p = nominal[i].position;
-      const Eigen::Vector2d v = w->z.head<2>() + w->z(2) * Eigen::Vector2d(-p.y(), p.x());
-      ref_speed.push_back(v.norm() / (w->tb - w->ta));
-    }
-  }
-  array_speed.resize(ref_speed.size());
-  for (int j = -lags; j <= lags; ++j) {
-    const double lr = reference_latency + j * kLagStep;
-    std::size_t row = 0;
+    if (static_cast<int>(in_range.size()) < kMinWindows) return fail(PoseReferenceError::kTooFewFixes);
+    // Per window and sensor: the sensor point's speed by the reference at the
+    // nominal position, |z_xy + z_theta J p_i| / dt, against the sensor's own,
+    // |c_i| / (k_i dt) (neither yaw nor mirroring changes it).
+    const int lags = static_cast<int>(std::ceil(m / kLagStep));
+    std::vector<double> ref_speed, array_speed, c;
     for (const Window* w : in_range) {
       for (int i = 0; i < n; ++i) {
-        const auto u = static_cast<std::size_t>(i);
-        const double d = latency[u] - lr;
-        array_speed[row++] = tracks[u].between(w->ta + d, w->tb + d).norm() /
-                             (nominal[i].counts_per_metre() * (w->tb - w->ta));
+        const Eigen::Vector2d p = nominal[i].position;
+        const Eigen::Vector2d v = w->z.head<2>() + w->z(2) * Eigen::Vector2d(-p.y(), p.x());
+        ref_speed.push_back(v.norm() / (w->tb - w->ta));
       }
     }
-    c.push_back(pearson_correlation(array_speed, ref_speed));
+    array_speed.resize(ref_speed.size());
+    for (int j = -lags; j <= lags; ++j) {
+      const double lr = reference_latency + j * kLagStep;
+      std::size_t row = 0;
+      for (const Window* w : in_range) {
+        for (int i = 0; i < n; ++i) {
+          const auto u = static_cast<std::size_t>(i);
+          const double d = latency[u] - lr;
+          array_speed[row++] = tracks[u].between(w->ta + d, w->tb + d).norm() /
+                               (nominal[i].counts_per_metre() * (w->tb - w->ta));
+        }
+      }
+      c.push_back(pearson_correlation(array_speed, ref_speed));
+    }
+    const auto peak = correlation_peak(c, kLagStep, options.min_correlation);
+    out.correlation = *std::max_element(c.begin(), c.end());
+    if (!peak) {
+      return PoseReferenceFailure{PoseReferenceError::kNoCorrelation, std::nullopt, out.correlation};
+    }
+    out.coarse_latency = reference_latency + peak->lag;
   }
-  const auto peak = correlation_peak(c, kLagStep, options.min_correlation);
-  PoseReferenceCalibration out;
-  out.correlation = *std::max_element(c.begin(), c.end());
-  if (!peak) {
-    return PoseReferenceFailure{PoseReferenceError::kNoCorrelation, std::nullopt, out.correlation};
-  }
-  out.coarse_latency = reference_latency + peak->lag;
 
   // 2. Mounts and offsets alternating, then the gauge.
   std::vector<double> d(static_cast<std::size_t>(n));
@@ -364,6 +377,7 @@ std::variant<PoseReferenceCalibration, PoseReferenceFailure> calibrate_against_p
       return PoseReferenceFailure{PoseReferenceError::kCalibration, *e, out.correlation};
     }
     const SensorArray& array = std::get<ExactCalibration>(cal).calibrated;
+    const double mean_before = std::accumulate(d.begin(), d.end(), 0.0) / n;
     for (int sweep = 0; sweep < 3; ++sweep) {
       for (int i = 0; i < n; ++i) {
         const auto u = static_cast<std::size_t>(i);
@@ -371,6 +385,13 @@ std::variant<PoseReferenceCalibration, PoseReferenceFailure> calibrate_against_p
         information[u] = fit_offset(tracks, array, windows, trial, i);
         if (information[u] >= options.min_latency_information) d[u] = trial[u];
       }
+    }
+    if (positions) {
+      // Each d_i is fitted against the others: only their differences are
+      // seen here, so their mean (the common offset, the caller's) is kept.
+      const double shift = std::accumulate(d.begin(), d.end(), 0.0) / n - mean_before;
+      for (double& x : d) x -= shift;
+      continue;
     }
     std::vector<double> trial = d;
     common_information = fit_common_offset(tracks, array, long_windows, trial);
@@ -418,6 +439,462 @@ std::variant<PoseReferenceCalibration, PoseReferenceFailure> calibrate_against_p
     out.latency_sigma[u] = 1.0 / std::sqrt(information[u]);
   }
   return out;
+}
+
+// ------------------------------------------------------------ positions only
+
+constexpr double kMinRotationRange = 0.5;  // rad, least range of Theta to fit epsilon
+constexpr int kPositionPasses = 12;        // at most: heading / poses / gauge passes
+constexpr double kPassTolerance = 2e-5;    // s, passes stop when L_r moves less
+// s, the common offset's segments (track_offset): long enough that the
+// velocity varies within one beyond a line (a 2 s segment keeps about a
+// fifth of the variation a 6 s one does), short enough that the dead
+// reckoning's drift within it is a line.
+constexpr double kTrackSegment = 5.0;
+
+using LeastSquares = Eigen::Matrix<double, 3, Eigen::Dynamic>;
+
+LeastSquares least_squares(const SensorArray& array) {
+  const Stack h = stack(array);
+  return (h.transpose() * h).inverse() * h.transpose();
+}
+
+// The array's displacement z = P c (m, m, rad; body frame at the start)
+// over (a + d_i, b + d_i] of every track.
+Eigen::Vector3d array_displacement(std::span<const CountsTrack> tracks, const LeastSquares& ls,
+                                   std::span<const double> d, double a, double b) {
+  Eigen::VectorXd c(2 * static_cast<Eigen::Index>(tracks.size()));
+  for (std::size_t i = 0; i < tracks.size(); ++i) {
+    c.segment<2>(2 * static_cast<Eigen::Index>(i)) = tracks[i].between(a + d[i], b + d[i]);
+  }
+  return ls * c;
+}
+
+// Fixes [lo, hi) every track covers at offsets d with `margin`: a contiguous
+// range, since each track covers one interval.
+std::pair<std::size_t, std::size_t> covered_fixes(std::span<const CountsTrack> tracks,
+                                                  std::span<const PositionFix> fixes,
+                                                  std::span<const double> d, double margin) {
+  const auto inside = [&](double t) {
+    for (std::size_t i = 0; i < tracks.size(); ++i) {
+      if (t + d[i] - margin < tracks[i].front() || t + d[i] + margin > tracks[i].back()) {
+        return false;
+      }
+    }
+    return true;
+  };
+  std::size_t lo = 0;
+  while (lo < fixes.size() && !inside(fixes[lo].t)) ++lo;
+  std::size_t hi = lo;
+  while (hi < fixes.size() && inside(fixes[hi].t)) ++hi;
+  return {lo, hi};
+}
+
+// Windows of fixes [s, e] (indices into a range), at least `window` s and
+// at most kMaxWindowFactor x window long.
+std::vector<std::pair<std::size_t, std::size_t>> index_windows(std::span<const double> t,
+                                                               double window) {
+  std::vector<std::pair<std::size_t, std::size_t>> out;
+  std::size_t s = 0;
+  while (s + 1 < t.size()) {
+    std::size_t e = s + 1;
+    while (e < t.size() && t[e] - t[s] < window) ++e;
+    if (e >= t.size()) break;
+    if (t[e] - t[s] <= kMaxWindowFactor * window) out.emplace_back(s, e);
+    s = e;
+  }
+  return out;
+}
+
+// Step 1 of the header: the heading of fixes t, p (one range) from the
+// array's steps z (z[j] between fixes j and j + 1). Returns the fit and
+// fills `theta` (rad, at each fix); nullopt with fewer than kMinWindows
+// windows.
+std::optional<HeadingFit> fit_heading(std::span<const double> t,
+                                      std::span<const Eigen::Vector2d> p,
+                                      const std::vector<Eigen::Vector3d>& z, double window,
+                                      std::vector<double>& theta) {
+  const std::size_t m = t.size();
+  std::vector<double> big(m, 0.0);  // Theta_j
+  for (std::size_t j = 0; j + 1 < m; ++j) big[j + 1] = big[j] + z[j](2);
+  const auto windows = index_windows(t, window);
+  if (static_cast<int>(windows.size()) < kMinWindows) return std::nullopt;
+  HeadingFit fit;
+  fit.windows = static_cast<int>(windows.size());
+  fit.rotation_range = *std::max_element(big.begin(), big.end()) -
+                       *std::min_element(big.begin(), big.end());
+  fit.rate_scale_estimated = fit.rotation_range >= kMinRotationRange;
+  const Eigen::Index np = fit.rate_scale_estimated ? 3 : 2;  // theta_0, beta[, epsilon]
+  const Eigen::Matrix2d turn{{0.0, -1.0}, {1.0, 0.0}};
+  // theta_j' and its derivatives (theta_0, beta, epsilon)
+  const auto heading = [&](std::size_t j, const Eigen::Vector3d& x) {
+    return x(0) + x(1) * (t[j] - t[0]) + (1.0 + x(2)) * (big[j] + 0.5 * z[j](2));
+  };
+  Eigen::Vector3d x = Eigen::Vector3d::Zero();
+  {  // theta_0 by Procrustes: the angle from the array's path to the camera's
+    double cross = 0.0, dot = 0.0;
+    for (const auto& [a, b] : windows) {
+      Eigen::Vector2d u = Eigen::Vector2d::Zero();
+      for (std::size_t j = a; j < b; ++j) u += rotation(heading(j, x)) * z[j].head<2>();
+      const Eigen::Vector2d w = p[b] - p[a];
+      cross += u.x() * w.y() - u.y() * w.x();
+      dot += u.dot(w);
+    }
+    x(0) = std::atan2(cross, dot);
+  }
+  Eigen::MatrixXd jtj(np, np);
+  double rr = 0.0;
+  for (int iter = 0; iter < 10; ++iter) {
+    jtj.setZero();
+    Eigen::VectorXd jtr = Eigen::VectorXd::Zero(np);
+    rr = 0.0;
+    for (const auto& [a, b] : windows) {
+      Eigen::Vector2d r = p[b] - p[a];
+      Eigen::Matrix<double, 2, 3> jac = Eigen::Matrix<double, 2, 3>::Zero();
+      for (std::size_t j = a; j < b; ++j) {
+        const Eigen::Vector2d step = rotation(heading(j, x)) * z[j].head<2>();
+        r -= step;
+        const Eigen::Vector2d dstep = turn * step;  // d step / d theta_j'
+        jac.col(0) -= dstep;
+        jac.col(1) -= dstep * (t[j] - t[0]);
+        jac.col(2) -= dstep * (big[j] + 0.5 * z[j](2));
+      }
+      const auto jn = jac.leftCols(np);
+      jtj += jn.transpose() * jn;
+      jtr += jn.transpose() * r;
+      rr += r.squaredNorm();
+    }
+    const Eigen::VectorXd delta = jtj.ldlt().solve(-jtr);
+    x.head(np) += delta;
+    if (delta.cwiseAbs().maxCoeff() < 1e-10) break;
+  }
+  const double dof = 2.0 * static_cast<double>(windows.size()) - static_cast<double>(np);
+  const double s2 = rr / dof;
+  const Eigen::MatrixXd cov = s2 * jtj.inverse();
+  fit.theta0 = x(0);
+  fit.theta0_sigma = std::sqrt(cov(0, 0));
+  fit.drift = x(1);
+  fit.drift_sigma = std::sqrt(cov(1, 1));
+  fit.rate_scale = x(2);
+  fit.rate_scale_sigma = np == 3 ? std::sqrt(cov(2, 2)) : 0.0;
+  fit.residual_rms = std::sqrt(s2);
+  theta.resize(m);
+  for (std::size_t j = 0; j < m; ++j) {
+    theta[j] = wrap_angle(x(0) + x(1) * (t[j] - t[0]) + (1.0 + x(2)) * big[j]);
+  }
+  return fit;
+}
+
+// Step 3 of the header: the robot frame turned so that the sensors' mean
+// yaw change is 0; returns delta (rad).
+double apply_yaw_gauge(ExactCalibration& cal, const SensorArray& nominal) {
+  double sin_sum = 0.0, cos_sum = 0.0;
+  for (int pass = 0; pass < 2 && sin_sum == 0.0 && cos_sum == 0.0; ++pass) {
+    for (std::size_t i = 0; i < cal.sensors.size(); ++i) {
+      const SensorMount& c = cal.sensors[i].calibrated;
+      const SensorMount& n = nominal[static_cast<int>(i)];
+      if (pass == 0 && c.mirrored != n.mirrored) continue;  // a flip changes the yaw's meaning
+      const double change = wrap_angle(static_cast<double>(c.yaw - n.yaw));
+      sin_sum += std::sin(change);
+      cos_sum += std::cos(change);
+    }
+  }
+  const double delta = std::atan2(sin_sum, cos_sum);
+  const Eigen::Matrix2d back = rotation(-delta);
+  std::vector<SensorMount> mounts;
+  const auto n = static_cast<Eigen::Index>(cal.sensors.size());
+  Eigen::MatrixXd turn = Eigen::MatrixXd::Identity(5 * n, 5 * n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    SensorCalibration& s = cal.sensors[static_cast<std::size_t>(i)];
+    s.calibrated.position = (back * s.calibrated.position.cast<double>()).cast<real>();
+    s.calibrated.yaw = static_cast<real>(s.calibrated.yaw - delta);
+    MountMatrix t = MountMatrix::Identity();
+    t.topLeftCorner<2, 2>() = back;
+    s.covariance = t * s.covariance * t.transpose();
+    turn.block<2, 2>(5 * i, 5 * i) = back;
+    mounts.push_back(s.calibrated);
+  }
+  if (cal.covariance.rows() == 5 * n) cal.covariance = turn * cal.covariance * turn.transpose();
+  cal.calibrated = SensorArray(mounts);
+  return delta;
+}
+
+// The array's twist rate (m/s, m/s, rad/s; body frame) at fix time t:
+// each track's row rate at t + d_i through the least squares.
+Eigen::Vector3d array_rate(std::span<const CountsTrack> tracks, const LeastSquares& ls,
+                           std::span<const double> d, double t) {
+  Eigen::VectorXd c(2 * static_cast<Eigen::Index>(tracks.size()));
+  for (std::size_t i = 0; i < tracks.size(); ++i) {
+    c.segment<2>(2 * static_cast<Eigen::Index>(i)) = tracks[i].rate(t + d[i]);
+  }
+  return ls * c;
+}
+
+struct TrackOffset {
+  double e = 0.0;            ///< s, to add to every d_i
+  double information = 0.0;  ///< s^-2
+};
+
+// The common offset from the camera's positions against the array's path
+// (positions only; the windows' end fixes alone see too little of it). Per
+// segment of fixes s..f at least `segment` s long and per axis,
+//   r_j = (p_j - p_s) - D_j = a + b (t_j - t_s) + V_j e + sum_k G_kj m_k + noise,
+// D_j the array's world displacement from fix s to fix j (its steps turned
+// by the heading), V_j its world velocity at fix j (a later clock moves
+// the path along it); a and b take the start fix's error and a slow drift
+// of the dead reckoning; m (4) a correction (I + M) of the array's
+// body-frame translation, G_kj = sum_m R(theta_m') E_k z_m,xy (E_k the four
+// unit 2x2 matrices): while the mounts are still off, the path's error is
+// not taken for a clock offset. With a and b projected out of every column
+// (per segment and axis), the normal equations A x = g of (e, m) summed;
+// e = x_0, its information 1 / (s^2 (A^-1)_00), s^2 the residual variance.
+TrackOffset track_offset(std::span<const double> t, std::span<const Eigen::Vector2d> p,
+                         const std::vector<Eigen::Vector3d>& z, const std::vector<double>& theta,
+                         const std::vector<Eigen::Vector3d>& rate, double segment) {
+  Eigen::Matrix<double, 5, 5> a = Eigen::Matrix<double, 5, 5>::Zero();
+  Eigen::Matrix<double, 5, 1> g = Eigen::Matrix<double, 5, 1>::Zero();
+  double rr = 0.0;
+  int dof = -5;
+  std::size_t s = 0;
+  std::vector<Eigen::Matrix<double, 2, 6>> rows;  // per fix: [V, G_1..G_4, r]
+  while (s + 1 < t.size()) {
+    std::size_t f = s + 1;
+    while (f < t.size() && t[f] - t[s] < segment) ++f;
+    if (f >= t.size()) break;
+    rows.clear();
+    Eigen::Vector2d travelled = Eigen::Vector2d::Zero();
+    Eigen::Matrix<double, 2, 4> basis = Eigen::Matrix<double, 2, 4>::Zero();
+    for (std::size_t j = s; j <= f; ++j) {
+      if (j > s) {
+        const std::size_t m = j - 1;
+        const Eigen::Matrix2d turn = rotation(theta[m] + 0.5 * z[m](2));
+        const Eigen::Vector2d step = z[m].head<2>();
+        travelled += turn * step;
+        // E_k z for E = (1,0;0,0), (0,1;0,0), (0,0;1,0), (0,0;0,1)
+        basis.col(0) += turn.col(0) * step.x();
+        basis.col(1) += turn.col(0) * step.y();
+        basis.col(2) += turn.col(1) * step.x();
+        basis.col(3) += turn.col(1) * step.y();
+      }
+      Eigen::Matrix<double, 2, 6> row;
+      row.col(0) = rotation(theta[j]) * rate[j].head<2>();
+      row.middleCols<4>(1) = basis;
+      row.col(5) = p[j] - p[s] - travelled;
+      rows.push_back(row);
+    }
+    const auto k = static_cast<Eigen::Index>(rows.size());
+    if (k >= 8) {
+      Eigen::MatrixXd x(k, 2);
+      for (Eigen::Index j = 0; j < k; ++j) x.row(j) << 1.0, t[s + static_cast<std::size_t>(j)] - t[s];
+      const Eigen::MatrixXd hat = x * (x.transpose() * x).inverse() * x.transpose();
+      for (int axis = 0; axis < 2; ++axis) {
+        Eigen::MatrixXd col(k, 6);
+        for (Eigen::Index j = 0; j < k; ++j) col.row(j) = rows[static_cast<std::size_t>(j)].row(axis);
+        const Eigen::MatrixXd c = col - hat * col;
+        a += c.leftCols<5>().transpose() * c.leftCols<5>();
+        g += c.leftCols<5>().transpose() * c.col(5);
+        rr += c.col(5).squaredNorm();
+        dof += static_cast<int>(k) - 2;
+      }
+    }
+    s = f;
+  }
+  TrackOffset out;
+  const Eigen::FullPivLU<Eigen::Matrix<double, 5, 5>> lu(a);
+  if (dof < 1 || !lu.isInvertible()) return out;
+  const Eigen::Matrix<double, 5, 1> x = lu.solve(g);
+  const double s2 = (rr - x.dot(g)) / dof;
+  const double var = lu.inverse()(0, 0);
+  out.e = x(0);
+  out.information = s2 > 0.0 && var > 0.0 ? 1.0 / (s2 * var) : 0.0;
+  return out;
+}
+
+// The nominal array with each sensor's mirroring chosen by the counts'
+// own rigidity: the least-squares residual of the windows' counts,
+// sum_k |(I - H (H^T H)^-1 H^T) c_k|^2, lowered by one sensor's flip at a
+// time while a flip halves it (a wrong mirroring leaves
+// residuals of the order of the motion's counts, a right one of their
+// noise; an array symmetric about an axis fits a global flip as well).
+// Positions only: without a heading, a wrongly mirrored sensor would turn
+// the array's own rotation, and with it every heading, into noise.
+SensorArray rigid_mirroring(const SensorArray& nominal, std::span<const CountsTrack> tracks,
+                            std::span<const double> d, std::span<const double> t,
+                            const std::vector<std::pair<std::size_t, std::size_t>>& windows) {
+  const int n = nominal.size();
+  std::vector<Eigen::VectorXd> counts;
+  for (const auto& [a, b] : windows) {
+    Eigen::VectorXd c(2 * n);
+    for (int i = 0; i < n; ++i) {
+      const auto u = static_cast<std::size_t>(i);
+      c.segment<2>(2 * i) = tracks[u].between(t[a] + d[u], t[b] + d[u]);
+    }
+    counts.push_back(c);
+  }
+  const auto residual = [&](const SensorArray& array) {
+    const Stack h = stack(array);
+    const Eigen::MatrixXd proj = Eigen::MatrixXd::Identity(2 * n, 2 * n) -
+                                 h * (h.transpose() * h).inverse() * h.transpose();
+    double sum = 0.0;
+    for (const auto& c : counts) sum += (proj * c).squaredNorm();
+    return sum;
+  };
+  // Greedy: one sensor's flip at a time, taken while it halves the residual.
+  SensorArray best = nominal;
+  double best_residual = residual(nominal);
+  for (int round = 0; round < n; ++round) {
+    std::optional<SensorArray> next;
+    double next_residual = 0.5 * best_residual;
+    for (int i = 0; i < n; ++i) {
+      std::vector<SensorMount> m(best.mounts().begin(), best.mounts().end());
+      m[static_cast<std::size_t>(i)].mirrored = !m[static_cast<std::size_t>(i)].mirrored;
+      SensorArray trial(m);
+      const double r = residual(trial);
+      if (r < next_residual) {
+        next_residual = r;
+        next = std::move(trial);
+      }
+    }
+    if (!next) break;
+    best = *std::move(next);
+    best_residual = next_residual;
+  }
+  return best;
+}
+
+}  // namespace
+
+std::variant<PoseReferenceCalibration, PoseReferenceFailure> calibrate_against_poses(
+    const SensorArray& nominal, std::span<const CountsTrack> tracks,
+    std::span<const double> latency, std::span<const PoseFix> fixes, double reference_latency,
+    const PoseReferenceOptions& options) {
+  return fit_poses(nominal, tracks, latency, fixes, reference_latency, options, false);
+}
+
+std::variant<PoseReferenceCalibration, PoseReferenceFailure> calibrate_against_positions(
+    const SensorArray& nominal, std::span<const CountsTrack> tracks,
+    std::span<const double> latency, std::span<const PositionFix> fixes, double reference_latency,
+    const PoseReferenceOptions& options) {
+  const auto fail = [](PoseReferenceError e) { return PoseReferenceFailure{e, std::nullopt}; };
+  const int n = nominal.size();
+  if (static_cast<int>(tracks.size()) != n || static_cast<int>(latency.size()) != n) {
+    return fail(PoseReferenceError::kBadInput);
+  }
+  std::vector<double> t;
+  for (const PositionFix& f : fixes) {
+    if (!f.position.allFinite()) return fail(PoseReferenceError::kBadInput);
+    t.push_back(f.t);
+  }
+  if (!valid_fix_times(t)) return fail(PoseReferenceError::kBadInput);
+  for (const CountsTrack& tr : tracks) {
+    if (tr.empty()) return fail(PoseReferenceError::kTooFewFixes);
+  }
+
+  // 0. Coarse: L_r by the robot centre's speed.
+  const auto offsets = [&](const std::vector<double>& lat, double lr) {
+    std::vector<double> d(lat.size());
+    for (std::size_t i = 0; i < lat.size(); ++i) d[i] = lat[i] - lr;
+    return d;
+  };
+  std::vector<double> lat(latency.begin(), latency.end());
+  const auto [lo0, hi0] = covered_fixes(tracks, fixes, offsets(lat, reference_latency),
+                                        options.max_offset);
+  const std::span<const double> t0(t.data() + lo0, hi0 - lo0);
+  const auto coarse_windows = index_windows(t0, options.window);
+  if (static_cast<int>(coarse_windows.size()) < kMinWindows) {
+    return fail(PoseReferenceError::kTooFewFixes);
+  }
+  std::vector<double> ref_speed, array_speed, c;
+  for (const auto& [a, b] : coarse_windows) {
+    ref_speed.push_back((fixes[lo0 + b].position - fixes[lo0 + a].position).norm() /
+                        (t0[b] - t0[a]));
+  }
+  const int lags = static_cast<int>(std::ceil(options.max_offset / kLagStep));
+  for (int j = -lags; j <= lags; ++j) {
+    const std::vector<double> d = offsets(lat, reference_latency + j * kLagStep);
+    array_speed.clear();
+    for (const auto& [a, b] : coarse_windows) {
+      double sum = 0.0;
+      for (int i = 0; i < n; ++i) {
+        const auto u = static_cast<std::size_t>(i);
+        sum += tracks[u].between(t0[a] + d[u], t0[b] + d[u]).norm() / nominal[i].counts_per_metre();
+      }
+      array_speed.push_back(sum / (n * (t0[b] - t0[a])));
+    }
+    c.push_back(pearson_correlation(array_speed, ref_speed));
+  }
+  const double best_correlation = *std::max_element(c.begin(), c.end());
+  const auto peak = correlation_peak(c, kLagStep, options.min_correlation);
+  if (!peak) {
+    return PoseReferenceFailure{PoseReferenceError::kNoCorrelation, std::nullopt,
+                                best_correlation};
+  }
+  double lr = reference_latency + peak->lag;
+
+  // 1-4, kPositionPasses times; within a pass the heading and the common
+  // offset alternate (each needs the other's clock or heading).
+  SensorArray array = rigid_mirroring(nominal, tracks, offsets(lat, lr), t0, coarse_windows);
+  std::optional<PoseReferenceCalibration> out;
+  double lr_before = lr;
+  for (int pass = 0; pass < kPositionPasses; ++pass) {
+    std::optional<HeadingFit> heading;
+    std::vector<PoseFix> poses;
+    TrackOffset common;
+    for (int step = 0; step < 3; ++step) {
+      const std::vector<double> d = offsets(lat, lr);
+      const auto [lo, hi] = covered_fixes(tracks, fixes, d, 2.0 * kMaxLatencyStep);
+      if (hi < lo + 2) return fail(PoseReferenceError::kTooFewFixes);
+      const LeastSquares ls = least_squares(array);
+      std::vector<Eigen::Vector3d> z, rate;
+      std::vector<Eigen::Vector2d> p;
+      for (std::size_t j = lo; j < hi; ++j) {
+        p.push_back(fixes[j].position);
+        rate.push_back(array_rate(tracks, ls, d, t[j]));
+        if (j + 1 < hi) z.push_back(array_displacement(tracks, ls, d, t[j], t[j + 1]));
+      }
+      std::vector<double> theta;
+      const std::span<const double> tj(t.data() + lo, hi - lo);
+      heading = fit_heading(tj, p, z, options.window, theta);
+      if (!heading) return fail(PoseReferenceError::kTooFewFixes);
+      poses.clear();
+      for (std::size_t j = 0; j < tj.size(); ++j) poses.push_back({tj[j], Pose2{p[j], theta[j]}});
+      common = track_offset(tj, p, z, theta, rate, kTrackSegment);
+      // A shift of the array's clock by e is L_r - e (the gauge keeps the
+      // L_i); taken when it knows more than the coarse grid does.
+      if (common.information * kLagStep * kLagStep >= 1.0) {
+        lr -= std::clamp(common.e, -kMaxLatencyStep, kMaxLatencyStep);
+      }
+    }
+    auto fitted = fit_poses(nominal, tracks, lat, poses, lr, options, true);
+    if (auto* f = std::get_if<PoseReferenceFailure>(&fitted)) return *f;
+    const double moved = std::abs(lr - lr_before);
+    lr_before = lr;
+    PoseReferenceCalibration& r = std::get<PoseReferenceCalibration>(fitted);
+    heading->yaw_gauge = apply_yaw_gauge(r.exact, nominal);
+    array = r.exact.calibrated;
+    lat = r.latency;
+    lr = r.reference_latency;
+    // 1-sigma of L_r: the common offset's and the gauge's (the estimated
+    // sensors' mean), as for poses; the coarse grid's when not seen.
+    double sum_variance = 0.0;
+    int estimated = 0;
+    for (std::size_t i = 0; i < r.latency.size(); ++i) {
+      if (!r.latency_estimated[i]) continue;
+      sum_variance += r.latency_sigma[i] * r.latency_sigma[i];
+      ++estimated;
+    }
+    r.reference_latency_sigma =
+        common.information * kLagStep * kLagStep >= 1.0
+            ? std::sqrt(1.0 / common.information +
+                        (estimated > 0 ? sum_variance / (estimated * estimated) : 0.0))
+            : kLagStep;
+    r.heading = heading;
+    r.coarse_latency = reference_latency + peak->lag;
+    r.correlation = best_correlation;
+    out = std::move(r);
+    if (pass > 0 && moved < kPassTolerance) break;
+  }
+  return *std::move(out);
 }
 
 }  // namespace moa

@@ -279,7 +279,7 @@ void run_kimlee(CalibrationSummary& r, const RobotConfig& config, const fs::path
 // The model check of the exact method (ExactModelCheck): a fact line
 // always; a misfit is refused (io::Error) unless forced, then a warning.
 void model_check(CalibrationSummary& r, const ExactModelCheck& check, const RobotConfig& config,
-                 const fs::path& log, bool force) {
+                 const fs::path& log, bool force, bool camera) {
   const std::string residual =
       check.tested
           ? fmt::format(
@@ -303,9 +303,9 @@ void model_check(CalibrationSummary& r, const ExactModelCheck& check, const Robo
   }
   if (check.information_indefinite()) {
     why.push_back(fmt::format(
-        "the information of sensor '{}' is not positive definite (eigenvalue {:.3g}): wheels.csv "
+        "the information of sensor '{}' is not positive definite (eigenvalue {:.3g}): {} "
         "and mice.csv disagree about the motion",
-        worst, check.min_eigenvalue));
+        worst, check.min_eigenvalue, camera ? "camera.csv" : "wheels.csv"));
   }
   const std::string reason = fmt::format("{}", fmt::join(why, "; "));
   if (force) {
@@ -315,16 +315,17 @@ void model_check(CalibrationSummary& r, const ExactModelCheck& check, const Robo
   }
   throw OptionError(fmt::format(
       "{}: {{method}} exact: refused, the calibrated model does not explain the data: {}; is "
-      "wheels.csv the twist of this robot in its frame (vx, vy in m/s, omega in rad/s) over the "
-      "same time as mice.csv? Nothing written ({{force}} writes it anyway)",
-      OptionError::literal(log.string()), OptionError::literal(reason)));
+      "{} over the same time as mice.csv? Nothing written ({{force}} writes it anyway)",
+      OptionError::literal(log.string()), OptionError::literal(reason),
+      camera ? "camera.csv the pose (or position) of this robot's centre in the world frame (m, rad)"
+             : "wheels.csv the twist of this robot in its frame (vx, vy in m/s, omega in rad/s)"));
 }
 
 // The exact method's report and result, whatever its reference (`samples`:
 // how many intervals or windows it was given).
 void report_exact(CalibrationSummary& r, const RobotConfig& config, const fs::path& log,
                   const CalibrationOptions& options, const ExactCalibration& cal,
-                  std::size_t samples) {
+                  std::size_t samples, bool camera = false) {
   const Eigen::Vector3d ref_sd = cal.noise.reference_covariance.diagonal().cwiseSqrt();
   r.facts.push_back(fmt::format(
       "reference noise (estimated, 1-sigma per interval): vx {:.4g} m/s, vy {:.4g} m/s, omega "
@@ -390,7 +391,7 @@ void report_exact(CalibrationSummary& r, const RobotConfig& config, const fs::pa
     r.warnings.push_back("the optimiser did not converge: the result is rough");
   }
   if (cal.model_misfit || cal.check.misfit()) r.termination = CalibrationTermination::kModelMisfit;
-  model_check(r, cal.check, config, log, options.force);
+  model_check(r, cal.check, config, log, options.force, camera);
   if (samples < 30) {
     r.warnings.push_back(
         fmt::format("only {} samples: the noise levels (and so the 1-sigma) are rough", samples));
@@ -417,28 +418,30 @@ void run_exact_camera(CalibrationSummary& r, const RobotConfig& config, const fs
   const fs::path camera = files.dir / "camera.csv";
   if (!files.camera) {
     throw OptionError(fmt::format(
-        "{}: not found: {{method}} exact {{reference}} camera needs the poses (t,x,y,theta) of "
-        "the robot",
+        "{}: not found: {{method}} exact {{reference}} camera needs the camera's fixes of the robot "
+        "(t,x,y, with theta from motion capture)",
         OptionError::literal(camera.string())));
   }
+  // Fixes with theta (motion capture) when any row has one, else positions
+  // (a ceiling camera).
   std::vector<PoseFix> fixes;
+  std::vector<PositionFix> positions;
   std::size_t rows = 0;
   for (const auto& row : read_all<CameraRow>(camera)) {
     ++rows;
-    if (!row.theta) continue;
-    if (!fixes.empty() && !(row.t > fixes.back().t)) {
+    if (!positions.empty() && !(row.t > positions.back().t)) {
       throw Error(fmt::format("{}: data row {} (t = {} s): not after the previous fix (t = {} s)",
-                              camera.string(), rows, row.t, fixes.back().t));
+                              camera.string(), rows, row.t, positions.back().t));
     }
-    fixes.push_back({row.t, Pose2{row.position, *row.theta}});
+    positions.push_back({row.t, row.position});
+    if (row.theta) fixes.push_back({row.t, Pose2{row.position, *row.theta}});
   }
-  if (fixes.empty()) {
-    throw Error(fmt::format(
-        "{}: {} data rows and none with theta: the exact calibration against the camera needs "
-        "the heading (motion capture); positions only (a ceiling camera) is not supported yet",
-        camera.string(), rows));
+  if (positions.empty()) {
+    throw Error(fmt::format("{}: no data rows: the exact calibration against the camera needs "
+                            "its fixes",
+                            camera.string()));
   }
-
+  const bool with_theta = !fixes.empty();
   const int n = config.array.size();
   std::vector<CountsTrack> tracks(static_cast<std::size_t>(n),
                                   CountsTrack(options.max_row_interval));
@@ -456,7 +459,10 @@ void run_exact_camera(CalibrationSummary& r, const RobotConfig& config, const fs
   po.window = options.window;
   const double camera_latency = config.camera_latency.value_or(0.0);
   auto result =
-      calibrate_against_poses(config.array, tracks, latency, fixes, camera_latency, po);
+      with_theta
+          ? calibrate_against_poses(config.array, tracks, latency, fixes, camera_latency, po)
+          : calibrate_against_positions(config.array, tracks, latency, positions, camera_latency,
+                                        po);
   if (const auto* f = std::get_if<PoseReferenceFailure>(&result)) {
     std::string what = describe(f->error);
     if (f->exact_error) what += fmt::format(": {}", describe(*f->exact_error));
@@ -468,9 +474,29 @@ void run_exact_camera(CalibrationSummary& r, const RobotConfig& config, const fs
     throw Error(fmt::format("{}: exact against {}: {}", log.string(), camera.string(), what));
   }
   const PoseReferenceCalibration& pr = std::get<PoseReferenceCalibration>(result);
-  r.facts.push_back(fmt::format(
-      "reference: {} ({} fixes with theta of {} rows), {} windows of at least {} s",
-      camera.string(), fixes.size(), rows, pr.windows, options.window));
+  if (with_theta) {
+    r.facts.push_back(fmt::format(
+        "reference: {} ({} fixes with theta of {} rows), {} windows of at least {} s",
+        camera.string(), fixes.size(), rows, pr.windows, options.window));
+  } else {
+    const HeadingFit& h = *pr.heading;
+    r.facts.push_back(fmt::format(
+        "reference: {} ({} fixes, positions only), {} windows of at least {} s; the heading from "
+        "the array's rotation fitted to the camera's steps over {} windows: {:.2f} +- {:.2f} deg "
+        "at the first fix, drift {:.3f} +- {:.3f} deg/s, rotation scale {}, residual {:.2f} mm",
+        camera.string(), rows, pr.windows, options.window, h.windows, to_degrees(h.theta0),
+        to_degrees(h.theta0_sigma), to_degrees(h.drift), to_degrees(h.drift_sigma),
+        h.rate_scale_estimated
+            ? fmt::format("{:+.3f} +- {:.3f} %", 100.0 * h.rate_scale, 100.0 * h.rate_scale_sigma)
+            : fmt::format("not seen (the array turned {:.2f} rad, less than 0.5): positions' "
+                          "scale kept from the counts alone",
+                          h.rotation_range),
+        1e3 * h.residual_rms));
+    r.facts.push_back(fmt::format(
+        "gauge: the robot frame's orientation is not seen from positions; the sensors' mean yaw "
+        "is kept as configured (turned back by {:.3f} deg)",
+        to_degrees(h.yaw_gauge)));
+  }
   r.facts.push_back(fmt::format(
       "coarse alignment: camera latency {:.4f} s (speed correlation {:.3f}, searched {} s around "
       "{} s)",
@@ -487,7 +513,7 @@ void run_exact_camera(CalibrationSummary& r, const RobotConfig& config, const fs
   r.facts.push_back(fmt::format(
       "latencies (gauge: the sensors' mean as configured): {}; camera {:.2f} +- {:.2f} ms",
       fmt::join(lat, ", "), 1e3 * pr.reference_latency, 1e3 * pr.reference_latency_sigma));
-  report_exact(r, config, log, options, pr.exact, static_cast<std::size_t>(pr.windows));
+  report_exact(r, config, log, options, pr.exact, static_cast<std::size_t>(pr.windows), true);
   std::vector<SensorMount> mounts(r.calibrated.array.mounts().begin(),
                                   r.calibrated.array.mounts().end());
   for (int i = 0; i < n; ++i) mounts[static_cast<std::size_t>(i)].latency = pr.latency[static_cast<std::size_t>(i)];

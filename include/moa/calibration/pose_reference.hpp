@@ -1,5 +1,6 @@
 // The exact calibration against measured poses of the robot (motion
-// capture: camera.csv with theta), with every sensor's latency and the
+// capture: camera.csv with theta; or positions only, a ceiling camera),
+// with every sensor's latency and the
 // reference's latency relative to the array (docs/calibration.md,
 // "Against a camera").
 //
@@ -104,6 +105,13 @@ struct PoseFix {
   Pose2 pose;
 };
 
+/// A fix of a ceiling camera: stamp t (s) and the robot centre's position
+/// in the world frame (m); no heading.
+struct PositionFix {
+  double t = 0.0;
+  Eigen::Vector2d position{0.0, 0.0};
+};
+
 struct PoseReferenceOptions {
   double window = 0.2;          ///< s, least window between two fixes (the mounts, d_i)
   /// s, least window of the common offset's fit; halved (down to twice
@@ -126,6 +134,21 @@ enum class PoseReferenceError {
 };
 const char* describe(PoseReferenceError error);
 
+/// Positions only: the heading the fixes did not carry, from the array's
+/// own rotation Theta(t) (integrated at the current mounts and latencies),
+///   theta(t) = theta_0 + (1 + epsilon) Theta(t) + beta (t - t_0),
+/// fitted to the camera's steps (header of calibrate_against_positions).
+struct HeadingFit {
+  double theta0 = 0.0, theta0_sigma = 0.0;           ///< rad, at the first fix used
+  double rate_scale = 0.0, rate_scale_sigma = 0.0;   ///< epsilon, 1
+  double drift = 0.0, drift_sigma = 0.0;             ///< beta, rad/s
+  bool rate_scale_estimated = false;  ///< false: the array turned too little (kept 0)
+  double rotation_range = 0.0;        ///< rad, max - min of Theta over the fixes used
+  double residual_rms = 0.0;          ///< m, per axis and window of the camera's steps
+  int windows = 0;
+  double yaw_gauge = 0.0;  ///< rad, the common yaw removed by the gauge in the last pass
+};
+
 struct PoseReferenceCalibration {
   ExactCalibration exact;
   std::vector<double> latency;        ///< L_i, s
@@ -136,6 +159,7 @@ struct PoseReferenceCalibration {
   double coarse_latency = 0.0;           ///< s, L_r of the coarse peak
   double correlation = 0.0;              ///< at the coarse peak
   int windows = 0;
+  std::optional<HeadingFit> heading;  ///< positions only (calibrate_against_positions)
 };
 
 struct PoseReferenceFailure {
@@ -150,6 +174,42 @@ struct PoseReferenceFailure {
 std::variant<PoseReferenceCalibration, PoseReferenceFailure> calibrate_against_poses(
     const SensorArray& nominal, std::span<const CountsTrack> tracks,
     std::span<const double> latency, std::span<const PoseFix> fixes, double reference_latency,
+    const PoseReferenceOptions& options = {});
+
+/// The same with positions only (a ceiling camera: camera.csv without
+/// theta). The heading is not measured, so it is reconstructed, and the
+/// robot frame's orientation is a gauge:
+/// 0. Coarse: L_r by the correlation of the robot centre's speed,
+///    |p_e - p_s| / dt, with the sensors' mean speed, mean_i |c_i| / (k_i dt)
+///    over windows of fixes: the two differ by the rotation's share, but
+///    neither yaw nor mirroring changes the latter (a least-squares speed
+///    at a wrongly mirrored nominal mount would be no speed at all).
+/// 1. Heading: the array's twist over each step between fixes, z_j = P c_j
+///    (current mounts and offsets d_i), its rotations summed to Theta_j;
+///    theta_0, epsilon and beta by Gauss-Newton on, per window s..e,
+///      r = (p_e - p_s) - sum_j R(theta_j') z_j,xy,
+///      theta_j' = theta_0 + (1 + epsilon) (Theta_j + z_j,theta / 2) + beta (t_j - t_0):
+///    the direction of travel in the world against the body frame's. theta_0
+///    and beta need translation only; epsilon (the array's rotation scale,
+///    which its positions set: scaling every position by s scales the
+///    array's rotation by 1/s, invisible to the counts' own fit) needs the
+///    robot to turn: below 0.5 rad of range it is kept 0 and said.
+///    Alternating with it, the common offset: the camera's positions against
+///    the array's dead-reckoned path over segments of 5 s, each with its own
+///    start and drift, the array's translation with a free 2x2 correction
+///    (mounts still off), and a clock shift e moving the path along its
+///    velocity (track_offset in the source); taken when its 1-sigma is
+///    below the coarse grid's 5 ms, L_r <- L_r - e.
+/// 2. calibrate_against_poses' mounts and per-sensor offsets on the fixes
+///    with that heading (no coarse search, the offsets' mean kept: only
+///    their differences are seen against the other sensors).
+/// 3. Gauge: the robot frame turned by the circular mean delta of the
+///    sensors' yaw changes, p_i <- R(-delta) p_i, yaw_i <- yaw_i - delta (the
+///    nominal mean yaw kept). Steps 1-3 repeated until L_r moves less than
+///    0.02 ms (each pass takes about 0.4 of the remaining error; at most 12).
+std::variant<PoseReferenceCalibration, PoseReferenceFailure> calibrate_against_positions(
+    const SensorArray& nominal, std::span<const CountsTrack> tracks,
+    std::span<const double> latency, std::span<const PositionFix> fixes, double reference_latency,
     const PoseReferenceOptions& options = {});
 
 }  // namespace moa
