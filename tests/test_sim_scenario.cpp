@@ -37,7 +37,8 @@ TEST(SimScenario, BuiltinScenariosAreTheExampleFiles) {
   }
   std::sort(files.begin(), files.end());
   EXPECT_EQ(builtin_scenarios(), files);
-  for (const char* name : {"sekimori-a", "sekimori-b", "kimlee", "calibration"}) {
+  for (const char* name :
+       {"sekimori-a", "sekimori-b", "kimlee", "calibration", "calib-mocap", "calib-camera"}) {
     EXPECT_NE(std::find(files.begin(), files.end(), name), files.end()) << name;
   }
 }
@@ -102,6 +103,50 @@ TEST(SimScenario, CalibrationScenarioHasTheStatedErrors) {
   EXPECT_EQ(mirrored, 1);
   EXPECT_EQ(s.drive.type, DriveType::kReference);
   EXPECT_GT(s.drive.noise_speed, 0.0);
+}
+
+// calib-mocap and calib-camera: calibration's robot, rows a few ms late, no
+// wheels, 60 s; motion capture (120 Hz, 0.3 mm, 0.1 deg, 12 ms) or a ceiling
+// camera (25 Hz, 2 mm, 60 ms, 5 ms jitter, 2 % dropped), as documented.
+TEST(SimScenario, CalibrationAgainstACameraScenariosAreAsStated) {
+  const Scenario calibration = load_scenario("calibration");
+  for (const char* name : {"calib-mocap", "calib-camera"}) {
+    const Scenario s = load_scenario(name);
+    EXPECT_EQ(s.drive.type, DriveType::kNone) << name;
+    EXPECT_NEAR(s.duration, 60.0, 1e-9) << name;
+    ASSERT_EQ(s.truth.array.size(), 4) << name;
+    const std::vector<double> latency = {0.002, 0.005, 0.008, 0.003};
+    for (int i = 0; i < 4; ++i) {
+      const auto u = static_cast<std::size_t>(i);
+      const SensorMount& t = s.truth.array[i];
+      const SensorMount& c = calibration.truth.array[i];
+      EXPECT_EQ(t.position, c.position) << name << i;
+      EXPECT_EQ(t.yaw, c.yaw) << name << i;
+      EXPECT_EQ(t.scale, c.scale) << name << i;
+      EXPECT_EQ(t.mirrored, c.mirrored) << name << i;
+      EXPECT_NEAR(s.sensor_timing[u].latency, latency[u], 1e-15) << name << i;
+      EXPECT_NEAR(t.latency, latency[u], 1e-7) << name << i;
+      EXPECT_EQ(s.sensor_timing[u].jitter, 0.0) << name << i;
+      EXPECT_EQ(s.nominal.array[i].latency, 0.0) << name << i;
+    }
+    EXPECT_FALSE(s.nominal.camera_latency.has_value()) << name;
+    EXPECT_EQ(s.truth.camera_latency, s.camera.latency) << name;
+  }
+  const CameraModel mocap = load_scenario("calib-mocap").camera;
+  EXPECT_EQ(mocap.mode, CameraMode::kMocap);
+  EXPECT_EQ(mocap.rate, 120.0);
+  EXPECT_EQ(mocap.noise, 0.0003);
+  EXPECT_NEAR(mocap.heading_noise, 0.1 * kPi / 180.0, 1e-7);
+  EXPECT_EQ(mocap.latency, 0.012);
+  EXPECT_EQ(mocap.jitter, 0.0);
+  EXPECT_EQ(mocap.drop, 0.0);
+  const CameraModel ceiling = load_scenario("calib-camera").camera;
+  EXPECT_EQ(ceiling.mode, CameraMode::kPositions);
+  EXPECT_EQ(ceiling.rate, 25.0);
+  EXPECT_EQ(ceiling.noise, 0.002);
+  EXPECT_EQ(ceiling.latency, 0.060);
+  EXPECT_EQ(ceiling.jitter, 0.005);
+  EXPECT_EQ(ceiling.drop, 0.02);
 }
 
 // A valid scenario to break one key at a time.
