@@ -269,7 +269,6 @@ TEST(SimCli, SeedsThatAreNotWholeNumbersAreRefused) {
   EXPECT_THAT(r.out, HasSubstr("seed 18446744073709551615"));
 }
 
-
 // calib-mocap end to end: moa calibrate --method exact --reference camera
 // recovers robot.true.yaml's mounts and latencies (sensors and camera, up to
 // the gauge: the sensors' mean latency, 0 in robot.yaml) within 4 x the
@@ -279,10 +278,10 @@ TEST(SimCli, CalibMocapCalibratesBackToItsTrueRobot) {
   const auto dir = test::scratch_dir("sim-calib-mocap");
   const auto sim = simulate("calib-mocap", 5, dir / "log");
   ASSERT_EQ(sim.exit_code, 0) << sim.err;
-  const auto cal = test::run_moa("calibrate --config " + (dir / "log/robot.yaml").string() +
-                                 " --log " + (dir / "log").string() +
-                                 " --method exact --reference camera --out " +
-                                 (dir / "cal.yaml").string());
+  const auto cal =
+      test::run_moa("calibrate --config " + (dir / "log/robot.yaml").string() + " --log " +
+                    (dir / "log").string() + " --method exact --reference camera --out " +
+                    (dir / "cal.yaml").string());
   ASSERT_EQ(cal.exit_code, 0) << cal.err;
   const io::RobotConfig got = io::read_config(dir / "cal.yaml");
   const io::RobotConfig truth = io::read_config(dir / "log/robot.true.yaml");
@@ -297,7 +296,9 @@ TEST(SimCli, CalibMocapCalibratesBackToItsTrueRobot) {
     const SensorMount& g = got.array[i];
     const SensorMount& t = truth.array[i];
     EXPECT_LT((g.position - t.position).cwiseAbs().maxCoeff(), 4 * 0.15e-3) << i;
-    EXPECT_LT(std::abs(std::remainder(g.yaw - t.yaw, 2 * std::numbers::pi)), 4 * 0.026 * std::numbers::pi / 180) << i;
+    EXPECT_LT(std::abs(std::remainder(g.yaw - t.yaw, 2 * std::numbers::pi)),
+              4 * 0.026 * std::numbers::pi / 180)
+        << i;
     EXPECT_LT((g.scale - t.scale).cwiseAbs().maxCoeff(), 4 * 0.0005) << i;
     EXPECT_EQ(g.mirrored, t.mirrored) << i;
     EXPECT_NEAR(g.latency - got_mean, t.latency - true_mean, 4 * 0.04e-3) << i;

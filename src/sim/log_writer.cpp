@@ -76,8 +76,9 @@ class FileSink : public LogSink {
     if (s.imu.enabled) imu_.emplace(dir / "imu.csv", comment_, "t,gz");
     if (s.camera.enabled) {
       camera_.emplace(dir / "camera.csv",
-                      comment_ + "; t is the stamp at arrival (the capture time plus camera.latency), "
-                                 "t_arrival the same (kept for older readers)",
+                      comment_ +
+                          "; t is the stamp at arrival (the capture time plus camera.latency), "
+                          "t_arrival the same (kept for older readers)",
                       s.camera.mode == CameraMode::kMocap ? "t,x,y,theta,sx,sy,t_arrival,outlier"
                                                           : "t,x,y,sx,sy,t_arrival,outlier");
     }

@@ -561,9 +561,9 @@ void parse_faults(const Source& source, const YAML::Node& node, const io::RobotC
 // outliers}`: a ceiling camera (mode positions, the default) or motion
 // capture (mode mocap: heading_noise required).
 CameraModel parse_camera(const Source& source, const YAML::Node& node, double frame_rate) {
-  const Fields f(source, node, "camera",
-                 {"mode", "rate", "noise", "heading_noise", "latency", "jitter", "drop",
-                  "outliers"});
+  const Fields f(
+      source, node, "camera",
+      {"mode", "rate", "noise", "heading_noise", "latency", "jitter", "drop", "outliers"});
   CameraModel c;
   c.enabled = true;
   if (f.has("mode") && f.choice("mode", {"positions", "mocap"}) == "mocap") {
@@ -653,10 +653,10 @@ Scenario parse_scenario(std::string_view yaml, std::string_view source_name) {
       }
     }
   }
-  const Fields top(source, root, "",
-                   {"version", "name", "description", "duration", "truth_rate", "sensor_model",
-                    "sensors", "true_sensors", "drive", "wheels", "motion", "faults", "camera",
-                    "imu"});
+  const Fields top(
+      source, root, "",
+      {"version", "name", "description", "duration", "truth_rate", "sensor_model", "sensors",
+       "true_sensors", "drive", "wheels", "motion", "faults", "camera", "imu"});
   top.required("version");
 
   Scenario s;
@@ -683,8 +683,8 @@ Scenario parse_scenario(std::string_view yaml, std::string_view source_name) {
       top.fail("wheels", "no drive, so no wheels.csv to stamp (give drive:)");
     }
     const double fps = s.sensor_model.frame_rate;
-    s.wheel_timing = parse_timing(
-        f, io::kMaxStreamLatency, static_cast<double>(frames_per_row(fps, s.drive.rate)) / fps);
+    s.wheel_timing = parse_timing(f, io::kMaxStreamLatency,
+                                  static_cast<double>(frames_per_row(fps, s.drive.rate)) / fps);
     if (s.wheel_timing.latency != 0.0) s.truth.wheels_latency = s.wheel_timing.latency;
   }
   if (const auto c = top.get("camera")) {

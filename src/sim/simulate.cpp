@@ -82,8 +82,8 @@ void simulate(const Scenario& scenario, std::uint64_t seed, LogSink& sink,
   for (int i = 0; i < n; ++i) {
     const auto u = static_cast<std::size_t>(i);
     sensors.emplace_back(scenario.truth.array[i], model, scenario.faults[u], seed, i);
-    const StreamTiming timing = u < scenario.sensor_timing.size() ? scenario.sensor_timing[u]
-                                                                  : StreamTiming{};
+    const StreamTiming timing =
+        u < scenario.sensor_timing.size() ? scenario.sensor_timing[u] : StreamTiming{};
     clocks.emplace_back(timing, seed, Stream::kSensorClock, i);
   }
   MiceMerger mice(n, sink);
