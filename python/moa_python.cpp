@@ -615,6 +615,12 @@ py::dict simulate(const std::string& scenario_name, std::uint64_t seed,
     for (std::size_t i = 0; i < outlier.size(); ++i)
       o.mutable_at(static_cast<py::ssize_t>(i)) = outlier[i];
     camera["outlier"] = o;
+    if (scenario.camera.mode == sim::CameraMode::kMocap) {  // motion capture: the heading too
+      py::array_t<double> theta(static_cast<py::ssize_t>(log.camera.size()));
+      for (std::size_t i = 0; i < log.camera.size(); ++i)
+        theta.mutable_at(static_cast<py::ssize_t>(i)) = log.camera[i].theta.value_or(0.0);
+      camera["theta"] = theta;
+    }
     d["camera"] = camera;
   }
   {

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <numbers>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -171,7 +172,8 @@ TEST(SimCli, UnknownScenarioIsAnErrorAndWritesNothing) {
   const auto dir = test::scratch_dir("sim-bad") / "out";
   const auto r = simulate("sekimori-c", 1, dir);
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_THAT(r.err, HasSubstr("scenario 'sekimori-c': not a built-in scenario (calibration, "
+  EXPECT_THAT(r.err, HasSubstr("scenario 'sekimori-c': not a built-in scenario (calib-camera, "
+                               "calib-mocap, calibration, "
                                "cruise, differential, faults-bump, faults-cruise, faults-dirty, "
                                "faults-drift, faults-floor, faults-liftoff, faults-spikes, "
                                "faults-stuck, faults-zero, guided, gyro-bump, gyro-compact, "
@@ -265,6 +267,45 @@ TEST(SimCli, SeedsThatAreNotWholeNumbersAreRefused) {
                                (dir / "out").string());
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("seed 18446744073709551615"));
+}
+
+// calib-mocap end to end: moa calibrate --method exact --reference camera
+// recovers robot.true.yaml's mounts and latencies (sensors and camera, up to
+// the gauge: the sensors' mean latency, 0 in robot.yaml) within 4 x the
+// 1-sigma it reports on this log (0.15 mm, 0.026 deg, 0.05 %, 0.04 ms per
+// sensor, 0.17 ms for the camera; docs/calibration.md).
+TEST(SimCli, CalibMocapCalibratesBackToItsTrueRobot) {
+  const auto dir = test::scratch_dir("sim-calib-mocap");
+  const auto sim = simulate("calib-mocap", 5, dir / "log");
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const auto cal =
+      test::run_moa("calibrate --config " + (dir / "log/robot.yaml").string() + " --log " +
+                    (dir / "log").string() + " --method exact --reference camera --out " +
+                    (dir / "cal.yaml").string());
+  ASSERT_EQ(cal.exit_code, 0) << cal.err;
+  const io::RobotConfig got = io::read_config(dir / "cal.yaml");
+  const io::RobotConfig truth = io::read_config(dir / "log/robot.true.yaml");
+  ASSERT_EQ(got.array.size(), 4);
+  double got_mean = 0.0;
+  double true_mean = 0.0;
+  for (int i = 0; i < 4; ++i) {
+    got_mean += got.array[i].latency / 4.0;
+    true_mean += truth.array[i].latency / 4.0;
+  }
+  for (int i = 0; i < 4; ++i) {
+    const SensorMount& g = got.array[i];
+    const SensorMount& t = truth.array[i];
+    EXPECT_LT((g.position - t.position).cwiseAbs().maxCoeff(), 4 * 0.15e-3) << i;
+    EXPECT_LT(std::abs(std::remainder(g.yaw - t.yaw, 2 * std::numbers::pi)),
+              4 * 0.026 * std::numbers::pi / 180)
+        << i;
+    EXPECT_LT((g.scale - t.scale).cwiseAbs().maxCoeff(), 4 * 0.0005) << i;
+    EXPECT_EQ(g.mirrored, t.mirrored) << i;
+    EXPECT_NEAR(g.latency - got_mean, t.latency - true_mean, 4 * 0.04e-3) << i;
+  }
+  ASSERT_TRUE(got.camera_latency.has_value());
+  ASSERT_TRUE(truth.camera_latency.has_value());
+  EXPECT_NEAR(*got.camera_latency - got_mean, *truth.camera_latency - true_mean, 4 * 0.17e-3);
 }
 
 }  // namespace

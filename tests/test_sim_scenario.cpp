@@ -37,7 +37,8 @@ TEST(SimScenario, BuiltinScenariosAreTheExampleFiles) {
   }
   std::sort(files.begin(), files.end());
   EXPECT_EQ(builtin_scenarios(), files);
-  for (const char* name : {"sekimori-a", "sekimori-b", "kimlee", "calibration"}) {
+  for (const char* name :
+       {"sekimori-a", "sekimori-b", "kimlee", "calibration", "calib-mocap", "calib-camera"}) {
     EXPECT_NE(std::find(files.begin(), files.end(), name), files.end()) << name;
   }
 }
@@ -104,6 +105,50 @@ TEST(SimScenario, CalibrationScenarioHasTheStatedErrors) {
   EXPECT_GT(s.drive.noise_speed, 0.0);
 }
 
+// calib-mocap and calib-camera: calibration's robot, rows a few ms late, no
+// wheels, 60 s; motion capture (120 Hz, 0.3 mm, 0.1 deg, 12 ms) or a ceiling
+// camera (25 Hz, 2 mm, 60 ms, 5 ms jitter, 2 % dropped), as documented.
+TEST(SimScenario, CalibrationAgainstACameraScenariosAreAsStated) {
+  const Scenario calibration = load_scenario("calibration");
+  for (const char* name : {"calib-mocap", "calib-camera"}) {
+    const Scenario s = load_scenario(name);
+    EXPECT_EQ(s.drive.type, DriveType::kNone) << name;
+    EXPECT_NEAR(s.duration, 60.0, 1e-9) << name;
+    ASSERT_EQ(s.truth.array.size(), 4) << name;
+    const std::vector<double> latency = {0.002, 0.005, 0.008, 0.003};
+    for (int i = 0; i < 4; ++i) {
+      const auto u = static_cast<std::size_t>(i);
+      const SensorMount& t = s.truth.array[i];
+      const SensorMount& c = calibration.truth.array[i];
+      EXPECT_EQ(t.position, c.position) << name << i;
+      EXPECT_EQ(t.yaw, c.yaw) << name << i;
+      EXPECT_EQ(t.scale, c.scale) << name << i;
+      EXPECT_EQ(t.mirrored, c.mirrored) << name << i;
+      EXPECT_NEAR(s.sensor_timing[u].latency, latency[u], 1e-15) << name << i;
+      EXPECT_NEAR(t.latency, latency[u], 1e-7) << name << i;
+      EXPECT_EQ(s.sensor_timing[u].jitter, 0.0) << name << i;
+      EXPECT_EQ(s.nominal.array[i].latency, 0.0) << name << i;
+    }
+    EXPECT_FALSE(s.nominal.camera_latency.has_value()) << name;
+    EXPECT_EQ(s.truth.camera_latency, s.camera.latency) << name;
+  }
+  const CameraModel mocap = load_scenario("calib-mocap").camera;
+  EXPECT_EQ(mocap.mode, CameraMode::kMocap);
+  EXPECT_EQ(mocap.rate, 120.0);
+  EXPECT_EQ(mocap.noise, 0.0003);
+  EXPECT_NEAR(mocap.heading_noise, 0.1 * kPi / 180.0, 1e-7);
+  EXPECT_EQ(mocap.latency, 0.012);
+  EXPECT_EQ(mocap.jitter, 0.0);
+  EXPECT_EQ(mocap.drop, 0.0);
+  const CameraModel ceiling = load_scenario("calib-camera").camera;
+  EXPECT_EQ(ceiling.mode, CameraMode::kPositions);
+  EXPECT_EQ(ceiling.rate, 25.0);
+  EXPECT_EQ(ceiling.noise, 0.002);
+  EXPECT_EQ(ceiling.latency, 0.060);
+  EXPECT_EQ(ceiling.jitter, 0.005);
+  EXPECT_EQ(ceiling.drop, 0.02);
+}
+
 // A valid scenario to break one key at a time.
 constexpr const char* kValid = R"(version: 1
 name: t
@@ -142,8 +187,8 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(
         BadCase{"unknown top key", with("colour: red\n"),
                 "s.yaml:6: unknown key 'colour' (known here: version, name, description, "
-                "duration, truth_rate, sensor_model, sensors, true_sensors, drive, motion, "
-                "faults, camera, imu)"},
+                "duration, truth_rate, sensor_model, sensors, true_sensors, drive, wheels, "
+                "motion, faults, camera, imu)"},
         BadCase{"unknown nested key",
                 "version: 1\nname: t\nsensor_model: {preset: HDNS-2051, fps: 100}\n",
                 "s.yaml:3: unknown key 'sensor_model.fps' (known here: preset, cpi, frame_rate, "
@@ -182,7 +227,46 @@ INSTANTIATE_TEST_SUITE_P(
                 "s.yaml:6: key 'true_sensors': no sensor called 'm9' (sensors: m1, m2, m3)"},
         BadCase{"true sensor bad key", with("true_sensors: {m1: {yaw_err: 0.1}}\n"),
                 "s.yaml:6: unknown key 'true_sensors.m1.yaw_err' (known here: position_error, "
-                "position_scale, yaw_error, scale, mirrored, cpi)"},
+                "position_scale, yaw_error, scale, mirrored, cpi, latency, jitter)"},
+        // Stream clocks (K = 23 at 2300 frames/s: a mice row every 0.01 s).
+        BadCase{"sensor latency over 1 s", with("true_sensors: {m1: {latency: 1.5}}\n"),
+                "s.yaml:6: key 'true_sensors.m1.latency': must be within [-1, 1] (found 1.5)"},
+        BadCase{"sensor jitter negative", with("true_sensors: {m2: {jitter: -0.001}}\n"),
+                "s.yaml:6: key 'true_sensors.m2.jitter': must be >= 0 (found -0.001)"},
+        BadCase{"sensor jitter of a row period", with("true_sensors: {m1: {jitter: 0.01}}\n"),
+                "s.yaml:6: key 'true_sensors.m1.jitter': must be less than the row period "
+                "(0.01 s), so that the stamps stay in order (found 0.01)"},
+        BadCase{"wheels without a drive", with("wheels: {latency: 0.01}\n"),
+                "s.yaml:6: key 'wheels': no drive, so no wheels.csv to stamp (give drive:)"},
+        BadCase{"wheels unknown key", with("drive: {type: reference}\nwheels: {delay: 0.01}\n"),
+                "s.yaml:7: unknown key 'wheels.delay' (known here: latency, jitter)"},
+        BadCase{"wheels jitter of a row period",
+                with("drive: {type: reference, rate: 50}\nwheels: {jitter: 0.02}\n"),
+                "s.yaml:7: key 'wheels.jitter': must be less than the row period (0.02 s), so "
+                "that the stamps stay in order (found 0.02)"},
+        BadCase{"wheels latency over 60 s",
+                with("drive: {type: reference}\nwheels: {latency: -61}\n"),
+                "s.yaml:7: key 'wheels.latency': must be within [-60, 60] (found -61)"},
+        BadCase{"camera mode unknown", with("camera: {mode: lidar, rate: 10, noise: 0.01}\n"),
+                "s.yaml:6: key 'camera.mode': 'lidar' is not one of: positions, mocap"},
+        BadCase{"mocap without heading noise",
+                with("camera: {mode: mocap, rate: 100, noise: 0.001}\n"),
+                "s.yaml:6: missing key 'camera.heading_noise'"},
+        BadCase{"heading noise of a positions camera",
+                with("camera: {rate: 10, noise: 0.01, heading_noise: 0.01}\n"),
+                "s.yaml:6: key 'camera.heading_noise': not used by camera mode 'positions' (no "
+                "theta; mode: mocap has one)"},
+        BadCase{"heading noise negative",
+                with("camera: {mode: mocap, rate: 100, noise: 0.001, heading_noise: -1}\n"),
+                "s.yaml:6: key 'camera.heading_noise': must be >= 0 (found -1)"},
+        BadCase{"drop over 1", with("camera: {rate: 10, noise: 0.01, drop: 1.5}\n"),
+                "s.yaml:6: key 'camera.drop': must be within [0, 1] (found 1.5)"},
+        BadCase{"camera jitter of a fix period",
+                with("camera: {rate: 25, noise: 0.01, jitter: 0.05}\n"),
+                "s.yaml:6: key 'camera.jitter': must be less than the row period (0.04 s), so "
+                "that the stamps stay in order (found 0.05)"},
+        BadCase{"camera latency over 60 s", with("camera: {rate: 10, noise: 0.01, latency: 90}\n"),
+                "s.yaml:6: key 'camera.latency': must be within [-60, 60] (found 90)"},
         BadCase{"position pair", with("true_sensors: {m1: {position_error: [0.1]}}\n"),
                 "s.yaml:6: key 'true_sensors.m1.position_error': expected 2 numbers, found 1"},
         BadCase{"bad motion type",
@@ -333,7 +417,8 @@ TEST(SimScenario, UnknownNameListsTheBuiltins) {
   } catch (const io::Error& e) {
     EXPECT_EQ(
         std::string(e.what()),
-        "scenario 'sekimori-c': not a built-in scenario (calibration, cruise, differential, "
+        "scenario 'sekimori-c': not a built-in scenario (calib-camera, calib-mocap, calibration, "
+        "cruise, differential, "
         "faults-bump, faults-cruise, faults-dirty, faults-drift, faults-floor, faults-liftoff, "
         "faults-spikes, "
         "faults-stuck, faults-zero, guided, gyro-bump, gyro-compact, gyro-one, gyro-papers, "

@@ -76,9 +76,11 @@ class FileSink : public LogSink {
     if (s.imu.enabled) imu_.emplace(dir / "imu.csv", comment_, "t,gz");
     if (s.camera.enabled) {
       camera_.emplace(dir / "camera.csv",
-                      comment_ + "; t is the stamp at arrival (the capture time plus camera.latency), "
-                                 "t_arrival the same (kept for older readers)",
-                      "t,x,y,sx,sy,t_arrival,outlier");
+                      comment_ +
+                          "; t is the stamp at arrival (the capture time plus camera.latency), "
+                          "t_arrival the same (kept for older readers)",
+                      s.camera.mode == CameraMode::kMocap ? "t,x,y,theta,sx,sy,t_arrival,outlier"
+                                                          : "t,x,y,sx,sy,t_arrival,outlier");
     }
   }
 
@@ -96,6 +98,12 @@ class FileSink : public LogSink {
   }
   void imu(const ImuRecord& r) override { imu_->line("{},{:.9g}", r.t, tidy(r.gz)); }
   void camera(const CameraFix& f) override {
+    if (f.theta) {
+      camera_->line("{},{:.9g},{:.9g},{:.9g},{},{},{:.9g},{}", f.t_arrival, tidy(f.position.x()),
+                    tidy(f.position.y()), tidy(*f.theta), f.sigma, f.sigma, f.t_arrival,
+                    f.outlier ? 1 : 0);
+      return;
+    }
     camera_->line("{},{:.9g},{:.9g},{},{},{:.9g},{}", f.t_arrival, tidy(f.position.x()),
                   tidy(f.position.y()), f.sigma, f.sigma, f.t_arrival, f.outlier ? 1 : 0);
   }

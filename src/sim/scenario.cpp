@@ -179,9 +179,26 @@ int sensor_index(const Fields& f, std::string_view key, const YAML::Node& at,
   return *index;
 }
 
-// The real robot: the nominal one with the listed deviations.
+// `latency` (s, within +-latency_limit, default 0) and `jitter` (s, default
+// 0; below the stream's row period `period`, so that its stamps stay in
+// order: clock.hpp).
+StreamTiming parse_timing(const Fields& f, double latency_limit, double period) {
+  StreamTiming t;
+  t.latency = f.bounded("latency", -latency_limit, latency_limit, 0.0);
+  t.jitter = f.non_negative("jitter", 0.0);
+  if (t.jitter >= period) {
+    f.fail("jitter", fmt::format("must be less than the row period ({} s), so that the stamps "
+                                 "stay in order (found {})",
+                                 period, t.jitter));
+  }
+  return t;
+}
+
+// The real robot: the nominal one with the listed deviations, and its
+// sensors' row latencies and jitters (`timing`, one per sensor).
 io::RobotConfig parse_true_sensors(const Source& source, const YAML::Node& node,
-                                   const io::RobotConfig& nominal) {
+                                   const io::RobotConfig& nominal, const SensorModel& model,
+                                   std::vector<StreamTiming>& timing) {
   io::RobotConfig truth = nominal;
   if (!node.IsMap()) {
     source.fail(node, fmt::format("key 'true_sensors': expected a map from sensor names to "
@@ -206,7 +223,8 @@ io::RobotConfig parse_true_sensors(const Source& source, const YAML::Node& node,
     }
     seen[static_cast<std::size_t>(*index)] = true;
     const Fields f(source, entry.second, "true_sensors." + name,
-                   {"position_error", "position_scale", "yaw_error", "scale", "mirrored", "cpi"});
+                   {"position_error", "position_scale", "yaw_error", "scale", "mirrored", "cpi",
+                    "latency", "jitter"});
     SensorMount& m = truth.array[*index];
     m.position *= f.positive("position_scale", 1.0);
     if (f.has("position_error")) {
@@ -221,6 +239,9 @@ io::RobotConfig parse_true_sensors(const Source& source, const YAML::Node& node,
     }
     m.mirrored = f.boolean("mirrored", m.mirrored);
     m.cpi = f.positive("cpi", m.cpi);
+    StreamTiming& t = timing[static_cast<std::size_t>(*index)];
+    t = parse_timing(f, io::kMaxSensorLatency, model.row_period());
+    m.latency = static_cast<real>(t.latency);
   }
   return truth;
 }
@@ -536,14 +557,32 @@ void parse_faults(const Source& source, const YAML::Node& node, const io::RobotC
   }
 }
 
-CameraModel parse_camera(const Source& source, const YAML::Node& node) {
-  const Fields f(source, node, "camera", {"rate", "noise", "latency", "outliers"});
+// `camera: {mode, rate, noise, heading_noise, latency, jitter, drop,
+// outliers}`: a ceiling camera (mode positions, the default) or motion
+// capture (mode mocap: heading_noise required).
+CameraModel parse_camera(const Source& source, const YAML::Node& node, double frame_rate) {
+  const Fields f(
+      source, node, "camera",
+      {"mode", "rate", "noise", "heading_noise", "latency", "jitter", "drop", "outliers"});
   CameraModel c;
   c.enabled = true;
+  if (f.has("mode") && f.choice("mode", {"positions", "mocap"}) == "mocap") {
+    c.mode = CameraMode::kMocap;
+  }
   c.rate = f.bounded("rate", kMinRate, kMaxFrameRate);
   f.required("noise");
   c.noise = f.non_negative("noise", 0.0);
-  c.latency = f.non_negative("latency", 0.0);
+  if (c.mode == CameraMode::kMocap) {
+    f.required("heading_noise");
+    c.heading_noise = f.non_negative("heading_noise", 0.0);
+  } else if (f.has("heading_noise")) {
+    f.fail("heading_noise", "not used by camera mode 'positions' (no theta; mode: mocap has one)");
+  }
+  const double period = static_cast<double>(frames_per_row(frame_rate, c.rate)) / frame_rate;
+  const StreamTiming timing = parse_timing(f, io::kMaxStreamLatency, period);
+  c.latency = timing.latency;
+  c.jitter = timing.jitter;
+  c.drop = f.fraction("drop", 0.0);
   if (const auto o = f.get("outliers")) {
     const Fields of(source, *o, "camera.outliers", {"rate", "magnitude"});
     of.required("rate");
@@ -614,9 +653,10 @@ Scenario parse_scenario(std::string_view yaml, std::string_view source_name) {
       }
     }
   }
-  const Fields top(source, root, "",
-                   {"version", "name", "description", "duration", "truth_rate", "sensor_model",
-                    "sensors", "true_sensors", "drive", "motion", "faults", "camera", "imu"});
+  const Fields top(
+      source, root, "",
+      {"version", "name", "description", "duration", "truth_rate", "sensor_model", "sensors",
+       "true_sensors", "drive", "wheels", "motion", "faults", "camera", "imu"});
   top.required("version");
 
   Scenario s;
@@ -632,9 +672,26 @@ Scenario parse_scenario(std::string_view yaml, std::string_view source_name) {
   const auto noise = config_noise(s.sensor_model, model_fields);
   for (int i = 0; i < s.nominal.array.size(); ++i) s.nominal.array[i].noise = noise;
   s.truth = s.nominal;
-  if (const auto t = top.get("true_sensors")) s.truth = parse_true_sensors(source, *t, s.nominal);
+  s.sensor_timing.assign(static_cast<std::size_t>(s.nominal.array.size()), {});
+  if (const auto t = top.get("true_sensors")) {
+    s.truth = parse_true_sensors(source, *t, s.nominal, s.sensor_model, s.sensor_timing);
+  }
   if (const auto d = top.get("drive")) s.drive = parse_drive(source, *d, s.sensor_model);
-  if (const auto c = top.get("camera")) s.camera = parse_camera(source, *c);
+  if (const auto w = top.get("wheels")) {
+    const Fields f(source, *w, "wheels", {"latency", "jitter"});
+    if (s.drive.type == DriveType::kNone) {
+      top.fail("wheels", "no drive, so no wheels.csv to stamp (give drive:)");
+    }
+    const double fps = s.sensor_model.frame_rate;
+    s.wheel_timing = parse_timing(f, io::kMaxStreamLatency,
+                                  static_cast<double>(frames_per_row(fps, s.drive.rate)) / fps);
+    if (s.wheel_timing.latency != 0.0) s.truth.wheels_latency = s.wheel_timing.latency;
+  }
+  if (const auto c = top.get("camera")) {
+    s.camera = parse_camera(source, *c, s.sensor_model.frame_rate);
+    // robot.true.yaml knows the camera's latency; robot.yaml believes none.
+    if (s.camera.latency != 0.0) s.truth.camera_latency = s.camera.latency;
+  }
   if (const auto g = top.get("imu")) {
     s.imu = parse_imu(source, *g);
     s.nominal.imu = believed_gyro(s.imu);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 
 #include "moa/sim/gyro.hpp"
 #include "moa/sim/wheels.hpp"
@@ -22,9 +23,40 @@ class MemorySink : public LogSink {
   SimLog& log_;
 };
 
-std::int64_t frames_per(double frame_rate, double rate) {
-  return std::max<std::int64_t>(1, std::llround(frame_rate / rate));
-}
+// mice.csv in the order of the stamps. A sensor's stamps increase
+// (clock.hpp), so once every sensor has a row waiting, the smallest waiting
+// stamp (ties: config order) is final; rows wait at most the spread of the
+// sensors' latencies plus a jitter. With equal latencies and no jitter the
+// rows leave in the order they were made.
+class MiceMerger {
+ public:
+  MiceMerger(int sensors, LogSink& sink)
+      : pending_(static_cast<std::size_t>(sensors)), sink_(sink) {}
+  void push(const MiceRecord& record) {
+    pending_[static_cast<std::size_t>(record.sensor)].push_back(record);
+    drain(false);
+  }
+  void finish() { drain(true); }
+
+ private:
+  void drain(bool all) {
+    for (;;) {
+      std::deque<MiceRecord>* best = nullptr;
+      for (auto& queue : pending_) {
+        if (queue.empty()) {
+          if (!all) return;
+          continue;
+        }
+        if (best == nullptr || queue.front().t < best->front().t) best = &queue;
+      }
+      if (best == nullptr) return;
+      sink_.mice(best->front());
+      best->pop_front();
+    }
+  }
+  std::vector<std::deque<MiceRecord>> pending_;
+  LogSink& sink_;
+};
 
 }  // namespace
 
@@ -37,18 +69,28 @@ void simulate(const Scenario& scenario, std::uint64_t seed, LogSink& sink,
   // from losing a frame to rounding.
   const auto truth_every = std::max<std::int64_t>(
       1, static_cast<std::int64_t>(std::floor(fps / scenario.truth_rate + 1e-9)));
-  const std::int64_t wheel_every = frames_per(fps, scenario.drive.rate);
-  const std::int64_t imu_every = frames_per(fps, scenario.imu.rate);
-  const std::int64_t camera_every = frames_per(fps, scenario.camera.rate);
+  const std::int64_t wheel_every = frames_per_row(fps, scenario.drive.rate);
+  const std::int64_t imu_every = frames_per_row(fps, scenario.imu.rate);
+  const std::int64_t camera_every = frames_per_row(fps, scenario.camera.rate);
   const auto time = [fps](std::int64_t frame) { return static_cast<double>(frame) / fps; };
 
   std::vector<OpticalSensor> sensors;
+  std::vector<StreamClock> clocks;
   const int n = scenario.truth.array.size();
   sensors.reserve(static_cast<std::size_t>(n));
+  clocks.reserve(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) {
-    sensors.emplace_back(scenario.truth.array[i], model,
-                         scenario.faults[static_cast<std::size_t>(i)], seed, i);
+    const auto u = static_cast<std::size_t>(i);
+    sensors.emplace_back(scenario.truth.array[i], model, scenario.faults[u], seed, i);
+    const StreamTiming timing =
+        u < scenario.sensor_timing.size() ? scenario.sensor_timing[u] : StreamTiming{};
+    clocks.emplace_back(timing, seed, Stream::kSensorClock, i);
   }
+  MiceMerger mice(n, sink);
+  const auto mice_row = [&](double end, int i, const SensorRowOut& row) {
+    mice.push({clocks[static_cast<std::size_t>(i)].stamp(end), i, row, end});
+  };
+  StreamClock wheel_clock(scenario.wheel_timing, seed, Stream::kWheelClock);
   const bool has_wheels = scenario.drive.type != DriveType::kNone;
   WheelOdometry wheels(scenario.drive, seed);
   Camera camera(scenario.camera, seed);
@@ -56,10 +98,11 @@ void simulate(const Scenario& scenario, std::uint64_t seed, LogSink& sink,
   std::int64_t last_imu_frame = 0;
   MotionStepper stepper(scenario.motion);
 
-  for (int i = 0; i < n; ++i)
-    sink.mice({0.0, i, sensors[static_cast<std::size_t>(i)].initial_row()});
+  for (int i = 0; i < n; ++i) mice_row(0.0, i, sensors[static_cast<std::size_t>(i)].initial_row());
   sink.truth({0.0, stepper.pose(), {}});
-  if (scenario.camera.enabled) sink.camera(camera.capture(0.0, stepper.pose()));
+  if (scenario.camera.enabled) {
+    if (const auto fix = camera.capture(0.0, stepper.pose())) sink.camera(*fix);
+  }
 
   std::int64_t last_wheel_frame = 0;
   const std::int64_t progress_every = std::max<std::int64_t>(1, frames / 100);
@@ -70,13 +113,13 @@ void simulate(const Scenario& scenario, std::uint64_t seed, LogSink& sink,
     const MotionStepper::Step step = stepper.advance(t0, t1);
     for (int i = 0; i < n; ++i) {
       if (auto row = sensors[static_cast<std::size_t>(i)].frame(step.twist, t0, h)) {
-        sink.mice({t1, i, *row});
+        mice_row(t1, i, *row);
       }
     }
     if (has_wheels) {
       wheels.frame(step.twist, h);
       if ((k + 1) % wheel_every == 0 || k + 1 == frames) {
-        sink.wheels({t1, wheels.take_row(t1 - time(last_wheel_frame))});
+        sink.wheels({wheel_clock.stamp(t1), wheels.take_row(t1 - time(last_wheel_frame))});
         last_wheel_frame = k + 1;
       }
     }
@@ -91,12 +134,13 @@ void simulate(const Scenario& scenario, std::uint64_t seed, LogSink& sink,
       sink.truth({t1, step.pose, step.twist});
     }
     if (scenario.camera.enabled && (k + 1) % camera_every == 0) {
-      sink.camera(camera.capture(t1, step.pose));
+      if (const auto fix = camera.capture(t1, step.pose)) sink.camera(*fix);
     }
     if (progress && (k + 1) % progress_every == 0) {
       progress(static_cast<double>(k + 1) / static_cast<double>(frames));
     }
   }
+  mice.finish();
 }
 
 SimLog simulate(const Scenario& scenario, std::uint64_t seed) {

@@ -1,8 +1,9 @@
 // Writes a simulated run as a log directory (docs/formats/log.md, version 1)
 // with its configs:
-//   mice.csv         t,sensor,dx,dy,squal,flags
+//   mice.csv         t,sensor,dx,dy,squal,flags         (in stamp order)
 //   wheels.csv       t,vx,vy,omega                      (when the scenario has a drive)
-//   camera.csv       t,x,y,sx,sy,t_arrival,outlier      (when it has a camera; t = capture)
+//   camera.csv       t,x,y[,theta],sx,sy,t_arrival,outlier   (when it has a camera; t = the
+//                    stamp at arrival, capture + latency + jitter; theta in mode mocap)
 //   truth.csv        t,x,y,theta,vx,vy,omega            (twist over the frame ending at t)
 //   faults.csv       t,sensor,faults,faulty_frames,clean_dx,clean_dy   (moa extension:
 //                    one row per mice.csv row, FaultBit bits and the counts the

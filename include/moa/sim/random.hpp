@@ -32,6 +32,10 @@ enum class Stream : std::uint64_t {
   kWheels = 4,
   kCamera = 5,
   kGyro = 6,
+  kSensorClock = 7,  ///< + sensor index * kStreamStride: a row's jitter
+  kWheelClock = 8,
+  kCameraClock = 9,
+  kCameraDrop = 10,
 };
 inline constexpr std::uint64_t kStreamStride = 16;
 

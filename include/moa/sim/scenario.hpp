@@ -14,6 +14,7 @@
 
 #include "moa/formats/config.hpp"
 #include "moa/sim/camera.hpp"
+#include "moa/sim/clock.hpp"
 #include "moa/sim/gyro.hpp"
 #include "moa/sim/optical.hpp"
 #include "moa/sim/trajectory.hpp"
@@ -37,6 +38,10 @@ struct Scenario {
   double duration = 0.0;      ///< s, simulated time (whole rows of K frames)
   double truth_rate = 100.0;  ///< truth.csv rows per second, at least
   DriveModel drive;
+  /// One per sensor, config order: mice.csv's latency and jitter
+  /// (`true_sensors.NAME: {latency, jitter}`); robot.true.yaml has the latencies.
+  std::vector<StreamTiming> sensor_timing;
+  StreamTiming wheel_timing;  ///< wheels.csv's (`wheels: {latency, jitter}`)
   CameraModel camera;
   GyroSpec imu;
   std::vector<SensorFaults> faults;  ///< one per sensor, config order

@@ -9,7 +9,9 @@
 // one every max(1, floor(frame_rate / truth_rate)) frames and one at the end;
 // wheels.csv and imu.csv one every round(frame_rate / rate) frames (the last
 // interval may be shorter); the camera one fix every round(frame_rate / rate) frames from
-// t = 0.
+// t = 0. Those are the true times; a row is written at its stamp, the true
+// time plus its stream's latency and jitter (clock.hpp), and mice.csv's rows
+// are in the order of their stamps (ties: config order).
 #pragma once
 
 #include <Eigen/Core>
@@ -26,12 +28,13 @@ namespace moa::sim {
 
 /// One mice.csv row and its faults.csv twin.
 struct MiceRecord {
-  double t = 0.0;
+  double t = 0.0;  ///< s, the stamp: the interval's end plus the sensor's latency and jitter
   int sensor = 0;  ///< index in the config
   SensorRowOut row;
+  double end = 0.0;  ///< s, the true end of the row's interval
 };
 struct WheelRecord {
-  double t = 0.0;
+  double t = 0.0;  ///< s, the stamp: the interval's end plus the wheels' latency and jitter
   Twist2 twist;
 };
 struct ImuRecord {
@@ -56,10 +59,10 @@ class LogSink {
 
 /// A whole run in memory.
 struct SimLog {
-  std::vector<MiceRecord> mice;  ///< time order, sensors in config order within a time
+  std::vector<MiceRecord> mice;  ///< stamp order, sensors in config order within a stamp
   std::vector<WheelRecord> wheels;
   std::vector<ImuRecord> imu;
-  std::vector<CameraFix> camera;
+  std::vector<CameraFix> camera;  ///< the fixes kept (not dropped)
   std::vector<TruthRecord> truth;
 };
 
