@@ -166,6 +166,11 @@ TEST(CalibrateCli, ExactAgainstACeilingCameraKeepsTheMeanYawAsItsGauge) {
         << kNames[i];
     EXPECT_EQ(cal.array[i].mirrored, robot.truth[i].mirrored) << kNames[i];
   }
+  const auto json = test::run_moa(calibrate_args(robot.dir, "exact") + " --json");
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  EXPECT_THAT(json.out, HasSubstr("\"positions_only\": true"));
+  EXPECT_THAT(json.out, HasSubstr("\"yaw_gauge_rad\""));
+  EXPECT_THAT(json.out, HasSubstr("\"rate_scale_estimated\": true"));
   fs::remove_all(robot.dir);
 }
 

@@ -1000,6 +1000,25 @@ std::string CalibrationSummary::to_json(std::string_view out) const {
       json_array(json, p.latency);
       json.key("sensor_latency_sigma_s");
       json_array(json, p.latency_sigma);
+      json.member("positions_only", p.heading.has_value());
+      if (p.heading) {
+        // The heading reconstructed from the array (docs/calibration.md, "Positions only").
+        const HeadingFit& h = *p.heading;
+        json.key("heading")
+            .begin_object()
+            .member("theta0_rad", h.theta0)
+            .member("theta0_sigma_rad", h.theta0_sigma)
+            .member("drift_rad_per_s", h.drift)
+            .member("drift_sigma_rad_per_s", h.drift_sigma)
+            .member("rate_scale_estimated", h.rate_scale_estimated)
+            .member("rate_scale", h.rate_scale)
+            .member("rate_scale_sigma", h.rate_scale_sigma)
+            .member("rotation_range_rad", h.rotation_range)
+            .member("residual_rms_m", h.residual_rms)
+            .member("windows", h.windows)
+            .member("yaw_gauge_rad", h.yaw_gauge)
+            .end_object();
+      }
       json.end_object();
     }
   } else if (const auto* g = std::get_if<GuidedCalibration>(&result)) {
