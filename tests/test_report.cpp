@@ -179,6 +179,29 @@ TEST(Report, PageIsOneSelfContainedFileWithEverySection) {
   if (!HasFailure()) fs::remove_all(out_dir);
 }
 
+// A calibration against a camera writes latencies (docs/formats/config.md):
+// the calibration section shows each sensor's and the camera's, before and after.
+TEST(Report, CalibrationSectionShowsTheLatencies) {
+  const ReportRun& r = report_run();
+  const fs::path out_dir = test::scratch_dir("report-latency");
+  io::RobotConfig cal = io::read_config(r.calibration);
+  std::vector<SensorMount> mounts(cal.array.mounts().begin(), cal.array.mounts().end());
+  mounts[0].latency = 0.0042;
+  cal.array = SensorArray(mounts);
+  cal.camera_latency = 0.012;
+  io::write_config(cal, out_dir / "cal.yaml");
+  const fs::path page_file = out_dir / "report.html";
+  const auto result = test::run_moa(r.common + " --calibration " + (out_dir / "cal.yaml").string() +
+                                    " --out " + page_file.string());
+  ASSERT_EQ(result.exit_code, 0) << result.err;
+  const std::string page = slurp(page_file);
+  EXPECT_THAT(page, HasSubstr("<th>latency (ms)</th>"));
+  EXPECT_THAT(page, HasSubstr("<td>0.00 &rarr; 4.20</td>"));
+  EXPECT_THAT(page, HasSubstr("camera latency: not set &rarr; 12.00 ms"));
+  EXPECT_EQ(page.find("wheels latency"), std::string::npos);
+  if (!HasFailure()) fs::remove_all(out_dir);
+}
+
 TEST(Report, SummaryGivesMillimetresOverTheTruthsDistanceAndAVerdict) {
   const ReportRun& r = report_run();
   const io::ReportModel m = io::build_report(inputs_of(r), {.max_points = 200});

@@ -112,7 +112,8 @@ RobotConfig matched_calibration(const RobotConfig& nominal, const std::string& n
                               joined_names(nominal)));
     }
   }
-  RobotConfig out;
+  RobotConfig out = calibrated;  // the rest of the config (imu, latencies) as calibrated
+  out.names.clear();
   std::vector<SensorMount> mounts;
   for (const auto& name : nominal.names) {
     const auto index = calibrated.index_of(name);

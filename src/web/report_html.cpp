@@ -5,7 +5,9 @@
 
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <string_view>
+#include <tuple>
 
 #include "moa/web/html.hpp"
 #include "moa/web/report.hpp"
@@ -338,7 +340,7 @@ std::string calibration_table(const ReportModel& m) {
   std::string t =
       "<table class=\"grid\">\n<tr><th>sensor</th><th>x (m)</th><th>y (m)</th><th>yaw "
       "(rad)</th><th>scale</th><th>mirrored</th><th>shift (mm)</th><th>yaw change "
-      "(mrad)</th><th>scale change</th></tr>\n";
+      "(mrad)</th><th>scale change</th><th>latency (ms)</th></tr>\n";
   for (int i = 0; i < m.config.array.size(); ++i) {
     const SensorMount& a = m.config.array[i];
     const SensorMount& b = cal.array[i];
@@ -347,7 +349,8 @@ std::string calibration_table(const ReportModel& m) {
         "<tr><td>{}</td><td>{:.4f} &rarr; {:.4f}</td><td>{:.4f} &rarr; {:.4f}</td><td>{:.4f} "
         "&rarr; {:.4f}</td><td>({:.4f}, {:.4f}) &rarr; ({:.4f}, "
         "{:.4f})</td><td>{}</td><td>({:+.2f}, "
-        "{:+.2f}), |{:.2f}|</td><td>{:+.2f}</td><td>({:+.4f}, {:+.4f})</td></tr>\n",
+        "{:+.2f}), |{:.2f}|</td><td>{:+.2f}</td><td>({:+.4f}, {:+.4f})</td><td>{:.2f} &rarr; "
+        "{:.2f}</td></tr>\n",
         html(m.config.names[static_cast<std::size_t>(i)]), a.position.x(), b.position.x(),
         a.position.y(), b.position.y(), a.yaw, b.yaw, a.scale.x(), a.scale.y(), b.scale.x(),
         b.scale.y(),
@@ -356,9 +359,21 @@ std::string calibration_table(const ReportModel& m) {
             : fmt::format("<strong>{} &rarr; {}</strong>", a.mirrored ? "yes" : "no",
                           b.mirrored ? "yes" : "no"),
         shift.x(), shift.y(), shift.norm(), wrap_angle(b.yaw - a.yaw) * 1e3,
-        b.scale.x() - a.scale.x(), b.scale.y() - a.scale.y());
+        b.scale.x() - a.scale.x(), b.scale.y() - a.scale.y(), 1e3 * a.latency, 1e3 * b.latency);
   }
-  return t + "</table>\n";
+  t += "</table>\n";
+  // The streams' latencies (s in the config; docs/formats/config.md, "Latencies").
+  const auto latency = [](const std::optional<double>& x) {
+    return x ? fmt::format("{:.2f} ms", 1e3 * *x) : std::string("not set");
+  };
+  for (const auto& [name, a, b] :
+       {std::tuple{"camera", m.config.camera_latency, cal.camera_latency},
+        std::tuple{"wheels", m.config.wheels_latency, cal.wheels_latency}}) {
+    if (a || b) {
+      t += fmt::format("<p>{} latency: {} &rarr; {}</p>\n", name, latency(a), latency(b));
+    }
+  }
+  return t;
 }
 
 constexpr std::string_view kHint =
