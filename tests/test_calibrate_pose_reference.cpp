@@ -269,6 +269,31 @@ TEST(CalibratePoseReference, CeilingCameraWithinTheIssuesLimits) {
   }
 }
 
+// Without rotation the array's rotation scale (which its positions set) is
+// not seen from positions: said (rate_scale_estimated false), the heading
+// still fitted, and the positions left to the exact fit's observability
+// report (no rotation: positions kept at nominal).
+TEST(CalibratePoseReference, PositionsWithoutTurningSayTheRotationScaleIsNotSeen) {
+  const Case c = four_sensors(23);
+  MocapSetup s;
+  s.duration = 30.0;
+  s.fix_period = 1.0 / 25.0;
+  s.position_sd = 1e-3;
+  s.script = [](double t) {
+    return Twist2{{0.2 + 0.15 * std::sin(0.6 * t), 0.2 * std::cos(0.45 * t + 0.3)}, 0.0};
+  };
+  const MocapLog log = synthesise(c.truth, s, 23);
+  const std::vector<double> configured(4, mean(s.latency));
+  const PoseReferenceCalibration cal = calibrate_positions(c.nominal, log, configured, 0.0);
+  ASSERT_TRUE(cal.heading.has_value());
+  EXPECT_FALSE(cal.heading->rate_scale_estimated);
+  EXPECT_LT(cal.heading->rotation_range, 0.5);
+  for (int i = 0; i < 4; ++i) {
+    const auto& est = cal.exact.sensors[static_cast<std::size_t>(i)].estimated;
+    EXPECT_FALSE(est[0] && est[1]) << "position of sensor " << i << " without rotation";
+  }
+}
+
 TEST(CalibratePoseReference, PositionsFromAnotherRunAreRefused) {
   const Case c = four_sensors(9);
   MocapSetup s;
