@@ -107,8 +107,7 @@ TEST_P(CalibrationCrbReference, MirroringAndLatencies) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(References, CalibrationCrbReference,
-                         ::testing::Values("mocap", "camera"));
+INSTANTIATE_TEST_SUITE_P(References, CalibrationCrbReference, ::testing::Values("mocap", "camera"));
 
 TEST(CalibrationCrbMocap, MedianEfficiencyAboveFloor) {
   EXPECT_GT(median_efficiency(reference("mocap")), 0.08);

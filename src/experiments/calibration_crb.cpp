@@ -42,7 +42,7 @@ constexpr double kSpeedSd = 0.01;
 constexpr double kRateSd = 0.05;
 // Seeds of the pose references (calib-mocap, calib-camera) by default: one
 // simulated minute and one calibration each (calibration_crb_pose.cpp).
-constexpr int kPoseRuns = 8;
+constexpr int kPoseRuns = 16;
 
 Twist2 mixed(double t) {
   return {{0.2 + 0.15 * std::sin(0.6 * t), 0.2 * std::cos(0.45 * t + 0.3)},

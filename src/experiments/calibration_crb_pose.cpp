@@ -8,26 +8,28 @@
 // The bound. The Fisher information of the mounts (banded_information:
 // calibration_information's, exact.hpp, with the windows' noise correlated
 // as it is) at the true mounts, for the true displacement z_k over windows
-// of the fixes (consecutive fixes
-// merged to at least 0.2 s, the method's default window), with
+// of the fixes (consecutive fixes by capture time merged to at least 0.2 s,
+// the method's default window), with
 //  - count noise s_i^2 (counts^2 per axis and window) measured against the
 //    truth: r_ik = c_ik - H_i z_k, c_ik the sensor's counts over the true
 //    window on its stamped clock (true latency), H_i = G_i A_i the true
-//    mount, z_k = sum_j R(-theta_j') (p_{j+1} - p_j), theta_k's change, from
+//    mount, z_k = (sum_j R(-theta_j') (p_{j+1} - p_j), theta's change) from
 //    the truth sampled at 1 kHz (theta_j' the mean of two rows' headings);
 //    s_i^2 = sum r^2 / (2 K) pooled over the seeds, and the lag-1
 //    covariance of r between neighbouring windows likewise;
 //  - reference noise from the fixes' own: a window's displacement differs
-//    from z_k by the end fixes' errors, W_k = diag(2 sp^2, 2 sp^2, 2 sth^2)
-//    (m, m, rad)^2, passed as Sigma_w = W / mean(dt_k^2). Motion capture:
-//    sp, sth the scenario's; neighbouring windows share a fix, so their
-//    errors correlate (-1/2): a slow signal's errors cancel along the run,
-//    which the white model (the method's, and its 1-sigma's) does not know;
-//    the white model's bound is reported beside. Ceiling camera: sth = 0, the heading known: the
-//    method reconstructs it from the array, which costs more, so the bound
-//    is optimistic there; the stamps' jitter is not in it either.
+//    from z_k by its end fixes' errors (body frame, isotropic),
+//    W = diag(2 sp^2, 2 sp^2, 2 sth^2) (m, m, rad)^2; neighbouring windows
+//    share a fix, so their errors correlate (-W/2): a slow signal's errors
+//    cancel along the run, which the white model (the method's, and its
+//    1-sigma's) does not know; that model's bound is reported beside.
+//    Motion capture: sp, sth the scenario's. Ceiling camera: sth = 0, the
+//    heading known: the method reconstructs it from the array, which costs
+//    more, so the bound is optimistic there; the stamps' jitter is not in
+//    it either. The fixes' heading errors times each step's length (about
+//    4e-6 m per step at 120 Hz) are left out.
 // The latencies are taken as known (the method estimates them too). The
-// bound is averaged over the seeds' windows (the camera's drop fixes).
+// bound is averaged over the seeds' windows (the camera drops fixes).
 //
 // Ceiling camera: the robot frame's turn is a gauge (the sensors' mean yaw
 // kept as configured), so the truth x is compared as g(x): turned back by
@@ -118,8 +120,8 @@ Eigen::VectorXd gauged(const Eigen::VectorXd& x, const SensorArray& nominal,
   double s = 0.0, c = 0.0;
   for (int i = 0; i < nominal.size(); ++i) {
     if (!same[static_cast<std::size_t>(i)]) continue;
-    const double change = wrap_angle(x(kMountParameters * i + 2) -
-                                     static_cast<double>(nominal[i].yaw));
+    const double change =
+        wrap_angle(x(kMountParameters * i + 2) - static_cast<double>(nominal[i].yaw));
     s += std::sin(change);
     c += std::cos(change);
   }
@@ -135,21 +137,22 @@ Eigen::VectorXd gauged(const Eigen::VectorXd& x, const SensorArray& nominal,
 
 Eigen::VectorXd parameters_of(const SensorArray& a) {
   Eigen::VectorXd x(kMountParameters * a.size());
-  for (int i = 0; i < a.size(); ++i) x.segment<kMountParameters>(kMountParameters * i) = mount_parameters(a[i]);
+  for (int i = 0; i < a.size(); ++i)
+    x.segment<kMountParameters>(kMountParameters * i) = mount_parameters(a[i]);
   return x;
 }
 
 // One seed's calibration errors and the data of its bound.
 struct SeedRun {
-  Eigen::VectorXd error, sigma;           // 5N: estimate - truth (gauged), reported 1-sigma
-  Eigen::VectorXd latency_error, latency_sigma;  // N: relative to the sensors' mean, s
+  Eigen::VectorXd error, sigma;                   // 5N: estimate - truth (gauged), reported 1-sigma
+  Eigen::VectorXd latency_error, latency_sigma;   // N: relative to the sensors' mean, s
   double camera_error = 0.0, camera_sigma = 0.0;  // s
   bool mirrors = false;
   std::vector<Twist2> twists;  // true, per window
   std::vector<double> dts;
-  std::vector<bool> follows;  // the window starts at the previous one's end fix
+  std::vector<bool> follows;              // the window starts at the previous one's end fix
   std::vector<Eigen::VectorXd> residual;  // 2N counts, c_k - H z_k at the truth
-  double seconds = 0.0;  // wall time of the calibration
+  double seconds = 0.0;                   // wall time of the calibration
 };
 
 // Fisher information of the mounts (5N) with the windows' noise as it is:
@@ -172,7 +175,8 @@ Eigen::MatrixXd banded_information(const SensorArray& truth, const SeedRun& run,
   Eigen::MatrixXd dcov = Eigen::MatrixXd::Zero(m, m), lcov = Eigen::MatrixXd::Zero(m, m);
   for (int i = 0; i < n; ++i) {
     dcov.block<2, 2>(2 * i, 2 * i) = var[static_cast<std::size_t>(i)] * Eigen::Matrix2d::Identity();
-    lcov.block<2, 2>(2 * i, 2 * i) = lag1[static_cast<std::size_t>(i)] * Eigen::Matrix2d::Identity();
+    lcov.block<2, 2>(2 * i, 2 * i) =
+        lag1[static_cast<std::size_t>(i)] * Eigen::Matrix2d::Identity();
   }
   const Eigen::MatrixXd diag = dcov + h * w_diag.asDiagonal() * h.transpose();
   const Eigen::MatrixXd off = lcov - 0.5 * h * w_diag.asDiagonal() * h.transpose();
@@ -197,7 +201,8 @@ Eigen::MatrixXd banded_information(const SensorArray& truth, const SeedRun& run,
   Eigen::SparseMatrix<double> sigma(m * k_all, m * k_all);
   sigma.setFromTriplets(entries.begin(), entries.end());
   const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> chol(sigma);
-  if (chol.info() != Eigen::Success) throw io::Error("calibration-crb: noise covariance not positive definite");
+  if (chol.info() != Eigen::Success)
+    throw io::Error("calibration-crb: noise covariance not positive definite");
   const Eigen::MatrixXd solved = chol.solve(g);
   return g.transpose() * solved;
 }
@@ -225,7 +230,8 @@ void pose_reference_crb(std::string_view scenario_name, const Options& options, 
   const int n = truth.size();
   const int p_all = kMountParameters * n;
   std::vector<bool> same(static_cast<std::size_t>(n));
-  for (int i = 0; i < n; ++i) same[static_cast<std::size_t>(i)] = truth[i].mirrored == nominal[i].mirrored;
+  for (int i = 0; i < n; ++i)
+    same[static_cast<std::size_t>(i)] = truth[i].mirrored == nominal[i].mirrored;
 
   const Eigen::VectorXd x_true = parameters_of(truth);
   const Eigen::VectorXd x_ref = mocap ? x_true : gauged(x_true, nominal, same);
@@ -270,9 +276,9 @@ void pose_reference_crb(std::string_view scenario_name, const Options& options, 
     for (int i = 0; i < n; ++i) latency.push_back(static_cast<double>(nominal[i].latency));
     const double camera_latency = sc.nominal.camera_latency.value_or(0.0);
     const auto start = std::chrono::steady_clock::now();
-    auto result = mocap ? calibrate_against_poses(nominal, tracks, latency, poses, camera_latency)
-                        : calibrate_against_positions(nominal, tracks, latency, positions,
-                                                      camera_latency);
+    auto result =
+        mocap ? calibrate_against_poses(nominal, tracks, latency, poses, camera_latency)
+              : calibrate_against_positions(nominal, tracks, latency, positions, camera_latency);
     SeedRun run;
     run.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (const auto* f = std::get_if<PoseReferenceFailure>(&result)) {
@@ -324,9 +330,8 @@ void pose_reference_crb(std::string_view scenario_name, const Options& options, 
       Eigen::VectorXd res(2 * n);
       for (int i = 0; i < n; ++i) {
         const auto u = static_cast<std::size_t>(i);
-        const Eigen::Vector2d r =
-            tracks[u].between(a + true_latency[u], b + true_latency[u]) -
-            truth[i].twist_jacobian().cast<double>() * z;
+        const Eigen::Vector2d r = tracks[u].between(a + true_latency[u], b + true_latency[u]) -
+                                  truth[i].twist_jacobian().cast<double>() * z;
         res.segment<2>(2 * i) = r;
         noise_sum[u] += r.squaredNorm();
         noise_count[u] += 2.0;
@@ -365,7 +370,8 @@ void pose_reference_crb(std::string_view scenario_name, const Options& options, 
     crb += banded_information(truth, r, noise.counts_variance, lag1, w_diag).inverse() / runs;
     SeedRun alone = r;
     alone.follows.assign(r.follows.size(), false);
-    white += banded_information(truth, alone, noise.counts_variance, no_lag, w_diag).inverse() / runs;
+    white +=
+        banded_information(truth, alone, noise.counts_variance, no_lag, w_diag).inverse() / runs;
     windows += static_cast<double>(r.dts.size()) / runs;
   }
   crb = jac * crb * jac.transpose();
@@ -415,7 +421,9 @@ void pose_reference_crb(std::string_view scenario_name, const Options& options, 
       .begin_array();
   for (const double v : noise.counts_variance) json.value(std::sqrt(v));
   json.end_array().key("count_lag1_correlation").begin_array();
-  for (int i = 0; i < n; ++i) json.value(lag1[static_cast<std::size_t>(i)] / noise.counts_variance[static_cast<std::size_t>(i)]);
+  for (int i = 0; i < n; ++i)
+    json.value(lag1[static_cast<std::size_t>(i)] /
+               noise.counts_variance[static_cast<std::size_t>(i)]);
   json.end_array()
       .member("median_efficiency", median)
       .member("mirror_found_runs", mirrors)
@@ -471,29 +479,32 @@ void pose_reference_crb(std::string_view scenario_name, const Options& options, 
   std::vector<double> count_sd;
   for (const double v : noise.counts_variance) count_sd.push_back(std::sqrt(v));
   text += fmt::format(
-      "\nAgainst {} ({}: {}), seeds {}..{}, {:.0f} windows of 0.2 s per run; fix noise {} m{};\n"
-      "count noise measured against the truth, per sensor {:.3f} counts per axis and window.\n"
-      "{}\n"
+      "\nAgainst {} ({}: {}), seeds {}..{}, {:.0f} windows of 0.2 s\n"
+      "per run; fix noise {} m{}; count noise measured against the truth, per sensor\n"
+      "{:.3f} counts per axis and window. Bound: the fixes' noise at the window ends,\n"
+      "neighbouring windows sharing a fix; latencies known.{}\n"
+      "white CRB: the bound with the windows independent (the method's model).\n"
       "1-sigma/RMSE: the run's own 1-sigma (RMS over the seeds) over the RMSE; 1: honest.\n\n",
       mocap ? "motion capture" : "a ceiling camera", scenario_name,
       mocap ? "poses" : "positions only", options.seed, last, windows, sp,
-      mocap ? fmt::format(", heading {} rad", sth) : std::string(),
-      fmt::join(count_sd, " "),
-      mocap ? "Bound: the fixes' noise at the window ends, latencies known."
-            : "Gauge: truth and bound turned back by the truth's circular mean yaw change (sensors\n"
-              "mirrored as nominal). Bound: heading known and no jitter (the method reconstructs\n"
-              "the heading from the array): optimistic, latencies known.");
-  text += fmt::format("{:<6} {:<11} {:>12} {:>11} {:>11} {:>11} {:>10} {:>11} {:>12}\n",
-                      "sensor", "parameter", "true", "RMSE", "bias", "sqrt(CRB)", "efficiency",
-                      "white CRB", "1-sigma/RMSE");
+      mocap ? fmt::format(", heading {} rad", sth) : std::string(), fmt::join(count_sd, " "),
+      mocap ? ""
+            : " Heading known and no\n"
+              "jitter (the method reconstructs the heading from the array): optimistic. Gauge:\n"
+              "truth and bound turned back by the truth's circular mean yaw change (over the\n"
+              "sensors mirrored as nominal).");
+  text += fmt::format("{:<6} {:<11} {:>12} {:>11} {:>11} {:>11} {:>10} {:>11} {:>12}\n", "sensor",
+                      "parameter", "true", "RMSE", "bias", "sqrt(CRB)", "efficiency", "white CRB",
+                      "1-sigma/RMSE");
   for (int p = 0; p < p_all; ++p) {
     text += fmt::format(
         "{:<6} {:<11} {:>12.6f} {:>11.3e} {:>11.2e} {:>11.3e} {:>10.3f} {:>11.3e} {:>12.2f}\n",
         p / kMountParameters, names[static_cast<std::size_t>(p % kMountParameters)], x_ref(p),
         rmse(p), bias(p), bound(p), efficiency(p), white_bound(p), sigma_rms(p) / rmse(p));
   }
-  text += fmt::format("\nlatency errors relative to the sensors' mean (ms):\n{:<6} {:>11} {:>11} {:>11} {:>10}\n",
-                      "who", "RMSE", "bias", "1-sigma", "ratio");
+  text += fmt::format(
+      "\nlatency errors relative to the sensors' mean (ms):\n{:<6} {:>11} {:>11} {:>11} {:>10}\n",
+      "who", "RMSE", "bias", "1-sigma", "ratio");
   for (const auto& l : latency_lines) text += l;
   text += fmt::format(
       "\nmedian efficiency {:.3f}; mirroring right in {} of {} runs; calibration at most {:.2f} s "
