@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "calibration_crb_pose.hpp"
 #include "experiments_list.hpp"
 #include "moa/calibration/exact.hpp"
 #include "moa/formats/error.hpp"
@@ -39,6 +40,9 @@ constexpr double kPeriod = 0.02;
 constexpr double kCountSd = 0.5;
 constexpr double kSpeedSd = 0.01;
 constexpr double kRateSd = 0.05;
+// Seeds of the pose references (calib-mocap, calib-camera) by default: one
+// simulated minute and one calibration each (calibration_crb_pose.cpp).
+constexpr int kPoseRuns = 16;
 
 Twist2 mixed(double t) {
   return {{0.2 + 0.15 * std::sin(0.6 * t), 0.2 * std::cos(0.45 * t + 0.3)},
@@ -206,6 +210,13 @@ Result calibration_crb(const Options& options) {
         .member("rmse_ols", rmse_ols(p))
         .end_object();
   }
+  json.end_array();
+  std::string pose_text;
+  json.key("references").begin_array();
+  const int pose_runs = options.runs > 0 ? options.runs : kPoseRuns;
+  for (const char* scenario : {"calib-mocap", "calib-camera"}) {
+    pose_reference_crb(scenario, options, pose_runs, pose_text, json);
+  }
   json.end_array().end_object();
   text += fmt::format(
       "Exact calibration against its Cramer-Rao bound: 4 sensors, errors up to 8 mm, 4 deg, 4 %,\n"
@@ -224,6 +235,7 @@ Result calibration_crb(const Options& options) {
   }
   text += fmt::format("\nmedian efficiency {:.3f}; mirroring right in {} of {} runs\n", median,
                       mirrors_found, runs);
+  text += pose_text;
   return {text, json.str() + "\n"};
 }
 
