@@ -588,33 +588,63 @@ std::optional<HeadingFit> fit_heading(std::span<const double> t,
 // Step 3 of the header: the robot frame turned so that the sensors' mean
 // yaw change is 0; returns delta (rad).
 double apply_yaw_gauge(ExactCalibration& cal, const SensorArray& nominal) {
-  double sin_sum = 0.0, cos_sum = 0.0;
-  for (int pass = 0; pass < 2 && sin_sum == 0.0 && cos_sum == 0.0; ++pass) {
+  const auto n = static_cast<Eigen::Index>(cal.sensors.size());
+  // K: the sensors whose mirroring the data kept (a flip changes what the
+  // yaw means); all of them when none is.
+  std::vector<bool> in_mean(cal.sensors.size());
+  int members = 0;
+  for (int pass = 0; pass < 2 && members == 0; ++pass) {
     for (std::size_t i = 0; i < cal.sensors.size(); ++i) {
-      const SensorMount& c = cal.sensors[i].calibrated;
-      const SensorMount& n = nominal[static_cast<int>(i)];
-      if (pass == 0 && c.mirrored != n.mirrored) continue;  // a flip changes the yaw's meaning
-      const double change = wrap_angle(static_cast<double>(c.yaw - n.yaw));
-      sin_sum += std::sin(change);
-      cos_sum += std::cos(change);
+      in_mean[i] = pass == 1 || cal.sensors[i].calibrated.mirrored == nominal[static_cast<int>(i)].mirrored;
+      members += in_mean[i] ? 1 : 0;
     }
+  }
+  double sin_sum = 0.0, cos_sum = 0.0;
+  for (std::size_t i = 0; i < cal.sensors.size(); ++i) {
+    if (!in_mean[i]) continue;
+    const double change = wrap_angle(
+        static_cast<double>(cal.sensors[i].calibrated.yaw - nominal[static_cast<int>(i)].yaw));
+    sin_sum += std::sin(change);
+    cos_sum += std::cos(change);
   }
   const double delta = std::atan2(sin_sum, cos_sum);
   const Eigen::Matrix2d back = rotation(-delta);
+  const Eigen::Matrix2d turn90{{0.0, -1.0}, {1.0, 0.0}};
+  // The map's Jacobian T (5N x 5N, parameters sensor-major in MountParameter
+  // order): p_i' = R(-delta) p_i, yaw_i' = yaw_i - delta, delta the (circular,
+  // ~arithmetic) mean of the yaw changes over K, d delta / d yaw_j = 1/|K|:
+  //   d p_i' / d p_i = R(-delta),  d p_i' / d yaw_j = -J p_i' / |K|,
+  //   d yaw_i' / d yaw_j = [i = j] - 1/|K|   (j in K).
+  // Sigma' = T Sigma T^T: the common turn the data cannot see leaves the
+  // yaws' 1-sigma (they become relative to their mean).
+  Eigen::MatrixXd t = Eigen::MatrixXd::Identity(5 * n, 5 * n);
   std::vector<SensorMount> mounts;
-  const auto n = static_cast<Eigen::Index>(cal.sensors.size());
-  Eigen::MatrixXd turn = Eigen::MatrixXd::Identity(5 * n, 5 * n);
   for (Eigen::Index i = 0; i < n; ++i) {
     SensorCalibration& s = cal.sensors[static_cast<std::size_t>(i)];
     s.calibrated.position = (back * s.calibrated.position.cast<double>()).cast<real>();
     s.calibrated.yaw = static_cast<real>(s.calibrated.yaw - delta);
-    MountMatrix t = MountMatrix::Identity();
-    t.topLeftCorner<2, 2>() = back;
-    s.covariance = t * s.covariance * t.transpose();
-    turn.block<2, 2>(5 * i, 5 * i) = back;
+    t.block<2, 2>(5 * i, 5 * i) = back;
+    const Eigen::Vector2d lever = -turn90 * s.calibrated.position.cast<double>() / members;
+    for (Eigen::Index j = 0; j < n; ++j) {
+      if (!in_mean[static_cast<std::size_t>(j)]) continue;
+      t.block<2, 1>(5 * i, 5 * j + 2) += lever;
+      t(5 * i + 2, 5 * j + 2) -= 1.0 / members;
+    }
     mounts.push_back(s.calibrated);
   }
-  if (cal.covariance.rows() == 5 * n) cal.covariance = turn * cal.covariance * turn.transpose();
+  if (cal.covariance.rows() == 5 * n) {
+    cal.covariance = t * cal.covariance * t.transpose();
+    for (Eigen::Index i = 0; i < n; ++i) {
+      cal.sensors[static_cast<std::size_t>(i)].covariance = cal.covariance.block<5, 5>(5 * i, 5 * i);
+    }
+  } else {
+    for (Eigen::Index i = 0; i < n; ++i) {
+      MountMatrix r = MountMatrix::Identity();
+      r.topLeftCorner<2, 2>() = back;
+      auto& c = cal.sensors[static_cast<std::size_t>(i)].covariance;
+      c = r * c * r.transpose();
+    }
+  }
   cal.calibrated = SensorArray(mounts);
   return delta;
 }
