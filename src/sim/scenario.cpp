@@ -206,7 +206,8 @@ io::RobotConfig parse_true_sensors(const Source& source, const YAML::Node& node,
     }
     seen[static_cast<std::size_t>(*index)] = true;
     const Fields f(source, entry.second, "true_sensors." + name,
-                   {"position_error", "position_scale", "yaw_error", "scale", "mirrored", "cpi"});
+                   {"position_error", "position_scale", "yaw_error", "scale", "mirrored", "cpi",
+                    "speed_scale"});
     SensorMount& m = truth.array[*index];
     m.position *= f.positive("position_scale", 1.0);
     if (f.has("position_error")) {
@@ -221,6 +222,9 @@ io::RobotConfig parse_true_sensors(const Source& source, const YAML::Node& node,
     }
     m.mirrored = f.boolean("mirrored", m.mirrored);
     m.cpi = f.positive("cpi", m.cpi);
+    // Counted over true displacement by ground speed: the simulator's counts
+    // follow it, robot.true.yaml carries it, robot.yaml does not.
+    if (f.has("speed_scale")) m.speed_scale = io::parse_speed_scale(f);
   }
   return truth;
 }
