@@ -341,7 +341,7 @@ TEST(SimScenario, UnknownNameListsTheBuiltins) {
         "sekimori-a, "
         "sekimori-b, "
         "selfcal-ramp, "
-        "selfcal-step) and no such file");
+        "selfcal-step, speed-scale) and no such file");
   }
 }
 
