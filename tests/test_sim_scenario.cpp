@@ -182,7 +182,15 @@ INSTANTIATE_TEST_SUITE_P(
                 "s.yaml:6: key 'true_sensors': no sensor called 'm9' (sensors: m1, m2, m3)"},
         BadCase{"true sensor bad key", with("true_sensors: {m1: {yaw_err: 0.1}}\n"),
                 "s.yaml:6: unknown key 'true_sensors.m1.yaw_err' (known here: position_error, "
-                "position_scale, yaw_error, scale, mirrored, cpi)"},
+                "position_scale, yaw_error, scale, mirrored, cpi, speed_scale)"},
+        BadCase{"true sensor speed scale ratio",
+                with("true_sensors: {m1: {speed_scale: {speeds: [0, 2], ratios: [1, 0.4]}}}\n"),
+                "s.yaml:6: key 'true_sensors.m1.speed_scale': ratios[1]: must be within [0.5, "
+                "1.5] (found 0.4)"},
+        BadCase{"true sensor speed scale knots",
+                with("true_sensors: {m1: {speed_scale: {speeds: [1], ratios: [1]}}}\n"),
+                "s.yaml:6: key 'true_sensors.m1.speed_scale.speeds': expected 2 to 8 numbers, "
+                "found 1"},
         BadCase{"position pair", with("true_sensors: {m1: {position_error: [0.1]}}\n"),
                 "s.yaml:6: key 'true_sensors.m1.position_error': expected 2 numbers, found 1"},
         BadCase{"bad motion type",

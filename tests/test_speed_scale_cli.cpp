@@ -40,30 +40,35 @@ class SpeedScaleCli : public ::testing::Test {
 };
 fs::path* SpeedScaleCli::dir_ = nullptr;
 
+// The knots are the union of the true tables' (0.25, 1, 2 / 0.5, 1.5, 2 /
+// 0.5, 2): every true table is piecewise linear on them, so the fit has no
+// model error and each knot's error is its noise, within 4 sigma.
 TEST_F(SpeedScaleCli, CalibratedTablesMatchTheTrueOnesWithinTheirSigma) {
-  const auto r = test::run_moa(calibrate("--speed-knots 0.25,1,2 --json"));
+  const auto r = test::run_moa(calibrate("--speed-knots 0.25,0.5,1,1.5,2 --json"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const io::RobotConfig truth = io::read_config(*dir_ / "robot.true.yaml");
   const io::RobotConfig cal = io::read_config(*dir_ / "cal.yaml");
   const test::JsonValue report = test::JsonValue::parse(r.out);
-  const std::array<double, 3> knots{0.25, 1.0, 2.0};
+  const std::array<double, 5> knots{0.25, 0.5, 1.0, 1.5, 2.0};
   for (int i = 0; i < 4; ++i) {
     SCOPED_TRACE(cal.names[static_cast<std::size_t>(i)]);
     const SpeedScale& fitted = cal.array[i].speed_scale;
     ASSERT_TRUE(fitted.active());
-    ASSERT_EQ(fitted.size(), 3);
+    ASSERT_EQ(fitted.size(), 5);
     const auto& sigma = report["sensors"][static_cast<std::size_t>(i)]["speed_scale"]["sigma"];
     // The true table relative to its value at the first knot (the gauge).
     const SpeedScale& t = truth.array[i].speed_scale;
-    for (int k = 1; k < 3; ++k) {
+    for (int k = 1; k < 5; ++k) {
       const double expected = t.ratio(knots[static_cast<std::size_t>(k)]) / t.ratio(knots[0]);
       const double sd = sigma[static_cast<std::size_t>(k)].number();
       EXPECT_GT(sd, 0.0);
       EXPECT_LT(sd, 0.005);
       EXPECT_LT(std::abs(fitted.ratio_at(k) - expected), 4.0 * sd) << "knot " << k;
     }
-    // The scale carries the resolution at the first knot: the truth's there.
-    EXPECT_NEAR(cal.array[i].scale.x(), t.ratio(knots[0]), 0.01);
+    // The scale carries the resolution at the first knot: the truth's there,
+    // within 3 sigma of the gauge's (about the other knots' sigma, < 0.001).
+    EXPECT_NEAR(cal.array[i].scale.x(), t.ratio(knots[0]), 0.003);
+    EXPECT_NEAR(cal.array[i].scale.y(), t.ratio(knots[0]), 0.003);
   }
 }
 

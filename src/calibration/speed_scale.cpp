@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 
 namespace moa {
 namespace {
@@ -67,7 +68,7 @@ std::string SpeedScaleError::message(std::span<const std::string> names) const {
       return fmt::format("the knots: {}", table ? describe(*table) : "invalid");
     case Kind::kNotCovered:
       return fmt::format(
-          "{}: knot {} m/s not covered by the data: {:.1f} windows near it, needs {} (the "
+          "{}: knot {} m/s not covered by the data: {} windows near it, needs {} (the "
           "sensor's fastest window: {:.3g} m/s)",
           who, knot_speed, coverage, needed, max_speed);
     case Kind::kSingular:
@@ -105,7 +106,8 @@ std::variant<std::vector<SpeedScaleFit>, SpeedScaleError> fit_speed_scales(
       if (!(s >= options.min_speed)) continue;
       const Eigen::Vector2d d_counted = to_metres * sample.mice.counts[static_cast<std::size_t>(i)];
       hats(options.knots, s, h);
-      coverage += h;
+      // Near knot k: nearer to it than to any other knot (h_k >= 1/2).
+      coverage += (h.array() >= 0.5).cast<double>().matrix();
       rows.emplace_back(h * length);
       ys.push_back(d_true.dot(d_counted) / length);
       fit.max_speed = std::max(fit.max_speed, s);
@@ -230,7 +232,14 @@ std::variant<SpeedScaleCalibration, CalibrationError, SpeedScaleError> calibrate
     out.fits = fits;
     out.rounds = round;
     previous = std::move(fits);
-    if (round > 1 && change < 1e-5) {
+    // Settled: the last round moved no ratio (nor the gauge) by more than a
+    // small part of the smallest 1-sigma: further rounds change nothing the
+    // data can tell.
+    double smallest = std::numeric_limits<double>::infinity();
+    for (const SpeedScaleFit& fit : fits) {
+      for (std::size_t k = 1; k < fit.sigma.size(); ++k) smallest = std::min(smallest, fit.sigma[k]);
+    }
+    if (round > 1 && change <= options.settle * smallest) {
       out.converged = true;
       break;
     }

@@ -984,7 +984,7 @@ std::string CalibrationSummary::full_report() const {
       fmt::format_to(out, "  {:<14} {:>12} {:>12} {:>12}\n", "knot m/s", "ratio", "1-sigma",
                      "windows");
       for (std::size_t k = 0; k < f.knots.size(); ++k) {
-        fmt::format_to(out, "  {:<14.4g} {:>12.5f} {:>12} {:>12.1f}\n", f.knots[k], f.ratios[k],
+        fmt::format_to(out, "  {:<14.4g} {:>12.5f} {:>12} {:>12}\n", f.knots[k], f.ratios[k],
                        k == 0 ? std::string("(gauge)") : fmt::format("{:.5f}", f.sigma[k]),
                        f.coverage[k]);
       }
