@@ -192,6 +192,7 @@ std::variant<SpeedScaleCalibration, CalibrationError, SpeedScaleError> calibrate
   std::vector<CalibrationSample> corrected(samples.begin(), samples.end());
   SpeedScaleCalibration out;
   std::vector<SpeedScaleFit> previous;
+  std::vector<Vec2> previous_scale;
   for (int round = 1; round <= std::max(1, options.max_rounds); ++round) {
     auto fitted = calibrate_exact(start, corrected, exact_options);
     if (const auto* e = std::get_if<CalibrationError>(&fitted)) return *e;
@@ -203,7 +204,11 @@ std::variant<SpeedScaleCalibration, CalibrationError, SpeedScaleError> calibrate
     if (const auto* e = std::get_if<SpeedScaleError>(&tables)) return *e;
     std::vector<SpeedScaleFit> fits = std::get<std::vector<SpeedScaleFit>>(std::move(tables));
     // The gauge (header comment): the scale takes r_0, the table is 1 at s_0.
-    double change = 0.0;
+    // `moved`: the largest change since the last round in units of its
+    // 1-sigma (each ratio's, each scale's; the gauge r_0 - 1 in the sensor's
+    // smallest ratio sigma).
+    double moved = 0.0;
+    std::vector<Vec2> scales;
     for (int i = 0; i < exact.calibrated.size(); ++i) {
       const auto u = static_cast<std::size_t>(i);
       SpeedScaleFit& fit = fits[u];
@@ -220,10 +225,18 @@ std::variant<SpeedScaleCalibration, CalibrationError, SpeedScaleError> calibrate
       m.speed_scale = table;
       exact.sensors[u].calibrated.scale *= fit.first_ratio;
       exact.sensors[u].calibrated.speed_scale = table;
-      change = std::max(change, std::abs(fit.first_ratio - 1.0));
+      scales.push_back(m.scale);
+      double smallest = std::numeric_limits<double>::infinity();
+      for (std::size_t k = 1; k < fit.sigma.size(); ++k) smallest = std::min(smallest, fit.sigma[k]);
+      moved = std::max(moved, std::abs(fit.first_ratio - 1.0) / smallest);
       if (!previous.empty()) {
-        for (std::size_t k = 0; k < fit.ratios.size(); ++k) {
-          change = std::max(change, std::abs(fit.ratios[k] - previous[u].ratios[k]));
+        for (std::size_t k = 1; k < fit.ratios.size(); ++k) {
+          moved = std::max(moved, std::abs(fit.ratios[k] - previous[u].ratios[k]) / fit.sigma[k]);
+        }
+        const MountMatrix& cov = exact.sensors[u].covariance;
+        for (int a = 0; a < 2; ++a) {
+          const double sd = std::sqrt(cov(3 + a, 3 + a));
+          if (sd > 0.0) moved = std::max(moved, std::abs(m.scale(a) - previous_scale[u](a)) / sd);
         }
       }
     }
@@ -232,14 +245,10 @@ std::variant<SpeedScaleCalibration, CalibrationError, SpeedScaleError> calibrate
     out.fits = fits;
     out.rounds = round;
     previous = std::move(fits);
-    // Settled: the last round moved no ratio (nor the gauge) by more than a
-    // small part of the smallest 1-sigma: further rounds change nothing the
-    // data can tell.
-    double smallest = std::numeric_limits<double>::infinity();
-    for (const SpeedScaleFit& fit : fits) {
-      for (std::size_t k = 1; k < fit.sigma.size(); ++k) smallest = std::min(smallest, fit.sigma[k]);
-    }
-    if (round > 1 && change <= options.settle * smallest) {
+    previous_scale = std::move(scales);
+    // Settled: the last round moved nothing by more than a small part of its
+    // 1-sigma: further rounds change nothing the data can tell.
+    if (round > 1 && moved <= options.settle) {
       out.converged = true;
       break;
     }

@@ -33,9 +33,10 @@
 // at speed as a misfit, so the two alternate: the exact fit, the table at its
 // mounts, the exact fit again on the counts with the tables undone
 // (corrected_counts, core/sensor.hpp: what the pipeline does), and so on,
-// until a round moves no ratio by more than settle (5 %) of the smallest
-// 1-sigma (at most max_rounds rounds). Each round shrinks the change about
-// five-fold (speed-scale, seed 1: 0.050, 0.0083, 0.0014, 0.00027, 5.3e-5).
+// until a round moves no ratio and no mount scale by more than settle (5 %)
+// of its 1-sigma (at most max_rounds rounds). The ratios r_k / r_0 hardly depend on
+// the mount's scale, so the rounds mostly settle the gauge r_0 (the
+// speed-scale scenario, seed 1: 2 rounds).
 #pragma once
 
 #include <optional>
@@ -58,8 +59,9 @@ struct SpeedScaleOptions {
   /// (refused: its ratio would be an extrapolation).
   double min_windows = 20.0;
   int max_rounds = 8;  ///< exact fit and table, alternated
-  /// Settled when a round moves every ratio (and the gauge's r_0) by at most
-  /// this fraction of the smallest ratio 1-sigma.
+  /// Settled when a round moves every ratio and every mount scale by at most
+  /// this fraction of its 1-sigma (and r_0 within it of 1, in the sensor's
+  /// smallest ratio 1-sigma).
   double settle = 0.05;
 };
 
