@@ -257,8 +257,10 @@ TEST(SpeedScaleFit, RecoversTheTablesWithinTheirSigma) {
       }
     }
   }
-  // 80 standardised errors: mean within 4 / sqrt(80) of 0, rms within
-  // chi-square(80) bounds at 1e-4 (0.58..1.47 for the rms).
+  // 80 standardised errors: mean within 4 / sqrt(80) of 0; rms within
+  // 0.58..1.47, a little wider than chi-square(80)'s 1e-6 quantiles for
+  // independent errors (0.65..1.39, Wilson-Hilferty): a sensor's two knots
+  // share windows, so their errors are correlated.
   double mean = 0.0, sq = 0.0;
   for (const double v : z) {
     mean += v / static_cast<double>(z.size());

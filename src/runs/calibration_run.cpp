@@ -537,10 +537,12 @@ void run_exact_camera(CalibrationSummary& r, const RobotConfig& config, const fs
 void run_exact(CalibrationSummary& r, const RobotConfig& config, const fs::path& log,
                const CalibrationOptions& options) {
   // Default: wheels.csv when the log has it, else camera.csv when it has
-  // that, else wheels (whose error names the missing file).
+  // that, else wheels (whose error names the missing file); wheels.csv
+  // always for a speed scale.
   const LogFiles files = resolve_log(log);
   const ExactReference reference = options.reference.value_or(
-      !files.wheels && files.camera ? ExactReference::kCamera : ExactReference::kWheels);
+      !files.wheels && files.camera && options.speed_knots.empty() ? ExactReference::kCamera
+                                                                   : ExactReference::kWheels);
   if (reference == ExactReference::kWheels) {
     run_exact_wheels(r, config, log, options);
   } else {

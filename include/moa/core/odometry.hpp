@@ -135,7 +135,8 @@ struct FixCounts {
 
 /// One output epoch.
 struct OdometryStep {
-  const ArraySample* sample = nullptr;  ///< the epoch's counts, speed scales undone; valid during the sink call
+  /// The epoch's counts (speed scales undone); valid during the sink call.
+  const ArraySample* sample = nullptr;
   RobustEstimate estimate;              ///< twist (robot frame), covariance, selection
   Pose2 pose;                           ///< world_T_robot at sample->t
   bool fused = false;                   ///< pose_covariance is the EKF's

@@ -7,7 +7,7 @@
 // the ends (r_0 below s_0, r_{n-1} above s_{n-1}). With d_true the sensor
 // point's displacement over dt and s = |d_true| / dt, the sensor counts
 //   d_counted = ratio(s) d_true,          so   |d_counted| / dt = f(s) = s ratio(s).
-// The inversion (invert) takes the counted speed c = |d_counted| / dt, finds
+// The inversion (true_speed, correction) takes the counted speed c = |d_counted| / dt, finds
 // the s with f(s) = c and returns the correction 1 / ratio(s) that turns the
 // counted displacement (or the counts, a linear map of it) into the true one.
 // f must be strictly increasing for s to be unique: on a segment with slope
@@ -31,7 +31,7 @@ class SpeedScale {
   static constexpr real kMinRatio = 0.5;
   static constexpr real kMaxRatio = 1.5;
 
-  /// The first reason a table is refused, in the order they are checked.
+  /// Why a table is refused (the first problem found; error_knot() says where).
   enum class Error {
     kTooFewKnots,     ///< fewer than kMinKnots
     kTooManyKnots,    ///< more than kMaxKnots
