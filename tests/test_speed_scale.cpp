@@ -116,8 +116,7 @@ TEST(SpeedScale, ForwardThenInverseIsTheIdentity) {
     const Vec2 truth = m.counts(x, dt);
     const double speed = (m.point_jacobian() * x.vector()).norm();
     const Vec2 counted = truth * reference_ratio(s, r, speed);
-    const Vec2 back =
-        corrected_counts(m.speed_scale, m.robot_velocity_from_counts(), counted, dt);
+    const Vec2 back = corrected_counts(m.speed_scale, m.robot_velocity_from_counts(), counted, dt);
     EXPECT_LT((back - truth).norm(), 1e-10 * truth.norm() + 1e-12) << trial;
     EXPECT_NEAR(m.speed_scale.true_speed(speed * reference_ratio(s, r, speed)), speed,
                 1e-12 * (1.0 + speed));

@@ -100,10 +100,9 @@ TEST_F(SpeedScaleCli, BadKnotsAndMethodsAreRefused) {
               HasSubstr("speed_knots: must be >= 0 and finite"));
   EXPECT_THAT(test::run_moa(calibrate("--speed-knots 0.5,2 --reference camera")).err,
               HasSubstr("--speed-knots needs the reference twists of wheels.csv"));
-  const auto kimlee = test::run_moa("calibrate --method kimlee --config " +
-                                    (*dir_ / "robot.yaml").string() + " --log " + dir_->string() +
-                                    " --out " + (*dir_ / "k.yaml").string() +
-                                    " --speed-knots 0.5,2");
+  const auto kimlee = test::run_moa(
+      "calibrate --method kimlee --config " + (*dir_ / "robot.yaml").string() + " --log " +
+      dir_->string() + " --out " + (*dir_ / "k.yaml").string() + " --speed-knots 0.5,2");
   EXPECT_EQ(kimlee.exit_code, 1);
   EXPECT_THAT(kimlee.err, HasSubstr("--speed-knots is used by --method exact only"));
 }

@@ -157,8 +157,7 @@ std::variant<std::vector<SpeedScaleFit>, SpeedScaleError> fit_speed_scales(
     fit.residual_rms = std::sqrt(rss / static_cast<double>(rows.size()));
     for (Eigen::Index k = 0; k < nk; ++k) {
       const double q = r(k) / r(0);
-      const double var =
-          (cov(k, k) - 2.0 * q * cov(k, 0) + q * q * cov(0, 0)) / (r(0) * r(0));
+      const double var = (cov(k, k) - 2.0 * q * cov(k, 0) + q * q * cov(0, 0)) / (r(0) * r(0));
       fit.ratios.push_back(q);
       fit.sigma.push_back(k == 0 ? 0.0 : std::sqrt(std::max(var, 0.0)));
       fit.coverage.push_back(coverage(k));
@@ -227,7 +226,8 @@ std::variant<SpeedScaleCalibration, CalibrationError, SpeedScaleError> calibrate
       exact.sensors[u].calibrated.speed_scale = table;
       scales.push_back(m.scale);
       double smallest = std::numeric_limits<double>::infinity();
-      for (std::size_t k = 1; k < fit.sigma.size(); ++k) smallest = std::min(smallest, fit.sigma[k]);
+      for (std::size_t k = 1; k < fit.sigma.size(); ++k)
+        smallest = std::min(smallest, fit.sigma[k]);
       moved = std::max(moved, std::abs(fit.first_ratio - 1.0) / smallest);
       if (!previous.empty()) {
         for (std::size_t k = 1; k < fit.ratios.size(); ++k) {

@@ -344,7 +344,8 @@ std::string format_config(const RobotConfig& config) {
         speeds += fmt::format("{}{}", k ? ", " : "", m.speed_scale.speed(k));
         ratios += fmt::format("{}{}", k ? ", " : "", m.speed_scale.ratio_at(k));
       }
-      out += fmt::format("    speed_scale:\n      speeds: [{}]\n      ratios: [{}]\n", speeds, ratios);
+      out += fmt::format("    speed_scale:\n      speeds: [{}]\n      ratios: [{}]\n", speeds,
+                         ratios);
     }
   }
   if (config.limits) {

@@ -857,7 +857,8 @@ void check_calibration_options(CalibrationMethod method, const fs::path& log,
           "{{speed_knots}} is used by {{method}} exact only, not by {{method}} {}", name));
     }
     if (o.reference == ExactReference::kCamera) {
-      throw OptionError("{speed_knots} needs the reference twists of wheels.csv, not {reference} camera");
+      throw OptionError(
+          "{speed_knots} needs the reference twists of wheels.csv, not {reference} camera");
     }
     const std::size_t n = o.speed_knots.size();
     if (n < static_cast<std::size_t>(SpeedScale::kMinKnots) ||

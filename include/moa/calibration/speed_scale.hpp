@@ -67,31 +67,31 @@ struct SpeedScaleOptions {
 
 /// One sensor's fitted table.
 struct SpeedScaleFit {
-  std::vector<double> knots;        ///< m/s
-  std::vector<double> ratios;       ///< r_k / r_0
-  std::vector<double> sigma;        ///< 1-sigma of r_k / r_0 (0 at the first knot)
-  std::vector<double> coverage;     ///< windows near each knot (h_k >= 1/2)
-  double first_ratio = 1.0;         ///< r_0, moved into the mount's scale
-  double residual_rms = 0.0;        ///< m per window, along the motion
-  int windows = 0;                  ///< windows used
-  double max_speed = 0.0;           ///< m/s, the fastest window's
+  std::vector<double> knots;     ///< m/s
+  std::vector<double> ratios;    ///< r_k / r_0
+  std::vector<double> sigma;     ///< 1-sigma of r_k / r_0 (0 at the first knot)
+  std::vector<double> coverage;  ///< windows near each knot (h_k >= 1/2)
+  double first_ratio = 1.0;      ///< r_0, moved into the mount's scale
+  double residual_rms = 0.0;     ///< m per window, along the motion
+  int windows = 0;               ///< windows used
+  double max_speed = 0.0;        ///< m/s, the fastest window's
 };
 
 /// Why the table could not be fitted.
 struct SpeedScaleError {
   enum class Kind {
-    kBadKnots,      ///< knots not a usable table (SpeedScale's rules, ratios aside)
-    kNotCovered,    ///< a knot with too few windows near it
-    kSingular,      ///< X^T X not invertible
-    kBadTable,      ///< the fitted table is refused (a ratio out of range, not invertible)
+    kBadKnots,    ///< knots not a usable table (SpeedScale's rules, ratios aside)
+    kNotCovered,  ///< a knot with too few windows near it
+    kSingular,    ///< X^T X not invertible
+    kBadTable,    ///< the fitted table is refused (a ratio out of range, not invertible)
   } kind = Kind::kBadKnots;
-  int sensor = -1;  ///< kNotCovered, kSingular, kBadTable
+  int sensor = -1;                         ///< kNotCovered, kSingular, kBadTable
   std::optional<SpeedScale::Error> table;  ///< kBadKnots, kBadTable
-  int knot = -1;    ///< kNotCovered, kBadKnots
-  double knot_speed = 0.0;  ///< m/s, kNotCovered
-  double coverage = 0.0;    ///< windows near the knot (h_k >= 1/2)
-  double needed = 0.0;      ///< SpeedScaleOptions::min_windows
-  double max_speed = 0.0;  ///< m/s, the sensor's fastest window
+  int knot = -1;                           ///< kNotCovered, kBadKnots
+  double knot_speed = 0.0;                 ///< m/s, kNotCovered
+  double coverage = 0.0;                   ///< windows near the knot (h_k >= 1/2)
+  double needed = 0.0;                     ///< SpeedScaleOptions::min_windows
+  double max_speed = 0.0;                  ///< m/s, the sensor's fastest window
   /// "sensor 'm1': ..." with `names` (one per sensor), "sensor 2: ..." without.
   std::string message(std::span<const std::string> names = {}) const;
 };
