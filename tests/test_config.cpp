@@ -104,6 +104,12 @@ void expect_identical(const RobotConfig& a, const RobotConfig& b) {
       EXPECT_TRUE(same_bits(*x.noise, *y.noise));
     }
     EXPECT_TRUE(same_value(x.latency, y.latency));
+    ASSERT_EQ(x.speed_scale.active(), y.speed_scale.active());
+    ASSERT_EQ(x.speed_scale.size(), y.speed_scale.size());
+    for (int k = 0; k < x.speed_scale.size(); ++k) {
+      EXPECT_TRUE(same_bits(x.speed_scale.speed(k), y.speed_scale.speed(k)));
+      EXPECT_TRUE(same_bits(x.speed_scale.ratio_at(k), y.speed_scale.ratio_at(k)));
+    }
   }
   EXPECT_EQ(a.camera_latency, b.camera_latency);
   EXPECT_EQ(a.wheels_latency, b.wheels_latency);
@@ -136,6 +142,21 @@ RobotConfig random_config(std::mt19937_64& rng) {
     if (rng() % 2 == 0) m.max_speed = random_double(rng, 1e-6, 10.0);
     if (rng() % 3 == 0) m.noise = rng() % 4 == 0 ? 0.0 : random_double(rng, 0.0, 0.1);
     if (rng() % 2 == 0) m.latency = random_double(rng, -1.0, 1.0);
+    if (rng() % 3 == 0) {
+      // A usable table: 2..8 knots, increasing speeds, ratios near 1 (a
+      // drawn table that s ratio(s) would not invert is drawn again).
+      do {
+        const int knots = 2 + static_cast<int>(rng() % 7);
+        std::array<double, SpeedScale::kMaxKnots> s{}, r{};
+        double speed = random_double(rng, 0.0, 0.5);
+        for (int k = 0; k < knots; ++k) {
+          s[static_cast<std::size_t>(k)] = speed;
+          r[static_cast<std::size_t>(k)] = random_double(rng, 0.8, 1.2);
+          speed += random_double(rng, 0.1, 1.0);
+        }
+        m.speed_scale = SpeedScale(s.data(), r.data(), knots, knots);
+      } while (!m.speed_scale.active());
+    }
     mounts.push_back(m);
     config.names.push_back(static_cast<std::size_t>(i) < pool.size()
                                ? pool[static_cast<std::size_t>(i)]
@@ -230,7 +251,65 @@ TEST(Config, LatenciesAreOptionalAndRead) {
   EXPECT_EQ(c.wheels_latency, -0.002);
 }
 
+TEST(Config, SpeedScaleIsOptionalReadAndWrittenBack) {
+  EXPECT_FALSE(parse_config(two_sensors(), "robot.yaml").array[0].speed_scale.active());
+  const RobotConfig c = parse_config(
+      two_sensors("    speed_scale: {speeds: [0.5, 1.5, 2.5], ratios: [1, 0.96, 0.9]}\n"),
+      "robot.yaml");
+  const SpeedScale& s = c.array[0].speed_scale;
+  ASSERT_TRUE(s.active());
+  ASSERT_EQ(s.size(), 3);
+  EXPECT_EQ(s.speed(2), 2.5);
+  EXPECT_EQ(s.ratio_at(1), 0.96);
+  EXPECT_FALSE(c.array[1].speed_scale.active());
+  const std::string text = format_config(c);
+  EXPECT_NE(text.find("    speed_scale:\n      speeds: [0.5, 1.5, 2.5]\n      ratios: [1, 0.96, "
+                      "0.9]\n"),
+            std::string::npos)
+      << text;
+  expect_identical(parse_config(text, "robot.yaml"), c);
+}
+
 // ---------------------------------------------------------------- rejections
+
+TEST(ConfigErrors, SpeedScaleTablesAreChecked) {
+  const auto bad = [](const std::string& table) {
+    return parse_error(two_sensors("    speed_scale: " + table + "\n"));
+  };
+  EXPECT_EQ(bad("{speeds: [1], ratios: [0.9]}"),
+            "robot.yaml:7: sensor 'm1': key 'speed_scale.speeds': expected 2 to 8 numbers, found 1");
+  EXPECT_EQ(bad("{speeds: [0, 1, 2, 3, 4, 5, 6, 7, 8], ratios: [1, 1, 1, 1, 1, 1, 1, 1, 1]}"),
+            "robot.yaml:7: sensor 'm1': key 'speed_scale.speeds': expected 2 to 8 numbers, found 9");
+  EXPECT_EQ(bad("{speeds: [0, 1, 2], ratios: [1, 0.9]}"),
+            "robot.yaml:7: sensor 'm1': key 'speed_scale.ratios': expected one ratio per speed "
+            "(3), found 2");
+  EXPECT_EQ(bad("{speeds: [0, 2, 1], ratios: [1, 0.9, 0.8]}"),
+            "robot.yaml:7: sensor 'm1': key 'speed_scale': speeds[2]: must be > speeds[1] (found 1 "
+            "after 2)");
+  EXPECT_EQ(bad("{speeds: [-1, 2], ratios: [1, 0.9]}"),
+            "robot.yaml:7: sensor 'm1': key 'speed_scale': speeds[0]: must be a finite number >= 0 "
+            "(found -1)");
+  EXPECT_EQ(bad("{speeds: [0, 2], ratios: [1, 1.6]}"),
+            "robot.yaml:7: sensor 'm1': key 'speed_scale': ratios[1]: must be within [0.5, 1.5] "
+            "(found 1.6)");
+  // s ratio(s) = s (1.5 - 0.5 s) on [1, 2] has f'(2) = 1.5 - 2 = -0.5: not invertible.
+  EXPECT_EQ(bad("{speeds: [1, 2], ratios: [1.0, 0.5]}"),
+            "robot.yaml:7: sensor 'm1': key 'speed_scale': between speeds[0] and speeds[1]: speed "
+            "* ratio(speed) must increase with speed (the counts could not be inverted) (ratio "
+            "falls from 1 to 0.5 over 1..2 m/s)");
+  EXPECT_EQ(bad("{speeds: [0, 1]}"),
+            "robot.yaml:7: sensor 'm1': missing key 'speed_scale.ratios'");
+  EXPECT_EQ(bad("{speeds: [0, 1], ratios: [1, 1], knots: 2}"),
+            "robot.yaml:7: sensor 'm1': unknown key 'speed_scale.knots' (known here: speeds, "
+            "ratios)");
+  // format_config refuses what parse_config would.
+  RobotConfig c = parse_config(two_sensors(), "robot.yaml");
+  const std::array<real, 2> speeds{0.0, 1.0}, ratios{1.0, 2.0};
+  c.array[1].speed_scale = SpeedScale(speeds.data(), ratios.data(), 2, 2);
+  EXPECT_EQ(error_of([&] { (void)format_config(c); }),
+            "config: sensor 'm2': key 'speed_scale': ratios[1]: must be within [0.5, 1.5] (found "
+            "2)");
+}
 
 TEST(ConfigErrors, LatenciesAreBoundedAndFinite) {
   EXPECT_EQ(parse_error(two_sensors("    latency: 1.5\n")),
@@ -268,7 +347,7 @@ TEST(ConfigErrors, MissingNameNamesSensorByPosition) {
 TEST(ConfigErrors, UnknownSensorKeyIsRejected) {
   EXPECT_EQ(parse_error(two_sensors("", "    cip: 800\n")),
             "robot.yaml:11: sensor 'm2': unknown key 'cip' (known here: name, position, yaw, cpi, "
-            "scale, mirrored, max_speed, noise, latency)");
+            "scale, mirrored, max_speed, noise, latency, speed_scale)");
 }
 
 TEST(ConfigErrors, UnknownTopLevelKeyIsRejected) {
@@ -466,7 +545,7 @@ TEST(ConfigFile, ErrorsNameTheFile) {
   EXPECT_EQ(error_of([&] { read_config(path); }),
             path.string() +
                 ":11: sensor 'm2': unknown key 'cip' (known here: name, position, yaw, cpi, scale, "
-                "mirrored, max_speed, noise, latency)");
+                "mirrored, max_speed, noise, latency, speed_scale)");
 }
 
 TEST(ConfigFile, WriteThenReadReproducesConfig) {

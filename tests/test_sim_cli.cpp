@@ -179,7 +179,7 @@ TEST(SimCli, UnknownScenarioIsAnErrorAndWritesNothing) {
                                "faults-stuck, faults-zero, guided, gyro-bump, gyro-compact, "
                                "gyro-one, gyro-papers, kimlee, sekimori-a, "
                                "sekimori-b, "
-                               "selfcal-ramp, selfcal-step) and no "
+                               "selfcal-ramp, selfcal-step, speed-scale) and no "
                                "such file"));
   EXPECT_FALSE(fs::exists(dir));
 }

@@ -227,7 +227,7 @@ INSTANTIATE_TEST_SUITE_P(
                 "s.yaml:6: key 'true_sensors': no sensor called 'm9' (sensors: m1, m2, m3)"},
         BadCase{"true sensor bad key", with("true_sensors: {m1: {yaw_err: 0.1}}\n"),
                 "s.yaml:6: unknown key 'true_sensors.m1.yaw_err' (known here: position_error, "
-                "position_scale, yaw_error, scale, mirrored, cpi, latency, jitter)"},
+                "position_scale, yaw_error, scale, mirrored, cpi, latency, jitter, speed_scale)"},
         // Stream clocks (K = 23 at 2300 frames/s: a mice row every 0.01 s).
         BadCase{"sensor latency over 1 s", with("true_sensors: {m1: {latency: 1.5}}\n"),
                 "s.yaml:6: key 'true_sensors.m1.latency': must be within [-1, 1] (found 1.5)"},
@@ -267,6 +267,14 @@ INSTANTIATE_TEST_SUITE_P(
                 "that the stamps stay in order (found 0.05)"},
         BadCase{"camera latency over 60 s", with("camera: {rate: 10, noise: 0.01, latency: 90}\n"),
                 "s.yaml:6: key 'camera.latency': must be within [-60, 60] (found 90)"},
+        BadCase{"true sensor speed scale ratio",
+                with("true_sensors: {m1: {speed_scale: {speeds: [0, 2], ratios: [1, 0.4]}}}\n"),
+                "s.yaml:6: key 'true_sensors.m1.speed_scale': ratios[1]: must be within [0.5, "
+                "1.5] (found 0.4)"},
+        BadCase{"true sensor speed scale knots",
+                with("true_sensors: {m1: {speed_scale: {speeds: [1], ratios: [1]}}}\n"),
+                "s.yaml:6: key 'true_sensors.m1.speed_scale.speeds': expected 2 to 8 numbers, "
+                "found 1"},
         BadCase{"position pair", with("true_sensors: {m1: {position_error: [0.1]}}\n"),
                 "s.yaml:6: key 'true_sensors.m1.position_error': expected 2 numbers, found 1"},
         BadCase{"bad motion type",
@@ -426,7 +434,7 @@ TEST(SimScenario, UnknownNameListsTheBuiltins) {
         "sekimori-a, "
         "sekimori-b, "
         "selfcal-ramp, "
-        "selfcal-step) and no such file");
+        "selfcal-step, speed-scale) and no such file");
   }
 }
 

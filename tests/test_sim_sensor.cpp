@@ -108,6 +108,47 @@ TEST(SimSensor, CountsFollowTheModelForEveryPreset) {
   }
 }
 
+TEST(SimSensor, ASpeedScaleUnderCountsByItsRatioAtTheSensorsSpeed) {
+  // model_scenario with sensor a's true table: ratio 1 up to 0.1 m/s, 0.9
+  // from 0.4 m/s, linear between. Each segment's twist is constant, so is
+  // the sensor point's speed |v + omega J p|: its counts are the model's
+  // times the ratio there, written out here.
+  std::string text = model_scenario(std::string(kAdns3080.name), 64);
+  const std::string key = "  a: {position_error: [0.003, -0.002], yaw_error: 0.03, scale: [1.04, 0.97]}";
+  ASSERT_NE(text.find(key), std::string::npos);
+  text.replace(text.find(key), key.size(),
+               "  a: {position_error: [0.003, -0.002], yaw_error: 0.03, scale: [1.04, 0.97],\n"
+               "      speed_scale: {speeds: [0.1, 0.4], ratios: [1.0, 0.9]}}");
+  const Scenario s = parse_scenario(text, "model.yaml");
+  ASSERT_TRUE(s.truth.array[0].speed_scale.active());
+  ASSERT_FALSE(s.nominal.array[0].speed_scale.active());
+  const SensorMount& m = s.truth.array[0];
+  const auto ratio = [](double v) { return v <= 0.1 ? 1.0 : v >= 0.4 ? 0.9 : 1.0 - (v - 0.1) / 3.0; };
+  Eigen::Vector2d expected = Eigen::Vector2d::Zero();
+  std::vector<double> ratios;
+  for (const auto& seg : kSegments) {
+    const double v = std::hypot(seg.x.v.x() - seg.x.omega * m.position.y(),
+                                seg.x.v.y() + seg.x.omega * m.position.x());
+    ratios.push_back(ratio(v));
+    expected += ratio(v) * model_counts(m, seg.x, seg.duration);
+  }
+  // Every segment's speed is inside the table (0.14 to 0.36 m/s): each under-counts.
+  for (const double r : ratios) {
+    EXPECT_LT(r, 0.99);
+    EXPECT_GT(r, 0.9);
+  }
+  const SimLog log = simulate(s, 3);
+  Eigen::Vector2d total = Eigen::Vector2d::Zero(), other = Eigen::Vector2d::Zero();
+  for (const auto& r : log.mice) {
+    if (r.sensor == 0) total += r.row.counts.cast<double>();
+    if (r.sensor == 1) other += r.row.counts.cast<double>();
+  }
+  // Quantised with the remainder carried: within half a count of the total.
+  EXPECT_LE((total - expected).cwiseAbs().maxCoeff(), 0.5 + 1e-6);
+  // Sensor b has no table: its counts are the model's.
+  EXPECT_LE((other - exact_total(s.truth.array[1], 1.5)).cwiseAbs().maxCoeff(), 0.5 + 1e-6);
+}
+
 TEST(SimSensor, LongRunTotalsAreExactToOneCount) {
   // A minute of spinning at 3 rad/s: ~1.7e6 counts per sensor in 6000 rows.
   // Closed form: the sensor point's velocity is constant in the robot

@@ -173,6 +173,11 @@ void add_calibrate(CLI::App& app, Action& action) {
                   "configured camera latency")
       ->check(kPositive)
       ->capture_default_str();
+  cmd->add_option("--speed-knots", args->options.speed_knots,
+                  "exact against wheels.csv: m/s, comma-separated, 2 to 8 strictly increasing "
+                  "knots: fit each sensor's ratio of counted to true displacement at those "
+                  "ground speeds (the config's speed_scale)")
+      ->delimiter(',');
   cmd->add_option("--window", args->options.window,
                   "exact against the camera: s, least window between two fixes")
       ->check(kPositive)

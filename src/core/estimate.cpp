@@ -17,7 +17,8 @@ const char* describe(GeometryError error) {
     case GeometryError::kRankDeficient:
       return "rank-deficient geometry: the sensors sit at one point, so rotation is not observable";
     case GeometryError::kInvalidMount:
-      return "a sensor has cpi, scale or noise that is not positive and finite";
+      return "a sensor has cpi, scale or noise that is not positive and finite, or a speed_scale "
+             "table that is refused";
     case GeometryError::kLatencySpread:
       return "the sensors' latencies spread too wide: max_row_interval plus the largest latency "
              "minus the smallest (0 included) must be at most 61 epochs";
@@ -39,7 +40,7 @@ bool valid_mount(const SensorMount& m) {
   const auto positive = [](real x) { return std::isfinite(x) && x > 0.0; };
   return positive(m.cpi) && positive(m.scale.x()) && positive(m.scale.y()) &&
          m.position.allFinite() && std::isfinite(m.yaw) &&
-         (!m.noise || (std::isfinite(*m.noise) && *m.noise >= 0.0));
+         (!m.noise || (std::isfinite(*m.noise) && *m.noise >= 0.0)) && !m.speed_scale.error();
 }
 
 std::variant<LsEstimator, GeometryError> LsEstimator::create(const SensorArray& array,

@@ -99,6 +99,8 @@ Odometry::Odometry(const SensorArray& array, double t0, const OdometryOptions& o
     const auto u = static_cast<std::size_t>(i);
     velocity_from_counts_[u] = array[i].robot_velocity_from_counts();
     impossible_speed_[u] = impossible_speed(array[i]);
+    speed_scales_[u] = array[i].speed_scale;
+    speed_scaled_ = speed_scaled_ || array[i].speed_scale.active();
   }
   // The selected sensors as an array of their own: every estimator sees
   // exactly the sensors it may use.
@@ -425,7 +427,21 @@ bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& 
   return true;
 }
 
-void Odometry::process(const ArraySample& sample, StepSink sink) {
+const ArraySample& Odometry::undo_speed_scale(const ArraySample& sample) {
+  if (!speed_scaled_) return sample;
+  scaled_ = sample;
+  for (int i = 0; i < std::min(sample.size, n_); ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    scaled_.counts[u] =
+        corrected_counts(speed_scales_[u], velocity_from_counts_[u], sample.counts[u], sample.dt);
+  }
+  return scaled_;
+}
+
+void Odometry::process(const ArraySample& raw, StepSink sink) {
+  // The one place where a sensor's speed-dependent resolution is undone:
+  // every estimator, the self-calibration and the sink see the corrected counts.
+  const ArraySample& sample = undo_speed_scale(raw);
   const std::optional<Twist2> wheels = options_.use_wheels && wheels_seen_
                                            ? wheels_.average(sample.t - sample.dt, sample.t)
                                            : std::nullopt;

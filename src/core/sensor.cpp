@@ -16,6 +16,15 @@ Mat2 SensorMount::robot_velocity_from_counts() const {
   return rotation(yaw) * mirror(mirrored) * inv_scale.asDiagonal() / counts_per_metre();
 }
 
+Vec2 corrected_counts(const SpeedScale& scale, const Mat2& velocity_from_counts,
+                      const Vec2& counts, real dt) {
+  if (!scale.active() || !(dt > 0)) return counts;
+  // d = G^-1 counts (m, robot frame), c = |d| / dt (m/s); the counts are
+  // G d, linear in d, so scaling d by 1 / ratio(s) scales the counts alike.
+  const real counted_speed = (velocity_from_counts * counts).norm() / dt;
+  return counts * scale.correction(counted_speed);
+}
+
 real impossible_speed(const SensorMount& mount) {
   return mount.max_speed ? kImpossibleSpeedFactor * *mount.max_speed : kImpossibleUnratedSpeed;
 }

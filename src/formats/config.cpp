@@ -56,6 +56,33 @@ bool is_valid_sensor_name(std::string_view name) {
 
 namespace {
 
+// "speeds[2]: ..." for a refused table: the rule it breaks, the knot and its values.
+std::string speed_scale_message(const SpeedScale& s, SpeedScale::Error e) {
+  const int k = s.error_knot();
+  switch (e) {
+    case SpeedScale::Error::kTooFewKnots:
+    case SpeedScale::Error::kTooManyKnots:
+      return fmt::format("{} knots: {} (at least {}, at most {})", s.size(), describe(e),
+                         SpeedScale::kMinKnots, SpeedScale::kMaxKnots);
+    case SpeedScale::Error::kSizeMismatch:
+      return describe(e);
+    case SpeedScale::Error::kSpeedNotFinite:
+      return fmt::format("speeds[{}]: must be a finite number >= 0 (found {})", k, s.speed(k));
+    case SpeedScale::Error::kSpeedsNotIncreasing:
+      return fmt::format("speeds[{}]: must be > speeds[{}] (found {} after {})", k, k - 1,
+                         s.speed(k), s.speed(k - 1));
+    case SpeedScale::Error::kRatioOutOfRange:
+      return fmt::format("ratios[{}]: must be within [{}, {}] (found {})", k,
+                         SpeedScale::kMinRatio, SpeedScale::kMaxRatio, s.ratio_at(k));
+    case SpeedScale::Error::kNotMonotone:
+      return fmt::format(
+          "between speeds[{0}] and speeds[{1}]: {2} (ratio falls from {3} to {4} over {5}..{6} "
+          "m/s)",
+          k - 1, k, describe(e), s.ratio_at(k - 1), s.ratio_at(k), s.speed(k - 1), s.speed(k));
+  }
+  return describe(e);
+}
+
 // Range checks on values, shared by parsing (bad input) and formatting (a
 // config built in code must not produce a file that cannot be read back).
 void check_mount(const Context& context, const SensorMount& m) {
@@ -80,6 +107,9 @@ void check_mount(const Context& context, const SensorMount& m) {
   if (!(std::abs(m.latency) <= kMaxSensorLatency)) {
     context.fail_key("latency", fmt::format("must be within -{0}..{0} s (found {1})",
                                             kMaxSensorLatency, m.latency));
+  }
+  if (const auto e = m.speed_scale.error()) {
+    context.fail_key("speed_scale", speed_scale_message(m.speed_scale, *e));
   }
 }
 
@@ -120,7 +150,8 @@ SensorMount parse_sensor(const YamlSource& source, const YAML::Node& node, std::
                          std::string& name) {
   name = sensor_name(source, node, index);
   const YamlFields f(source, node, "",
-                     {"name", "position", "yaw", "cpi", "scale", "mirrored", "max_speed", "noise", "latency"},
+                     {"name", "position", "yaw", "cpi", "scale", "mirrored", "max_speed", "noise", "latency",
+                      "speed_scale"},
                      sensor_label(index, name));
   SensorMount m;
   const auto position = f.numbers("position", 2);
@@ -138,6 +169,7 @@ SensorMount parse_sensor(const YamlSource& source, const YAML::Node& node, std::
   if (f.has("max_speed")) m.max_speed = f.positive("max_speed");
   if (f.has("noise")) m.noise = f.non_negative("noise", 0.0);
   m.latency = static_cast<real>(f.bounded("latency", -kMaxSensorLatency, kMaxSensorLatency, 0.0));
+  m.speed_scale = parse_speed_scale(f);
   check_mount(Context(source.name(), sensor_label(index, name)), m);
   return m;
 }
@@ -306,6 +338,15 @@ std::string format_config(const RobotConfig& config) {
     if (m.max_speed) out += fmt::format("    max_speed: {}\n", *m.max_speed);
     if (m.noise) out += fmt::format("    noise: {}\n", *m.noise);
     if (m.latency != 0) out += fmt::format("    latency: {}\n", m.latency);
+    if (m.speed_scale.active()) {
+      std::string speeds, ratios;
+      for (int k = 0; k < m.speed_scale.size(); ++k) {
+        speeds += fmt::format("{}{}", k ? ", " : "", m.speed_scale.speed(k));
+        ratios += fmt::format("{}{}", k ? ", " : "", m.speed_scale.ratio_at(k));
+      }
+      out += fmt::format("    speed_scale:\n      speeds: [{}]\n      ratios: [{}]\n", speeds,
+                         ratios);
+    }
   }
   if (config.limits) {
     if (auto e = config.limits->validate()) {
@@ -339,6 +380,36 @@ std::string format_config(const RobotConfig& config) {
   stream("camera", config.camera_latency);
   stream("wheels", config.wheels_latency);
   return out;
+}
+
+SpeedScale parse_speed_scale(const YamlFields& f) {
+  const auto node = f.get("speed_scale");
+  if (!node) return {};
+  const YamlFields s(f.source(), *node, f.full("speed_scale"), {"speeds", "ratios"}, f.label());
+  const std::vector<double> speeds = s.numbers("speeds");
+  const std::vector<double> ratios = s.numbers("ratios");
+  const auto size = [&](const char* key, std::size_t n) {
+    if (n < static_cast<std::size_t>(SpeedScale::kMinKnots) ||
+        n > static_cast<std::size_t>(SpeedScale::kMaxKnots)) {
+      s.fail(key, fmt::format("expected {} to {} numbers, found {}", SpeedScale::kMinKnots,
+                              SpeedScale::kMaxKnots, n));
+    }
+  };
+  size("speeds", speeds.size());
+  size("ratios", ratios.size());
+  if (speeds.size() != ratios.size()) {
+    s.fail("ratios", fmt::format("expected one ratio per speed ({}), found {}", speeds.size(),
+                                 ratios.size()));
+  }
+  std::array<real, SpeedScale::kMaxKnots> sp{}, ra{};
+  std::copy(speeds.begin(), speeds.end(), sp.begin());
+  std::copy(ratios.begin(), ratios.end(), ra.begin());
+  const int n = static_cast<int>(speeds.size());
+  SpeedScale table(sp.data(), ra.data(), n, n);
+  if (const auto e = table.error()) {
+    f.fail("speed_scale", speed_scale_message(table, *e));
+  }
+  return table;
 }
 
 void write_config(const RobotConfig& config, const std::filesystem::path& path) {

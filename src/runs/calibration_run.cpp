@@ -400,10 +400,48 @@ void report_exact(CalibrationSummary& r, const RobotConfig& config, const fs::pa
   r.result = cal;
 }
 
+// The exact fit alternated with each sensor's speed scale at options.speed_knots.
+void run_exact_speed_scale(CalibrationSummary& r, const RobotConfig& config, const fs::path& log,
+                           const CalibrationOptions& options, const ReferenceData& ref) {
+  SpeedScaleOptions so;
+  so.knots = options.speed_knots;
+  auto fitted = calibrate_exact_speed_scale(config.array, ref.samples, so);
+  if (const auto* e = std::get_if<SpeedScaleError>(&fitted)) {
+    throw OptionError(fmt::format("{}: {{speed_knots}}: {}. Nothing written",
+                                  OptionError::literal(log.string()),
+                                  OptionError::literal(e->message(config.names))));
+  }
+  if (const auto* e = std::get_if<CalibrationError>(&fitted)) {
+    throw OptionError(fmt::format("{}: {{method}} exact: {}", OptionError::literal(log.string()),
+                                  describe(*e)));
+  }
+  const SpeedScaleCalibration& cal = std::get<SpeedScaleCalibration>(fitted);
+  common_sample_lines(r, ref, options);
+  report_exact(r, config, log, options, cal.exact, ref.samples.size());
+  r.facts.push_back(fmt::format(
+      "speed scale: knots {} m/s, {} rounds of mount fit and table{}; the table is 1 at the first "
+      "knot, the mount's scale the resolution there",
+      fmt::join(options.speed_knots, ", "), cal.rounds,
+      cal.converged ? " (settled)" : " (not settled: tables still moving)"));
+  if (!cal.converged) {
+    r.warnings.push_back("the speed scales did not settle between mount fit and table: rough");
+  }
+  for (std::size_t i = 0; i < r.sensors.size() && i < cal.fits.size(); ++i) {
+    r.sensors[i].speed_scale = cal.fits[i];
+  }
+}
+
 void run_exact_wheels(CalibrationSummary& r, const RobotConfig& config, const fs::path& log,
                       const CalibrationOptions& options) {
-  const ReferenceData ref = read_reference(config, log, r.method, options);
+  ReferenceData ref = read_reference(config, log, r.method, options);
   check_sample_count(ref, r.method);
+  if (!options.speed_knots.empty()) return run_exact_speed_scale(r, config, log, options, ref);
+  // A config's speed scales are undone as the pipeline does, before the
+  // mounts are fitted; the calibrated mounts keep them.
+  if (std::any_of(config.array.mounts().begin(), config.array.mounts().end(),
+                  [](const SensorMount& m) { return m.speed_scale.active(); })) {
+    ref.samples = undo_speed_scales(config.array, ref.samples);
+  }
   const ExactCalibration cal =
       solved(calibrate_exact(config.array, ref.samples), log.string(), r.method);
   common_sample_lines(r, ref, options);
@@ -525,10 +563,12 @@ void run_exact_camera(CalibrationSummary& r, const RobotConfig& config, const fs
 void run_exact(CalibrationSummary& r, const RobotConfig& config, const fs::path& log,
                const CalibrationOptions& options) {
   // Default: wheels.csv when the log has it, else camera.csv when it has
-  // that, else wheels (whose error names the missing file).
+  // that, else wheels (whose error names the missing file); wheels.csv
+  // always for a speed scale.
   const LogFiles files = resolve_log(log);
   const ExactReference reference = options.reference.value_or(
-      !files.wheels && files.camera ? ExactReference::kCamera : ExactReference::kWheels);
+      !files.wheels && files.camera && options.speed_knots.empty() ? ExactReference::kCamera
+                                                                   : ExactReference::kWheels);
   if (reference == ExactReference::kWheels) {
     run_exact_wheels(r, config, log, options);
   } else {
@@ -789,6 +829,9 @@ OptionCheck CalibrationOptions::validate() const {
   c.positive("window", window);
   if (min_interval) c.non_negative("min_interval", *min_interval);
   if (measurements) c.at_least("measurements", *measurements, 0);
+  for (const double knot : speed_knots) {
+    c.require(std::isfinite(knot) && knot >= 0.0, "speed_knots", ">= 0 and finite", knot);
+  }
   if (distance) c.positive("distance", *distance);
   if (turns) {
     c.require(std::isfinite(*turns), "turns", "finite", *turns)
@@ -833,6 +876,29 @@ void check_calibration_options(CalibrationMethod method, const fs::path& log,
     refuse(!o.spin.empty(), "spin", why);
     refuse(o.distance.has_value(), "distance", why);
     refuse(o.turns.has_value(), "turns", why);
+  }
+  if (!o.speed_knots.empty()) {
+    if (method != CalibrationMethod::kExact) {
+      throw OptionError(fmt::format(
+          "{{speed_knots}} is used by {{method}} exact only, not by {{method}} {}", name));
+    }
+    if (o.reference == ExactReference::kCamera) {
+      throw OptionError(
+          "{speed_knots} needs the reference twists of wheels.csv, not {reference} camera");
+    }
+    const std::size_t n = o.speed_knots.size();
+    if (n < static_cast<std::size_t>(SpeedScale::kMinKnots) ||
+        n > static_cast<std::size_t>(SpeedScale::kMaxKnots)) {
+      throw OptionError(fmt::format("{{speed_knots}}: {} knots, needs {} to {}", n,
+                                    SpeedScale::kMinKnots, SpeedScale::kMaxKnots));
+    }
+    for (std::size_t k = 1; k < n; ++k) {
+      if (!(o.speed_knots[k] > o.speed_knots[k - 1])) {
+        throw OptionError(fmt::format(
+            "{{speed_knots}}: knots must be strictly increasing ({} after {} m/s)",
+            o.speed_knots[k], o.speed_knots[k - 1]));
+      }
+    }
   }
   if (const auto e = o.validate()) throw Error(fmt::format("invalid option: {}", e->message()));
 }
@@ -939,6 +1005,18 @@ std::string CalibrationSummary::full_report() const {
     if (s.information_eigenvalues) {
       fmt::format_to(out, "  {:<14} {:.3g}\n", "information",
                      fmt::join(*s.information_eigenvalues, " "));
+    }
+    if (s.speed_scale) {
+      const SpeedScaleFit& f = *s.speed_scale;
+      fmt::format_to(out, "  speed scale ({} windows, fastest {:.3f} m/s, residual {:.3f} mm)\n",
+                     f.windows, f.max_speed, f.residual_rms * 1e3);
+      fmt::format_to(out, "  {:<14} {:>12} {:>12} {:>12}\n", "knot m/s", "ratio", "1-sigma",
+                     "windows");
+      for (std::size_t k = 0; k < f.knots.size(); ++k) {
+        fmt::format_to(out, "  {:<14.4g} {:>12.5f} {:>12} {:>12}\n", f.knots[k], f.ratios[k],
+                       k == 0 ? std::string("(gauge)") : fmt::format("{:.5f}", f.sigma[k]),
+                       f.coverage[k]);
+      }
     }
   }
   if (gyro) {
@@ -1054,6 +1132,17 @@ std::string CalibrationSummary::to_json(std::string_view out) const {
     if (s.information_eigenvalues) {
       json.key("information_eigenvalues");
       json_array(json, *s.information_eigenvalues);
+    }
+    if (s.speed_scale) {
+      json.key("speed_scale").begin_object().key("speeds_m_s");
+      json_array(json, s.speed_scale->knots);
+      json.key("ratios");
+      json_array(json, s.speed_scale->ratios);
+      json.key("sigma");
+      json_array(json, s.speed_scale->sigma);
+      json.key("windows");
+      json_array(json, s.speed_scale->coverage);
+      json.end_object();
     }
     json.end_object();
   }

@@ -69,6 +69,13 @@ std::optional<SensorRowOut> OpticalSensor::frame(const Twist2& twist, double t, 
   const auto& H = counts_rate_;
   std::array<double, 2> c{(H[0] * vx + H[1] * vy + H[2] * w) * h,
                           (H[3] * vx + H[4] * vy + H[5] * w) * h};
+  if (mount_.speed_scale.active()) {
+    // Speed-dependent resolution: the sensor counts ratio(s) of the true
+    // displacement, s = |v + omega J p| (m/s) its point's true ground speed.
+    const double ratio = mount_.speed_scale.ratio(std::hypot(vx - w * py_, vy + w * px_));
+    c[0] *= ratio;
+    c[1] *= ratio;
+  }
   if (model_.relative_noise > 0.0 || model_.frame_noise > 0.0) {
     for (double& ca : c) {
       const double relative = model_.relative_noise * noise_rng_.normal();

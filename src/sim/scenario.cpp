@@ -224,7 +224,7 @@ io::RobotConfig parse_true_sensors(const Source& source, const YAML::Node& node,
     seen[static_cast<std::size_t>(*index)] = true;
     const Fields f(source, entry.second, "true_sensors." + name,
                    {"position_error", "position_scale", "yaw_error", "scale", "mirrored", "cpi",
-                    "latency", "jitter"});
+                    "latency", "jitter", "speed_scale"});
     SensorMount& m = truth.array[*index];
     m.position *= f.positive("position_scale", 1.0);
     if (f.has("position_error")) {
@@ -242,6 +242,9 @@ io::RobotConfig parse_true_sensors(const Source& source, const YAML::Node& node,
     StreamTiming& t = timing[static_cast<std::size_t>(*index)];
     t = parse_timing(f, io::kMaxSensorLatency, model.row_period());
     m.latency = static_cast<real>(t.latency);
+    // Counted over true displacement by ground speed: the simulator's counts
+    // follow it, robot.true.yaml carries it, robot.yaml does not.
+    if (f.has("speed_scale")) m.speed_scale = io::parse_speed_scale(f);
   }
   return truth;
 }

@@ -33,7 +33,7 @@ enum class GeometryError {
   kTooFewSensors,   ///< fewer than two sensors selected
   kTooManySensors,  ///< more than kMaxSensors, or a mask bit past the array
   kRankDeficient,   ///< A^T A singular: the sensors do not observe rotation
-  kInvalidMount,    ///< cpi, scale or noise not positive and finite
+  kInvalidMount,    ///< cpi, scale or noise not positive and finite; a refused speed scale
   /// the sensors' latencies spread wider than the synchroniser's pending
   /// epochs hold (SynchroniserOptions::validate)
   kLatencySpread,
@@ -41,7 +41,7 @@ enum class GeometryError {
 const char* describe(GeometryError error);
 
 /// cpi and scale positive and finite, position and yaw finite, noise (when
-/// given) finite and not negative.
+/// given) finite and not negative, the speed scale (when given) not refused.
 bool valid_mount(const SensorMount& m);
 
 /// A twist estimate with its covariance.

@@ -135,7 +135,8 @@ struct FixCounts {
 
 /// One output epoch.
 struct OdometryStep {
-  const ArraySample* sample = nullptr;  ///< the epoch's counts; valid during the sink call
+  /// The epoch's counts (speed scales undone); valid during the sink call.
+  const ArraySample* sample = nullptr;
   RobustEstimate estimate;              ///< twist (robot frame), covariance, selection
   Pose2 pose;                           ///< world_T_robot at sample->t
   bool fused = false;                   ///< pose_covariance is the EKF's
@@ -238,7 +239,10 @@ class Odometry {
                                  SubsetSolver>;
   void on_epoch(const ArraySample& sample, StepSink sink);
   void drain(bool all, StepSink sink);
-  void process(const ArraySample& sample, StepSink sink);
+  void process(const ArraySample& raw, StepSink sink);
+  /// The epoch with each sensor's counts divided by its speed scale's ratio
+  /// (corrected_counts, core/sensor.hpp); `raw` itself when no sensor has one.
+  const ArraySample& undo_speed_scale(const ArraySample& raw);
   /// Into `out`, default-constructed; false when the epoch has no interval.
   bool estimate(const ArraySample& sample, const std::optional<Twist2>& wheels,
                 const std::optional<real>& gyro, RobustEstimate& out);
@@ -280,6 +284,9 @@ class Odometry {
   /// Per configured sensor: m/s per count (G_i^-1), the speed refused.
   std::array<Mat2, kMaxSensors> velocity_from_counts_ = zeros<Mat2>();
   std::array<real, kMaxSensors> impossible_speed_{};
+  std::array<SpeedScale, kMaxSensors> speed_scales_{};
+  bool speed_scaled_ = false;  ///< some sensor has a speed scale
+  ArraySample scaled_;         ///< the current epoch, its speed scales undone
   std::optional<SelfCalibration> self_calibration_;
   ArraySample raw_;  ///< the selected sensors' counts before the self-calibration's correction
   std::array<SelfCalibrationEstimate, kMaxSensors>

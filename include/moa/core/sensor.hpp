@@ -15,6 +15,7 @@
 #include <optional>
 
 #include "moa/core/se2.hpp"
+#include "moa/core/speed_scale.hpp"
 
 namespace moa {
 
@@ -31,6 +32,10 @@ struct SensorMount {
   /// s, a row's t minus the true end of its interval (USB polling, the
   /// firmware's K-frame accumulation); the synchroniser shifts the rows back.
   real latency = 0.0;
+  /// Counted over true displacement as a function of the sensor point's
+  /// ground speed (core/speed_scale.hpp); the identity unless configured.
+  /// The pipeline divides each epoch's counts by it (corrected_counts).
+  SpeedScale speed_scale;
 
   /// k = cpi / 0.0254: counts per metre before the per-axis scale.
   real counts_per_metre() const { return cpi / kMetresPerInch; }
@@ -55,6 +60,13 @@ struct SensorMount {
   /// needs it.
   Mat<2, 5> parameter_jacobian(const Twist2& twist) const;
 };
+
+/// The counts of one interval of dt (s) with the speed scale undone: the
+/// counted displacement d = G^-1 counts has the counted speed c = |d| / dt;
+/// the true speed s solves s ratio(s) = c, and the counts are divided by
+/// ratio(s). The counts unchanged for the identity or dt <= 0.
+Vec2 corrected_counts(const SpeedScale& scale, const Mat2& velocity_from_counts,
+                      const Vec2& counts, real dt);
 
 /// A sensor's rated figures (from the manufacturers' datasheets).
 /// Counts implying a sensor-point speed above impossible_speed(mount) are a

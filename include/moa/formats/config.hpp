@@ -10,6 +10,9 @@
 //       mirrored: false          # optional
 //       max_speed: 0.3556        # optional, m/s
 //       noise: 0.002             # optional (moa extension), m/s per axis
+//       speed_scale:             # optional (moa extension): counted / true displacement
+//         speeds: [0.5, 2.5]     # m/s, the sensor's ground speed, strictly increasing, 2..8 knots
+//         ratios: [1.0, 0.9]     # each within [0.5, 1.5]; linear between, constant beyond
 //   limits:                      # optional (moa extension): the motion prior
 //     accel: 2.0                 # m/s^2, default 2
 //     angular_accel: 20.0        # rad/s^2, default 20
@@ -71,6 +74,13 @@ struct RobotConfig {
   /// Index of the sensor called `name`, nullopt if there is none.
   std::optional<int> index_of(std::string_view name) const;
 };
+
+class YamlFields;
+/// The key `speed_scale: {speeds: [m/s...], ratios: [...]}` of the map `f`
+/// reads (a sensor of a config, a sensor of a scenario's true_sensors); the
+/// identity when the key is absent. A refused table is an io::Error naming
+/// the key, the knot and the bound (core/speed_scale.hpp).
+SpeedScale parse_speed_scale(const YamlFields& f);
 
 /// Parses YAML text; `source` names it in errors (usually the file path).
 RobotConfig parse_config(std::string_view yaml, std::string_view source);

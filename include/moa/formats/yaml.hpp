@@ -80,6 +80,8 @@ class YamlFields {
   std::string full(std::string_view key) const;
   const YamlSource& source() const { return source_; }
   const YAML::Node& node() const { return map_; }
+  /// What every message starts with ("sensor 'm1'"), for a nested map's fields.
+  const std::string& label() const { return label_; }
 
   // Typed values; the overloads with a fallback return it when the key is absent.
   double number(std::string_view key) const;

@@ -38,6 +38,7 @@
 #include "moa/calibration/gyro_calibration.hpp"
 #include "moa/calibration/kimlee.hpp"
 #include "moa/calibration/pose_reference.hpp"
+#include "moa/calibration/speed_scale.hpp"
 #include "moa/core/names.hpp"
 #include "moa/formats/config.hpp"
 
@@ -131,6 +132,11 @@ struct CalibrationOptions {
   double max_offset = 1.0;
   /// exact against the camera: s, least window between two fixes.
   double window = 0.2;
+  /// exact against wheels.csv: m/s, the knots of each sensor's speed scale
+  /// (calibration/speed_scale.hpp), written as `speed_scale` into the
+  /// calibrated config; empty: no speed scale is fitted (a table in the
+  /// config is kept, its counts undone before the mount fit).
+  std::vector<double> speed_knots;
   /// nullopt when the numbers can be used, else the first field out of its
   /// bounds (core/options_check.hpp): max_row_interval, max_offset and window positive,
   /// min_interval and measurements not negative, distance positive, turns
@@ -155,6 +161,7 @@ struct SensorCalibrationReport {
   std::optional<double> residual_rms;                  ///< m/s (kimlee, exact)
   std::optional<double> push_misfit;                   ///< m (guided)
   std::optional<MountVector> information_eigenvalues;  ///< exact: observability.hpp
+  std::optional<SpeedScaleFit> speed_scale;            ///< exact with speed_knots
 };
 
 /// How a calibration's solve ended, as Ceres' Summary::termination_type.
