@@ -19,18 +19,12 @@
 #include "moa/formats/config.hpp"
 #include "moa/formats/log.hpp"
 #include "support/run.hpp"
+#include "support/slow.hpp"
 #include "support/synth.hpp"
 
 // The silence bound's cases write up to 360 000 epochs before the refusal:
-// 0.5 s for the Release program, about two minutes each built for
-// AddressSanitizer (Debug), where they would only time the sanitizer. CI
-// runs them in its Release pass (make test).
-#if defined(__SANITIZE_ADDRESS__)
-#define SKIP_WHERE_SLOW() \
-  GTEST_SKIP() << "writes 360 000 epochs: run in the Release build, minutes under ASan"
-#else
-#define SKIP_WHERE_SLOW() static_cast<void>(0)
-#endif
+// 0.5 s for the Release program, about two minutes each under ASan.
+#define SKIP_WHERE_SLOW() MOA_SKIP_UNDER_SANITIZER("writes 360 000 epochs")
 
 namespace moa {
 namespace {

@@ -24,6 +24,7 @@
 
 #include "support/json_value.hpp"
 #include "support/run.hpp"
+#include "support/slow.hpp"
 
 namespace moa {
 namespace {
@@ -126,6 +127,7 @@ void camera_compared_in_the_gauge() {
 
 // One test: the experiment runs once (13 s under ctest -j2).
 TEST(CalibrationCrbExperiment, MocapAndCamera) {
+  MOA_SKIP_UNDER_SANITIZER("12 calibrations of 60 s logs");
   for (const char* name : {"mocap", "camera"}) {
     SCOPED_TRACE(name);
     const JsonValue& ref = reference(name);

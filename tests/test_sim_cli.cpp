@@ -18,6 +18,7 @@
 #include "moa/formats/config.hpp"
 #include "moa/formats/log.hpp"
 #include "support/run.hpp"
+#include "support/slow.hpp"
 #include "support/synth.hpp"
 
 namespace moa {
@@ -314,6 +315,7 @@ TEST(SimCli, CalibMocapCalibratesBackToItsTrueRobot) {
 // sensors whose mirroring is nominal) 0.25 deg, scale 0.5 %, relative sensor
 // latencies 2 ms, the camera's 3 ms. Seed 5 (seeds 1-10 in docs/calibration.md).
 TEST(SimCli, CalibCameraCalibratesBackToItsTrueRobotInTheGauge) {
+  MOA_SKIP_UNDER_SANITIZER("a 60 s ceiling-camera calibration");
   const auto dir = test::scratch_dir("sim-calib-camera");
   const auto sim = simulate("calib-camera", 5, dir / "log");
   ASSERT_EQ(sim.exit_code, 0) << sim.err;

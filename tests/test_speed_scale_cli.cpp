@@ -11,6 +11,7 @@
 #include "moa/formats/config.hpp"
 #include "support/json_value.hpp"
 #include "support/run.hpp"
+#include "support/slow.hpp"
 #include "support/synth.hpp"
 
 namespace moa {
@@ -44,6 +45,7 @@ fs::path* SpeedScaleCli::dir_ = nullptr;
 // 0.5, 2): every true table is piecewise linear on them, so the fit has no
 // model error and each knot's error is its noise, within 4 sigma.
 TEST_F(SpeedScaleCli, CalibratedTablesMatchTheTrueOnesWithinTheirSigma) {
+  MOA_SKIP_UNDER_SANITIZER("a 60 s calibration with a speed table");
   const auto r = test::run_moa(calibrate("--speed-knots 0.25,0.5,1,1.5,2 --json"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const io::RobotConfig truth = io::read_config(*dir_ / "robot.true.yaml");
@@ -73,6 +75,7 @@ TEST_F(SpeedScaleCli, CalibratedTablesMatchTheTrueOnesWithinTheirSigma) {
 }
 
 TEST_F(SpeedScaleCli, TheReportPrintsEachKnotWithItsSigma) {
+  MOA_SKIP_UNDER_SANITIZER("a 60 s calibration with a speed table");
   const auto r = test::run_moa(calibrate("--speed-knots 0.5,2"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("speed scale: knots 0.5, 2 m/s"));

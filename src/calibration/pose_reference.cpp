@@ -714,13 +714,23 @@ TrackOffset track_offset(std::span<const double> t, std::span<const Eigen::Vecto
     }
     const auto k = static_cast<Eigen::Index>(rows.size());
     if (k >= 8) {
-      Eigen::MatrixXd x(k, 2);
-      for (Eigen::Index j = 0; j < k; ++j) x.row(j) << 1.0, t[s + static_cast<std::size_t>(j)] - t[s];
-      const Eigen::MatrixXd hat = x * (x.transpose() * x).inverse() * x.transpose();
+      // Each column less its least-squares line in tau = t_j - t_s:
+      // c~ = c - mean(c) - (tau - mean(tau)) S_tc / S_tt.
+      double tau_mean = 0.0;
+      for (Eigen::Index j = 0; j < k; ++j) tau_mean += t[s + static_cast<std::size_t>(j)] - t[s];
+      tau_mean /= static_cast<double>(k);
+      Eigen::VectorXd tau(k);
+      for (Eigen::Index j = 0; j < k; ++j) {
+        tau(j) = t[s + static_cast<std::size_t>(j)] - t[s] - tau_mean;
+      }
+      const double stt = tau.squaredNorm();
       for (int axis = 0; axis < 2; ++axis) {
-        Eigen::MatrixXd col(k, 6);
-        for (Eigen::Index j = 0; j < k; ++j) col.row(j) = rows[static_cast<std::size_t>(j)].row(axis);
-        const Eigen::MatrixXd c = col - hat * col;
+        Eigen::MatrixXd c(k, 6);
+        for (Eigen::Index j = 0; j < k; ++j) c.row(j) = rows[static_cast<std::size_t>(j)].row(axis);
+        const Eigen::Matrix<double, 1, 6> mean = c.colwise().mean();
+        c.rowwise() -= mean;
+        const Eigen::Matrix<double, 1, 6> slope = tau.transpose() * c / stt;
+        c -= tau * slope;
         a += c.leftCols<5>().transpose() * c.leftCols<5>();
         g += c.leftCols<5>().transpose() * c.col(5);
         rr += c.col(5).squaredNorm();
@@ -895,7 +905,10 @@ std::variant<PoseReferenceCalibration, PoseReferenceFailure> calibrate_against_p
         lr -= std::clamp(common.e, -kMaxLatencyStep, kMaxLatencyStep);
       }
     }
-    auto fitted = fit_poses(nominal, tracks, lat, poses, lr, options, true);
+    // One mounts / offsets alternation per pass: the passes alternate anyway.
+    PoseReferenceOptions once = options;
+    once.iterations = 1;
+    auto fitted = fit_poses(nominal, tracks, lat, poses, lr, once, true);
     if (auto* f = std::get_if<PoseReferenceFailure>(&fitted)) return *f;
     const double moved = std::abs(lr - lr_before);
     lr_before = lr;
