@@ -17,6 +17,7 @@
 #include "moa/formats/config.hpp"
 #include "moa/formats/log.hpp"
 #include "support/run.hpp"
+#include "support/slow.hpp"
 #include "support/synth.hpp"
 
 namespace moa {
@@ -182,6 +183,7 @@ struct BumpLog {
 };
 
 TEST(GyroCalibrationCli, ExactCalibratesTheGyroAgainstTheArray) {
+  MOA_SKIP_UNDER_SANITIZER("moa calibrate with the gyro on a long simulated log");
   const BumpLog bump("gyro-cal-cli", 11);
   const fs::path truth = bump.log / "robot.true.yaml";
   const double scale = yaml_number(truth, "imu", "scale");
@@ -233,6 +235,7 @@ TEST(GyroCalibrationCli, ExactCalibratesTheGyroAgainstTheArray) {
 }
 
 TEST(GyroCalibrationCli, RefusesAGyroOfAnotherMotion) {
+  MOA_SKIP_UNDER_SANITIZER("moa calibrate with the gyro on a long simulated log");
   // Seeds of gyro-bump differ in their noise, not in their motion (the same
   // square): another seed's gyro correlates with this run. A gyro of another
   // motion over the same time (imu.csv replaced) does not, and nothing is
@@ -263,6 +266,7 @@ TEST(GyroCalibrationCli, RefusesAGyroOfAnotherMotion) {
 // 0.1 s, theta with 2 mrad of noise (gyro-bump's simulated camera has no
 // theta); the camera's clock is the truth's, so L is the gyro's 5 ms.
 TEST(GyroCalibrationCli, CalibratesTheGyroAgainstTheCamerasHeading) {
+  MOA_SKIP_UNDER_SANITIZER("moa calibrate with the gyro on a long simulated log");
   const BumpLog bump("gyro-cal-camera", 12);
   {
     const auto truth = io::read_all<io::TruthRow>(bump.log / "truth.csv");
