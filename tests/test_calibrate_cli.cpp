@@ -382,9 +382,10 @@ TEST_F(CalibrateCliBadInput, MalformedWheelsRowNamesFileAndLine) {
 
 TEST_F(CalibrateCliBadInput, CameraReferenceWithoutCameraCsvIsAnError) {
   const auto r = test::run_moa(calibrate_args(dir_, "exact") + " --reference camera");
-  expect_one_line_error(r,
-                        "camera.csv: not found: --method exact --reference camera needs the camera's "
-                        "fixes");
+  expect_one_line_error(
+      r,
+      "camera.csv: not found: --method exact --reference camera needs the camera's "
+      "fixes");
   EXPECT_FALSE(fs::exists(out()));
 }
 

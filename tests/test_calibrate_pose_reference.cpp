@@ -5,8 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <numbers>
 #include <cstdio>
+#include <numbers>
 #include <random>
 
 #include "moa/calibration/pose_reference.hpp"
@@ -25,13 +25,13 @@ struct MocapLog {
 };
 
 struct MocapSetup {
-  double duration = 60.0;     // s
-  double row_period = 0.01;   // s, every sensor
+  double duration = 60.0;    // s
+  double row_period = 0.01;  // s, every sensor
   double fix_period = 1.0 / 120.0;
   std::vector<double> latency{0.002, 0.005, 0.003, 0.008};  // L_i, s
-  double reference_latency = 0.012;                          // L_r, s
-  double position_sd = 0.0;                                  // m, per axis and fix
-  double theta_sd = 0.0;                                     // rad
+  double reference_latency = 0.012;                         // L_r, s
+  double position_sd = 0.0;                                 // m, per axis and fix
+  double theta_sd = 0.0;                                    // rad
   double fix_jitter = 0.0;  // s, each fix's stamp off by a uniform in [-j/2, j/2]
   double fix_drop = 0.0;    // probability a fix is lost
   bool quantise = true;
@@ -308,8 +308,8 @@ TEST(CalibratePoseReference, PositionsFromAnotherRunAreRefused) {
   other.script = [](double t) { return test::mixed_motion(t + 17.0); };
   const MocapLog camera = synthesise(c.truth, other, 6);
   const std::vector<double> configured(4, mean(s.latency));
-  const auto r = calibrate_against_positions(c.nominal, mice.tracks, configured,
-                                             positions_of(camera), 0.0);
+  const auto r =
+      calibrate_against_positions(c.nominal, mice.tracks, configured, positions_of(camera), 0.0);
   ASSERT_TRUE(std::holds_alternative<PoseReferenceFailure>(r));
   EXPECT_EQ(std::get<PoseReferenceFailure>(r).error, PoseReferenceError::kNoCorrelation);
 }

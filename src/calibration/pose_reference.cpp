@@ -83,8 +83,9 @@ struct Window {
   Eigen::Vector3d z = Eigen::Vector3d::Zero();  // m, m, rad (robot frame at t_a)
 };
 
-constexpr double kLagStep = 0.005;      // s, coarse grid
-constexpr double kMaxWindowFactor = 3;  // windows longer than this x window (dropped fixes): not used
+constexpr double kLagStep = 0.005;  // s, coarse grid
+constexpr double kMaxWindowFactor =
+    3;  // windows longer than this x window (dropped fixes): not used
 constexpr double kMaxLatencyStep = 0.02;  // s, per Gauss-Newton step
 constexpr int kMinWindows = 20;
 constexpr int kMinLongWindows = 10;  // of the common offset's fit (one parameter, S 3x3)
@@ -315,7 +316,8 @@ std::variant<PoseReferenceCalibration, PoseReferenceFailure> fit_poses(
       }
       if (ok) in_range.push_back(&w);
     }
-    if (static_cast<int>(in_range.size()) < kMinWindows) return fail(PoseReferenceError::kTooFewFixes);
+    if (static_cast<int>(in_range.size()) < kMinWindows)
+      return fail(PoseReferenceError::kTooFewFixes);
     // Per window and sensor: the sensor point's speed by the reference at the
     // nominal position, |z_xy + z_theta J p_i| / dt, against the sensor's own,
     // |c_i| / (k_i dt) (neither yaw nor mirroring changes it).
@@ -345,7 +347,8 @@ std::variant<PoseReferenceCalibration, PoseReferenceFailure> fit_poses(
     const auto peak = correlation_peak(c, kLagStep, options.min_correlation);
     out.correlation = *std::max_element(c.begin(), c.end());
     if (!peak) {
-      return PoseReferenceFailure{PoseReferenceError::kNoCorrelation, std::nullopt, out.correlation};
+      return PoseReferenceFailure{PoseReferenceError::kNoCorrelation, std::nullopt,
+                                  out.correlation};
     }
     out.coarse_latency = reference_latency + peak->lag;
   }
@@ -510,8 +513,7 @@ std::vector<std::pair<std::size_t, std::size_t>> index_windows(std::span<const d
 // array's steps z (z[j] between fixes j and j + 1). Returns the fit and
 // fills `theta` (rad, at each fix); nullopt with fewer than kMinWindows
 // windows.
-std::optional<HeadingFit> fit_heading(std::span<const double> t,
-                                      std::span<const Eigen::Vector2d> p,
+std::optional<HeadingFit> fit_heading(std::span<const double> t, std::span<const Eigen::Vector2d> p,
                                       const std::vector<Eigen::Vector3d>& z, double window,
                                       std::vector<double>& theta) {
   const std::size_t m = t.size();
@@ -521,8 +523,8 @@ std::optional<HeadingFit> fit_heading(std::span<const double> t,
   if (static_cast<int>(windows.size()) < kMinWindows) return std::nullopt;
   HeadingFit fit;
   fit.windows = static_cast<int>(windows.size());
-  fit.rotation_range = *std::max_element(big.begin(), big.end()) -
-                       *std::min_element(big.begin(), big.end());
+  fit.rotation_range =
+      *std::max_element(big.begin(), big.end()) - *std::min_element(big.begin(), big.end());
   fit.rate_scale_estimated = fit.rotation_range >= kMinRotationRange;
   const Eigen::Index np = fit.rate_scale_estimated ? 3 : 2;  // theta_0, beta[, epsilon]
   const Eigen::Matrix2d turn{{0.0, -1.0}, {1.0, 0.0}};
@@ -595,7 +597,8 @@ double apply_yaw_gauge(ExactCalibration& cal, const SensorArray& nominal) {
   int members = 0;
   for (int pass = 0; pass < 2 && members == 0; ++pass) {
     for (std::size_t i = 0; i < cal.sensors.size(); ++i) {
-      in_mean[i] = pass == 1 || cal.sensors[i].calibrated.mirrored == nominal[static_cast<int>(i)].mirrored;
+      in_mean[i] =
+          pass == 1 || cal.sensors[i].calibrated.mirrored == nominal[static_cast<int>(i)].mirrored;
       members += in_mean[i] ? 1 : 0;
     }
   }
@@ -635,7 +638,8 @@ double apply_yaw_gauge(ExactCalibration& cal, const SensorArray& nominal) {
   if (cal.covariance.rows() == 5 * n) {
     cal.covariance = t * cal.covariance * t.transpose();
     for (Eigen::Index i = 0; i < n; ++i) {
-      cal.sensors[static_cast<std::size_t>(i)].covariance = cal.covariance.block<5, 5>(5 * i, 5 * i);
+      cal.sensors[static_cast<std::size_t>(i)].covariance =
+          cal.covariance.block<5, 5>(5 * i, 5 * i);
     }
   } else {
     for (Eigen::Index i = 0; i < n; ++i) {
@@ -773,8 +777,8 @@ SensorArray rigid_mirroring(const SensorArray& nominal, std::span<const CountsTr
   }
   const auto residual = [&](const SensorArray& array) {
     const Stack h = stack(array);
-    const Eigen::MatrixXd proj = Eigen::MatrixXd::Identity(2 * n, 2 * n) -
-                                 h * (h.transpose() * h).inverse() * h.transpose();
+    const Eigen::MatrixXd proj =
+        Eigen::MatrixXd::Identity(2 * n, 2 * n) - h * (h.transpose() * h).inverse() * h.transpose();
     double sum = 0.0;
     for (const auto& c : counts) sum += (proj * c).squaredNorm();
     return sum;
@@ -837,8 +841,8 @@ std::variant<PoseReferenceCalibration, PoseReferenceFailure> calibrate_against_p
     return d;
   };
   std::vector<double> lat(latency.begin(), latency.end());
-  const auto [lo0, hi0] = covered_fixes(tracks, fixes, offsets(lat, reference_latency),
-                                        options.max_offset);
+  const auto [lo0, hi0] =
+      covered_fixes(tracks, fixes, offsets(lat, reference_latency), options.max_offset);
   const std::span<const double> t0(t.data() + lo0, hi0 - lo0);
   const auto coarse_windows = index_windows(t0, options.window);
   if (static_cast<int>(coarse_windows.size()) < kMinWindows) {
@@ -866,8 +870,7 @@ std::variant<PoseReferenceCalibration, PoseReferenceFailure> calibrate_against_p
   const double best_correlation = *std::max_element(c.begin(), c.end());
   const auto peak = correlation_peak(c, kLagStep, options.min_correlation);
   if (!peak) {
-    return PoseReferenceFailure{PoseReferenceError::kNoCorrelation, std::nullopt,
-                                best_correlation};
+    return PoseReferenceFailure{PoseReferenceError::kNoCorrelation, std::nullopt, best_correlation};
   }
   double lr = reference_latency + peak->lag;
 

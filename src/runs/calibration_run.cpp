@@ -317,8 +317,9 @@ void model_check(CalibrationSummary& r, const ExactModelCheck& check, const Robo
       "{}: {{method}} exact: refused, the calibrated model does not explain the data: {}; is "
       "{} over the same time as mice.csv? Nothing written ({{force}} writes it anyway)",
       OptionError::literal(log.string()), OptionError::literal(reason),
-      camera ? "camera.csv the pose (or position) of this robot's centre in the world frame (m, rad)"
-             : "wheels.csv the twist of this robot in its frame (vx, vy in m/s, omega in rad/s)"));
+      camera
+          ? "camera.csv the pose (or position) of this robot's centre in the world frame (m, rad)"
+          : "wheels.csv the twist of this robot in its frame (vx, vy in m/s, omega in rad/s)"));
 }
 
 // The exact method's report and result, whatever its reference (`samples`:
@@ -412,8 +413,8 @@ void run_exact_speed_scale(CalibrationSummary& r, const RobotConfig& config, con
                                   OptionError::literal(e->message(config.names))));
   }
   if (const auto* e = std::get_if<CalibrationError>(&fitted)) {
-    throw OptionError(fmt::format("{}: {{method}} exact: {}", OptionError::literal(log.string()),
-                                  describe(*e)));
+    throw OptionError(
+        fmt::format("{}: {{method}} exact: {}", OptionError::literal(log.string()), describe(*e)));
   }
   const SpeedScaleCalibration& cal = std::get<SpeedScaleCalibration>(fitted);
   common_sample_lines(r, ref, options);
@@ -455,10 +456,11 @@ void run_exact_camera(CalibrationSummary& r, const RobotConfig& config, const fs
   const LogFiles files = resolve_log(log);
   const fs::path camera = files.dir / "camera.csv";
   if (!files.camera) {
-    throw OptionError(fmt::format(
-        "{}: not found: {{method}} exact {{reference}} camera needs the camera's fixes of the robot "
-        "(t,x,y, with theta from motion capture)",
-        OptionError::literal(camera.string())));
+    throw OptionError(
+        fmt::format("{}: not found: {{method}} exact {{reference}} camera needs the camera's fixes "
+                    "of the robot "
+                    "(t,x,y, with theta from motion capture)",
+                    OptionError::literal(camera.string())));
   }
   // Fixes with theta (motion capture) when any row has one, else positions
   // (a ceiling camera).
@@ -475,9 +477,10 @@ void run_exact_camera(CalibrationSummary& r, const RobotConfig& config, const fs
     if (row.theta) fixes.push_back({row.t, Pose2{row.position, *row.theta}});
   }
   if (positions.empty()) {
-    throw Error(fmt::format("{}: no data rows: the exact calibration against the camera needs "
-                            "its fixes",
-                            camera.string()));
+    throw Error(
+        fmt::format("{}: no data rows: the exact calibration against the camera needs "
+                    "its fixes",
+                    camera.string()));
   }
   const bool with_theta = !fixes.empty();
   const int n = config.array.size();
@@ -497,10 +500,9 @@ void run_exact_camera(CalibrationSummary& r, const RobotConfig& config, const fs
   po.window = options.window;
   const double camera_latency = config.camera_latency.value_or(0.0);
   auto result =
-      with_theta
-          ? calibrate_against_poses(config.array, tracks, latency, fixes, camera_latency, po)
-          : calibrate_against_positions(config.array, tracks, latency, positions, camera_latency,
-                                        po);
+      with_theta ? calibrate_against_poses(config.array, tracks, latency, fixes, camera_latency, po)
+                 : calibrate_against_positions(config.array, tracks, latency, positions,
+                                               camera_latency, po);
   if (const auto* f = std::get_if<PoseReferenceFailure>(&result)) {
     std::string what = describe(f->error);
     if (f->exact_error) what += fmt::format(": {}", describe(*f->exact_error));
@@ -513,9 +515,9 @@ void run_exact_camera(CalibrationSummary& r, const RobotConfig& config, const fs
   }
   const PoseReferenceCalibration& pr = std::get<PoseReferenceCalibration>(result);
   if (with_theta) {
-    r.facts.push_back(fmt::format(
-        "reference: {} ({} fixes with theta of {} rows), {} windows of at least {} s",
-        camera.string(), fixes.size(), rows, pr.windows, options.window));
+    r.facts.push_back(
+        fmt::format("reference: {} ({} fixes with theta of {} rows), {} windows of at least {} s",
+                    camera.string(), fixes.size(), rows, pr.windows, options.window));
   } else {
     const HeadingFit& h = *pr.heading;
     r.facts.push_back(fmt::format(
@@ -554,7 +556,8 @@ void run_exact_camera(CalibrationSummary& r, const RobotConfig& config, const fs
   report_exact(r, config, log, options, pr.exact, static_cast<std::size_t>(pr.windows), true);
   std::vector<SensorMount> mounts(r.calibrated.array.mounts().begin(),
                                   r.calibrated.array.mounts().end());
-  for (int i = 0; i < n; ++i) mounts[static_cast<std::size_t>(i)].latency = pr.latency[static_cast<std::size_t>(i)];
+  for (int i = 0; i < n; ++i)
+    mounts[static_cast<std::size_t>(i)].latency = pr.latency[static_cast<std::size_t>(i)];
   r.calibrated.array = SensorArray(mounts);
   r.calibrated.camera_latency = pr.reference_latency;
   r.pose_reference = pr;
@@ -894,9 +897,9 @@ void check_calibration_options(CalibrationMethod method, const fs::path& log,
     }
     for (std::size_t k = 1; k < n; ++k) {
       if (!(o.speed_knots[k] > o.speed_knots[k - 1])) {
-        throw OptionError(fmt::format(
-            "{{speed_knots}}: knots must be strictly increasing ({} after {} m/s)",
-            o.speed_knots[k], o.speed_knots[k - 1]));
+        throw OptionError(
+            fmt::format("{{speed_knots}}: knots must be strictly increasing ({} after {} m/s)",
+                        o.speed_knots[k], o.speed_knots[k - 1]));
       }
     }
   }
