@@ -295,8 +295,9 @@ TEST(CarelessCalls, UnknownCommandAndUnknownOptionAreNamed) {
   EXPECT_EQ(s.exit_code, cli::kExitUsage);
   EXPECT_THAT(s.err, HasSubstr("unknown option or argument '--bogus'"));
   // A missing --method is a usage error too, before anything is read.
-  const auto m = test::run_moa("calibrate --config " + kExample + "/robot.yaml --log " + kExample +
-                               " --out " + (test::scratch_dir("careless-method") / "c.yaml").string());
+  const auto m =
+      test::run_moa("calibrate --config " + kExample + "/robot.yaml --log " + kExample + " --out " +
+                    (test::scratch_dir("careless-method") / "c.yaml").string());
   EXPECT_EQ(m.exit_code, cli::kExitUsage) << m.err;
   EXPECT_THAT(m.err, HasSubstr("--method"));
 }

@@ -276,10 +276,12 @@ TEST(ConfigErrors, SpeedScaleTablesAreChecked) {
   const auto bad = [](const std::string& table) {
     return parse_error(two_sensors("    speed_scale: " + table + "\n"));
   };
-  EXPECT_EQ(bad("{speeds: [1], ratios: [0.9]}"),
-            "robot.yaml:7: sensor 'm1': key 'speed_scale.speeds': expected 2 to 8 numbers, found 1");
-  EXPECT_EQ(bad("{speeds: [0, 1, 2, 3, 4, 5, 6, 7, 8], ratios: [1, 1, 1, 1, 1, 1, 1, 1, 1]}"),
-            "robot.yaml:7: sensor 'm1': key 'speed_scale.speeds': expected 2 to 8 numbers, found 9");
+  EXPECT_EQ(
+      bad("{speeds: [1], ratios: [0.9]}"),
+      "robot.yaml:7: sensor 'm1': key 'speed_scale.speeds': expected 2 to 8 numbers, found 1");
+  EXPECT_EQ(
+      bad("{speeds: [0, 1, 2, 3, 4, 5, 6, 7, 8], ratios: [1, 1, 1, 1, 1, 1, 1, 1, 1]}"),
+      "robot.yaml:7: sensor 'm1': key 'speed_scale.speeds': expected 2 to 8 numbers, found 9");
   EXPECT_EQ(bad("{speeds: [0, 1, 2], ratios: [1, 0.9]}"),
             "robot.yaml:7: sensor 'm1': key 'speed_scale.ratios': expected one ratio per speed "
             "(3), found 2");
@@ -297,8 +299,7 @@ TEST(ConfigErrors, SpeedScaleTablesAreChecked) {
             "robot.yaml:7: sensor 'm1': key 'speed_scale': between speeds[0] and speeds[1]: speed "
             "* ratio(speed) must increase with speed (the counts could not be inverted) (ratio "
             "falls from 1 to 0.5 over 1..2 m/s)");
-  EXPECT_EQ(bad("{speeds: [0, 1]}"),
-            "robot.yaml:7: sensor 'm1': missing key 'speed_scale.ratios'");
+  EXPECT_EQ(bad("{speeds: [0, 1]}"), "robot.yaml:7: sensor 'm1': missing key 'speed_scale.ratios'");
   EXPECT_EQ(bad("{speeds: [0, 1], ratios: [1, 1], knots: 2}"),
             "robot.yaml:7: sensor 'm1': unknown key 'speed_scale.knots' (known here: speeds, "
             "ratios)");
@@ -352,7 +353,8 @@ TEST(ConfigErrors, UnknownSensorKeyIsRejected) {
 
 TEST(ConfigErrors, UnknownTopLevelKeyIsRejected) {
   EXPECT_EQ(parse_error(two_sensors() + "sensorz: []\n"),
-            "robot.yaml:11: unknown key 'sensorz' (known here: version, sensors, limits, imu, camera, wheels)");
+            "robot.yaml:11: unknown key 'sensorz' (known here: version, sensors, limits, imu, "
+            "camera, wheels)");
 }
 
 TEST(ConfigErrors, DuplicateKeyIsRejected) {

@@ -46,7 +46,8 @@ TEST(FusionCli, CameraFixesBoundTheDriftOfWrongMounts) {
     camera << "t,x,y\n";
     for (std::size_t k = 0; k < log.truth.size(); k += 10) {
       const auto& s = log.truth[k];
-      camera << s.t + 0.05 << ',' << s.pose.t.x() + noise(rng) << ',' << s.pose.t.y() + noise(rng) << '\n';
+      camera << s.t + 0.05 << ',' << s.pose.t.x() + noise(rng) << ',' << s.pose.t.y() + noise(rng)
+             << '\n';
     }
   }
   const std::string common = "odometry --config " + (dir / "robot.yaml").string() + " --log " +

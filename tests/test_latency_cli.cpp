@@ -31,8 +31,7 @@ std::vector<std::pair<double, Pose2>> read_poses(const fs::path& odometry) {
 // The largest distance between the poses of `a` and `b` at a's times up to
 // `until` (b holds every time of a, and maybe more at its end).
 double largest_difference(const std::vector<std::pair<double, Pose2>>& a,
-                          const std::vector<std::pair<double, Pose2>>& b,
-                          double until = INFINITY) {
+                          const std::vector<std::pair<double, Pose2>>& b, double until = INFINITY) {
   double worst = 0.0;
   std::size_t j = 0;
   for (const auto& [t, pose] : a) {

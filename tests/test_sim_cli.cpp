@@ -270,20 +270,29 @@ TEST(SimCli, SeedsThatAreNotWholeNumbersAreRefused) {
   EXPECT_THAT(r.out, HasSubstr("seed 18446744073709551615"));
 }
 
+// A scenario simulated into DIR/log and calibrated against its camera into
+// DIR/cal.yaml; DIR returned.
+fs::path simulate_and_calibrate(const std::string& scenario, int seed) {
+  const fs::path dir = test::scratch_dir("sim-" + scenario);
+  const auto sim = simulate(scenario, seed, dir / "log");
+  [&] { ASSERT_EQ(sim.exit_code, 0) << sim.err; }();
+  if (::testing::Test::HasFatalFailure()) return dir;
+  const auto cal =
+      test::run_moa("calibrate --config " + (dir / "log/robot.yaml").string() + " --log " +
+                    (dir / "log").string() + " --method exact --reference camera --out " +
+                    (dir / "cal.yaml").string());
+  [&] { ASSERT_EQ(cal.exit_code, 0) << cal.err; }();
+  return dir;
+}
+
 // calib-mocap end to end: moa calibrate --method exact --reference camera
 // recovers robot.true.yaml's mounts and latencies (sensors and camera, up to
 // the gauge: the sensors' mean latency, 0 in robot.yaml) within 4 x the
 // 1-sigma it reports on this log (0.15 mm, 0.026 deg, 0.05 %, 0.04 ms per
 // sensor, 0.17 ms for the camera; docs/calibration.md).
 TEST(SimCli, CalibMocapCalibratesBackToItsTrueRobot) {
-  const auto dir = test::scratch_dir("sim-calib-mocap");
-  const auto sim = simulate("calib-mocap", 5, dir / "log");
-  ASSERT_EQ(sim.exit_code, 0) << sim.err;
-  const auto cal =
-      test::run_moa("calibrate --config " + (dir / "log/robot.yaml").string() + " --log " +
-                    (dir / "log").string() + " --method exact --reference camera --out " +
-                    (dir / "cal.yaml").string());
-  ASSERT_EQ(cal.exit_code, 0) << cal.err;
+  const fs::path dir = simulate_and_calibrate("calib-mocap", 5);
+  if (HasFatalFailure()) return;
   const io::RobotConfig got = io::read_config(dir / "cal.yaml");
   const io::RobotConfig truth = io::read_config(dir / "log/robot.true.yaml");
   ASSERT_EQ(got.array.size(), 4);
@@ -316,14 +325,8 @@ TEST(SimCli, CalibMocapCalibratesBackToItsTrueRobot) {
 // latencies 2 ms, the camera's 3 ms. Seed 5 (seeds 1-10 in docs/calibration.md).
 TEST(SimCli, CalibCameraCalibratesBackToItsTrueRobotInTheGauge) {
   MOA_SKIP_UNDER_SANITIZER("a 60 s ceiling-camera calibration");
-  const auto dir = test::scratch_dir("sim-calib-camera");
-  const auto sim = simulate("calib-camera", 5, dir / "log");
-  ASSERT_EQ(sim.exit_code, 0) << sim.err;
-  const auto cal =
-      test::run_moa("calibrate --config " + (dir / "log/robot.yaml").string() + " --log " +
-                    (dir / "log").string() + " --method exact --reference camera --out " +
-                    (dir / "cal.yaml").string());
-  ASSERT_EQ(cal.exit_code, 0) << cal.err;
+  const fs::path dir = simulate_and_calibrate("calib-camera", 5);
+  if (HasFatalFailure()) return;
   const io::RobotConfig got = io::read_config(dir / "cal.yaml");
   const io::RobotConfig truth = io::read_config(dir / "log/robot.true.yaml");
   const io::RobotConfig nominal = io::read_config(dir / "log/robot.yaml");

@@ -114,7 +114,8 @@ TEST(SimSensor, ASpeedScaleUnderCountsByItsRatioAtTheSensorsSpeed) {
   // the sensor point's speed |v + omega J p|: its counts are the model's
   // times the ratio there, written out here.
   std::string text = model_scenario(std::string(kAdns3080.name), 64);
-  const std::string key = "  a: {position_error: [0.003, -0.002], yaw_error: 0.03, scale: [1.04, 0.97]}";
+  const std::string key =
+      "  a: {position_error: [0.003, -0.002], yaw_error: 0.03, scale: [1.04, 0.97]}";
   ASSERT_NE(text.find(key), std::string::npos);
   text.replace(text.find(key), key.size(),
                "  a: {position_error: [0.003, -0.002], yaw_error: 0.03, scale: [1.04, 0.97],\n"
@@ -123,7 +124,9 @@ TEST(SimSensor, ASpeedScaleUnderCountsByItsRatioAtTheSensorsSpeed) {
   ASSERT_TRUE(s.truth.array[0].speed_scale.active());
   ASSERT_FALSE(s.nominal.array[0].speed_scale.active());
   const SensorMount& m = s.truth.array[0];
-  const auto ratio = [](double v) { return v <= 0.1 ? 1.0 : v >= 0.4 ? 0.9 : 1.0 - (v - 0.1) / 3.0; };
+  const auto ratio = [](double v) {
+    return v <= 0.1 ? 1.0 : v >= 0.4 ? 0.9 : 1.0 - (v - 0.1) / 3.0;
+  };
   Eigen::Vector2d expected = Eigen::Vector2d::Zero();
   std::vector<double> ratios;
   for (const auto& seg : kSegments) {

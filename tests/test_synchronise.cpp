@@ -204,7 +204,8 @@ TEST(Synchroniser, LatentRowsGiveTheEpochsOfTheirTrueTimes) {
   std::vector<Timed> rows;
   for (int i = 0; i < 4; ++i) {
     for (double t = 1.02 + gap(rng); t < 4.0; t += gap(rng)) {
-      rows.push_back({t, row(t + latency[static_cast<std::size_t>(i)], i, counts(rng), counts(rng))});
+      rows.push_back(
+          {t, row(t + latency[static_cast<std::size_t>(i)], i, counts(rng), counts(rng))});
     }
   }
   SynchroniserOptions shifted{0.01, 0.05};

@@ -113,13 +113,13 @@ struct PositionFix {
 };
 
 struct PoseReferenceOptions {
-  double window = 0.2;          ///< s, least window between two fixes (the mounts, d_i)
+  double window = 0.2;  ///< s, least window between two fixes (the mounts, d_i)
   /// s, least window of the common offset's fit; halved (down to twice
   /// `window`) while that gives fewer than 20 windows (a short log)
   double latency_window = 2.0;
-  double max_offset = 1.0;      ///< s, coarse search's range around the configured L_r
+  double max_offset = 1.0;       ///< s, coarse search's range around the configured L_r
   double min_correlation = 0.5;  ///< least correlation at the coarse peak
-  int iterations = 4;           ///< mounts / latencies alternations
+  int iterations = 4;            ///< mounts / latencies alternations
   /// Least |dr/dd|^2 summed, over the residual variance, to fit a latency:
   /// 1/sigma^2 >= min_latency_information (s^-2): 1e6 is 1 ms.
   double min_latency_information = 1e6;
@@ -127,10 +127,10 @@ struct PoseReferenceOptions {
 };
 
 enum class PoseReferenceError {
-  kTooFewFixes,     ///< fewer than 20 windows within the sensors' rows
-  kBadInput,        ///< stamps not increasing, values not finite
-  kNoCorrelation,   ///< no correlation peak within the search range
-  kCalibration,     ///< calibrate_exact refused (see `exact_error`)
+  kTooFewFixes,    ///< fewer than 20 windows within the sensors' rows
+  kBadInput,       ///< stamps not increasing, values not finite
+  kNoCorrelation,  ///< no correlation peak within the search range
+  kCalibration,    ///< calibrate_exact refused (see `exact_error`)
 };
 const char* describe(PoseReferenceError error);
 
@@ -139,12 +139,12 @@ const char* describe(PoseReferenceError error);
 ///   theta(t) = theta_0 + (1 + epsilon) Theta(t) + beta (t - t_0),
 /// fitted to the camera's steps (header of calibrate_against_positions).
 struct HeadingFit {
-  double theta0 = 0.0, theta0_sigma = 0.0;           ///< rad, at the first fix used
-  double rate_scale = 0.0, rate_scale_sigma = 0.0;   ///< epsilon, 1
-  double drift = 0.0, drift_sigma = 0.0;             ///< beta, rad/s
-  bool rate_scale_estimated = false;  ///< false: the array turned too little (kept 0)
-  double rotation_range = 0.0;        ///< rad, max - min of Theta over the fixes used
-  double residual_rms = 0.0;          ///< m, per axis and window of the camera's steps
+  double theta0 = 0.0, theta0_sigma = 0.0;          ///< rad, at the first fix used
+  double rate_scale = 0.0, rate_scale_sigma = 0.0;  ///< epsilon, 1
+  double drift = 0.0, drift_sigma = 0.0;            ///< beta, rad/s
+  bool rate_scale_estimated = false;                ///< false: the array turned too little (kept 0)
+  double rotation_range = 0.0;                      ///< rad, max - min of Theta over the fixes used
+  double residual_rms = 0.0;  ///< m, per axis and window of the camera's steps
   int windows = 0;
   double yaw_gauge = 0.0;  ///< rad, the common yaw removed by the gauge in the last pass
 };
