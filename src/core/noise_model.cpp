@@ -17,6 +17,13 @@ OptionCheck NoiseModelOptions::validate() const {
       .result();
 }
 
+real NoiseModelOptions::speed_factor(real speed, real max_speed) const {
+  if (!(max_speed > 0.0)) return 1.0;
+  const real ratio = speed / (speed_onset * max_speed);
+  const real r2 = ratio * ratio, r4 = r2 * r2;
+  return std::min(speed_cap, 1.0 + r4 * r4);
+}
+
 NoiseModel::NoiseModel(const SensorArray& array, NoiseModelOptions options)
     : n_(array.size()), options_(options) {
   for (int i = 0; i < n_ && i < kMaxSensors; ++i) {
@@ -51,10 +58,8 @@ void NoiseModel::measure(const ArraySample& sample, const Twist2& predicted, Poi
     real factor = 1.0;
     std::uint8_t f = 0;
     if (max_speed_[s] > 0.0) {
-      const real ratio = predicted_speed / (options_.speed_onset * max_speed_[s]);
-      const real r2 = ratio * ratio, r4 = r2 * r2;
-      factor *= std::min(options_.speed_cap, 1.0 + r4 * r4);
-      if (ratio >= 1.0) f |= kNoiseOverSpeed;
+      factor *= options_.speed_factor(predicted_speed, max_speed_[s]);
+      if (predicted_speed >= options_.speed_onset * max_speed_[s]) f |= kNoiseOverSpeed;
     }
     if (sample.squal[s] < options_.min_squal) {
       factor *= options_.low_squal_factor;

@@ -36,10 +36,10 @@ OptionCheck SelfCalibrationOptions::validate() const {
 }
 
 SelfCalibration::SelfCalibration(const SensorArray& array, SelfCalibrationOptions options,
-                                 const NoiseModelOptions& noise)
+                                 const NoiseModelOptions& noise, int frozen_run)
     : options_(options),
-      min_squal_(noise.min_squal),
-      speed_onset_(noise.speed_onset),
+      noise_(noise),
+      frozen_run_(frozen_run),
       n_(std::min(array.size(), kMaxSensors)),
       array_(array),
       solver_(array) {
@@ -116,7 +116,7 @@ void SelfCalibration::renew(int i) {
   s.applied = {
       common.scale_x * (off ? rel.scale_x : (dimmed ? g : 1.0)),
       common.scale_y * (off ? rel.scale_y : (dimmed ? g : 1.0)),
-      common.yaw_offset + (std::abs(rel.yaw_offset) > options_.deadband ? rel.yaw_offset : 0.0)};
+      common.yaw_offset + (off || std::abs(rel.yaw_offset) > options_.deadband ? rel.yaw_offset : 0.0)};
   const SelfCalibrationEstimate& used = s.applied;
   // counts -> robot velocity (configured), into the configured sensor frame,
   // C^-1 = R(delta) diag(1/s), back to the robot frame and to counts.
@@ -155,6 +155,11 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
   for (int i = 0; i < n_; ++i) {
     const auto u = static_cast<std::size_t>(i);
     SensorState& d = state_[u];
+    // To the synchroniser's rounding, as health.cpp's frozen test.
+    const real big = std::max<real>(1.0, raw.counts[u].cwiseAbs().maxCoeff());
+    const bool repeated = (raw.counts[u] - d.last_raw).cwiseAbs().maxCoeff() <= 1e-6 * big;
+    d.repeats = repeated ? d.repeats + 1 : 0;
+    d.last_raw = raw.counts[u];
     if (estimate.excluded[u] == Exclusion::kDrift) {
       d.drifted = true;
     } else if (!d.corrected) {
@@ -172,8 +177,25 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
         continue;  // lift, frozen, zero, faulty, unselected, fallback
     }
     if (raw.flags[u] & (kFlagLift | kFlagOverflow)) continue;
-    if (raw.squal[u] < min_squal_) continue;
+    if (raw.squal[u] < noise_.min_squal) continue;
     if (raw.counts[u].isZero()) continue;
+    // A run of frozen_run epochs of counts repeated exactly is what a frozen
+    // register reads before the estimator's test can tell (health.hpp: in a
+    // cruise it waits for frozen_long_run): learnt as a scale, the correction
+    // it teaches would change the repeated counts and hide the fault. So a
+    // block ends only on an epoch whose counts differ from the one before (it
+    // grows while they repeat), and a block in which a run reaches
+    // frozen_run is dropped; shorter runs are chance and kept (leaving out
+    // epochs by their counts would break the block's telescoping sum).
+    if (d.repeats + 1 >= frozen_run_) {
+      SensorState& s = state_[u];
+      s.sum_pred.setZero();
+      s.sum_meas.setZero();
+      s.sum_var = 0.0;
+      s.factor = 1.0;
+      s.time = 0.0;
+      continue;
+    }
     const SensorMask others = used & ~(SensorMask{1} << i);
     if (count_sensors(others) < 2) continue;
     const auto fit = solver_.fit(others, points_);
@@ -185,21 +207,21 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
     if (fit->dof > 0 && fit->chi2 > chi2_gate_[static_cast<std::size_t>(fit->dof)]) continue;
     Vec2 p = solver_.jacobian(i) * fit->twist.vector();
     if (options_.gauge == SelfCalibrationGauge::kWheels) p = to_gauge * p;
-    // Over (or near) its rating a sensor under-reads by random fractions: a
-    // fault, not a calibration.
-    if (array_[i].max_speed && p.norm() > speed_onset_ * *array_[i].max_speed) continue;
     const Mat2 rt = rotation(array_[i].yaw).transpose();
     SensorState& s = state_[u];
     s.sum_pred += rt * p * dt;
     s.sum_meas += rt * velocity_from_counts_[u] * raw.counts[u];
     const Mat<2, 3>& a = solver_.jacobian(i);
     s.sum_var += 0.5 * (a * fit->covariance * a.transpose()).trace() * dt * dt;
+    // Near its rating the sensor weighs as the noise model says (header).
+    s.factor = std::max(s.factor, noise_.speed_factor(p.norm(), array_[i].max_speed.value_or(0.0)));
     s.time += dt;
-    if (s.time >= options_.block - 1e-9) {
+    if (s.time >= options_.block - 1e-9 && d.repeats == 0) {
       update(i, raw.t);
       s.sum_pred.setZero();
       s.sum_meas.setZero();
       s.sum_var = 0.0;
+      s.factor = 1.0;
       s.time = 0.0;
     }
   }
@@ -211,6 +233,7 @@ void SelfCalibration::observe_wheels(const ArraySample& raw, SensorMask used,
   if (!wheels.vector().allFinite()) return;
   const real dt = raw.dt;
   const SelfCalibrationEstimate common = gauge();
+  WheelGauge& w = wheel_;
   // The used sensors' point velocities (robot frame, m/s) corrected by their
   // relative calibration theta / (G, D) alone: u = R(yaw) R(delta - D)
   // diag(G / s) R(yaw)^T u_raw. Their fit is the array's twist in the
@@ -220,8 +243,7 @@ void SelfCalibration::observe_wheels(const ArraySample& raw, SensorMask used,
     const auto u = static_cast<std::size_t>(k);
     const SensorState& s = state_[u];
     const Vec2 u_raw = velocity_from_counts_[u] * raw.counts[u] / dt;
-    // Over (or near) its rating a sensor under-reads by random fractions.
-    if (array_[k].max_speed && u_raw.norm() > speed_onset_ * *array_[k].max_speed) return;
+    w.factor = std::max(w.factor, noise_.speed_factor(u_raw.norm(), array_[k].max_speed.value_or(0.0)));
     const Mat2 r = rotation(array_[k].yaw);
     const Mat2 c_inv =
         rotation(s.theta.yaw_offset - common.yaw_offset) *
@@ -233,7 +255,6 @@ void SelfCalibration::observe_wheels(const ArraySample& raw, SensorMask used,
   }
   const auto fit = solver_.fit(used, points_);
   if (!fit) return;
-  WheelGauge& w = wheel_;
   w.sum_v_array += fit->twist.v * dt;
   w.sum_theta_array += fit->twist.omega * dt;
   w.sum_v_wheels += wheels.v * dt;
@@ -246,6 +267,7 @@ void SelfCalibration::observe_wheels(const ArraySample& raw, SensorMask used,
     w.sum_v_array.setZero();
     w.sum_v_wheels.setZero();
     w.sum_theta_array = w.sum_theta_wheels = w.sum_var = w.time = 0.0;
+    w.factor = 1.0;
   }
 }
 
@@ -278,7 +300,7 @@ void SelfCalibration::update_gauge(double t) {
   if (r.norm() > options_.gate * d) return;  // the wheels slipped grossly
   // 4. Measurement variance, m^2 per component; Huber beyond three standard
   // deviations (chi-square 27 on three components).
-  real var = options_.wheel_noise * options_.wheel_noise * d * d + w.sum_var + 1e-12;
+  real var = (options_.wheel_noise * options_.wheel_noise * d * d + w.sum_var) * w.factor + 1e-12;
   const real nu2 = r.squaredNorm() / var;
   if (nu2 > 27.0) var *= nu2 / 27.0;
   // 5. Kalman update, Joseph form.
@@ -331,7 +353,7 @@ void SelfCalibration::update(int i, double t) {
     s.gross = {};
     const real mpc = metres_per_count_[static_cast<std::size_t>(i)];
     const real rel = options_.relative_noise * w.norm();
-    real var = mpc * mpc / 3.0 + s.sum_var + rel * rel;
+    real var = (mpc * mpc / 3.0 + s.sum_var + rel * rel) * s.factor;
     // Huber: a block far out weighs as one at three standard deviations.
     const real nu2 = r.squaredNorm() / var;
     if (nu2 > 18.0) var *= nu2 / 18.0;

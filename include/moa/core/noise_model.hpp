@@ -34,6 +34,9 @@ struct NoiseModelOptions {
   /// nullopt when usable, else the first field out of its bounds, its path
   /// relative to this struct (options_check.hpp).
   OptionCheck validate() const;
+  /// m's speed term for a point speed s (m/s) of a sensor rated at max_speed
+  /// (m/s; 0 or less: not rated, 1): min(speed_cap, 1 + (s / (onset max_speed))^8).
+  real speed_factor(real speed, real max_speed) const;
 };
 
 /// Per-sensor covariance of the point velocity u_i (robot frame, m^2/s^2):

@@ -24,10 +24,13 @@
 //        [ 0, (R(-delta) w)_y, s_y (-cos delta w_x - sin delta w_y) ]]
 // carries the rest: motion along the sensor's x axis informs s_x and delta,
 // along y s_y and delta. Not used: epochs without a mice estimate, or where
-// the sensor was lifted, frozen, zero, faulty or its noise was inflated (over
-// speed, low SQUAL, overflow: a sensor over its rating under-reads by random
-// fractions, which is a fault, not a calibration), blocks whose relative
-// residual |m - C w| / |w| exceeds `gate`.
+// the sensor was lifted, frozen, zero, faulty, its SQUAL low or its counts
+// overflowed, blocks whose relative residual |m - C w| / |w| exceeds `gate`.
+// Near its rating a sensor weighs as the estimators' noise model says: the
+// block's variance times the largest speed factor m of its epochs
+// (NoiseModelOptions::speed_factor, at most speed_cap); over its rating a
+// sensor under-reads by random fractions, gross errors that the gate and
+// the Huber weight below leave out.
 //
 // Gauge: a common isotropic scale of all sensors is a rigid twist scaled,
 // invisible to any redundancy; a common yaw offset is invisible in
@@ -61,11 +64,12 @@
 //   gauge_walk^2 per second on each (a floor change dims all sensors alike),
 //   capped at the prior (prior_scale_sd), measurement variance
 //   (wheel_noise d)^2 + the array twist's, d = sqrt(|V_w|^2 + (r Th_w)^2)
-//   (m); G = |k|, D = atan2(-b, a). Observable: translation tells both a and
+//   (m), times the block's largest speed factor of a used sensor (as
+//   above); G = |k|, D = atan2(-b, a). Observable: translation tells both a and
 //   b (scale and yaw), rotation alone a = G cos D, i.e. the scale (D only to
 //   second order: b keeps its estimate and its variance grows). Not used:
 //   epochs without a wheel twist or a mice estimate (a fallback to the
-//   wheels), with a used sensor over speed_onset (0.8) times its rated speed, blocks with
+//   wheels), blocks with
 //   d under min_speed times their length, and blocks whose residual exceeds
 //   `gate` times d (the wheels slipped grossly). The measurement w of each
 //   sensor's update (above) is predicted from the others' corrections, which
@@ -112,6 +116,7 @@
 
 #include "moa/core/array.hpp"
 #include "moa/core/names.hpp"
+#include "moa/core/health.hpp"
 #include "moa/core/noise_model.hpp"
 #include "moa/core/options_check.hpp"
 #include "moa/core/robust_estimate.hpp"
@@ -189,10 +194,13 @@ struct SelfCalibrationEstimate {
 
 class SelfCalibration {
  public:
-  /// `noise`: the estimator's noise model, whose min_squal and speed_onset
-  /// also mark the epochs not learnt from (low SQUAL, near the rating).
+  /// `noise`: the estimator's noise model: its min_squal marks the epochs
+  /// not learnt from, its speed factor weighs the blocks near the rating;
+  /// `frozen_run`: the health monitor's (a block with such a run of repeated
+  /// counts is dropped).
   SelfCalibration(const SensorArray& array, SelfCalibrationOptions options,
-                  const NoiseModelOptions& noise = {});
+                  const NoiseModelOptions& noise = {},
+                  int frozen_run = HealthOptions{}.frozen_run);
 
   /// Applies each sensor's correction to the counts of `sample` (in place).
   /// The applied correction changes only when an estimate moved by
@@ -254,6 +262,9 @@ class SelfCalibration {
     Mat3 p = Mat3::Zero();
     Vec2 sum_meas{0.0, 0.0}, sum_pred{0.0, 0.0};  ///< m, configured sensor frame
     real sum_var = 0.0;                           ///< m^2, prediction variance
+    real factor = 1.0;                            ///< the block's largest speed factor
+    Vec2 last_raw{0.0, 0.0};                      ///< counts of the last epoch observed
+    int repeats = 0;                              ///< epochs last_raw has repeated
     real time = 0.0;                              ///< s in the block
     double last_update = -1.0;                    ///< s; < 0: never
     long updates = 0;
@@ -273,6 +284,7 @@ class SelfCalibration {
     Vec2 sum_v_array{0.0, 0.0}, sum_v_wheels{0.0, 0.0};  ///< m, robot frame
     real sum_theta_array = 0.0, sum_theta_wheels = 0.0;  ///< rad
     real sum_var = 0.0;                                  ///< m^2, the array twist's
+    real factor = 1.0;                                   ///< the block's largest speed factor
     real time = 0.0;                                     ///< s in the block
     double last_update = -1.0;                           ///< s; < 0: never
     long updates = 0;
@@ -289,8 +301,8 @@ class SelfCalibration {
   SelfCalibrationEstimate applied_gauge() const;
 
   SelfCalibrationOptions options_;
-  int min_squal_;     ///< NoiseModelOptions::min_squal
-  real speed_onset_;  ///< NoiseModelOptions::speed_onset, of a sensor's max_speed
+  NoiseModelOptions noise_;  ///< the estimators' (min_squal, speed_factor)
+  int frozen_run_;           ///< HealthOptions::frozen_run
   int n_;
   SensorArray array_;
   SubsetSolver solver_;
