@@ -2,8 +2,9 @@
 // at a time (built-in scenarios faults-*: a 2 s window on each sensor in
 // turn along the Table 3 path at speed (a); tracking loss is speed (b)'s own
 // over-speed fault; drift, linear or a step at a change of floor, on one
-// sensor for the rest of the run; every sensor at once over a bump,
-// faults-bump), against plain least squares, Sekimori &
+// sensor for the rest of the run; a register frozen in a cruise while
+// another sensor drifts slowly, faults-cruise; every sensor at once over a
+// bump, faults-bump), against plain least squares, Sekimori &
 // Miyazaki's voting, the consensus, the consensus with online
 // self-calibration (`--self-calibrate`) and oracle selection.
 #include <fmt/core.h>
@@ -33,6 +34,8 @@ const FaultCase kCases[] = {
     {"zero reading", "faults-zero", "zero counts, SQUAL 80, no lift flag"},
     {"drift", "faults-drift", "m2's scale 1 -> 0.9 over 6 s from t = 1 s, then held"},
     {"drift, step", "faults-floor", "m2's scale steps 1 -> 0.9 at t = 5 s (change of floor)"},
+    {"frozen, other drifts", "faults-cruise",
+     "m2's scale 1 -> 0.9 over 90 s, m3 frozen 3 s in a cruise, 24 m run, noisy wheels"},
     {"common-mode dropout", "faults-bump",
      "every sensor reads zero for 0.3 s in three turns, 36 m run, slipping wheels"},
 };
