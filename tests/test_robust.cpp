@@ -483,9 +483,12 @@ TEST(Health, ZeroWhileTheOthersMoveIsExcludedAsZero) {
 
 TEST(Health, DriftTooSmallForOneEpochIsExcludedOverTime) {
   // Sensor 3 reads 5 % short: 2.5 sd of the 2 % relative noise model, which
-  // one epoch's chi-square over four sensors passes; its windowed residual
-  // against the other three crosses drift_exclude (3 %) once the window has
-  // drift_min_time of samples. Without the monitor it is used throughout.
+  // one epoch's chi-square over four sensors passes; its CUSUM against the
+  // other three crosses h. Each epoch moves a statistic by at most
+  // clip - k (z clipped to sqrt(q(1 - alpha, 2)) = sqrt(-2 ln alpha)), so
+  // not before h / (clip - k) epochs, with h solved here from Siegmund's
+  // run length independently of the monitor. Without the monitor it is
+  // used throughout.
   const SensorArray a = sekimori_array();
   for (const bool enabled : {true, false}) {
     ConsensusOptions o;
@@ -510,7 +513,12 @@ TEST(Health, DriftTooSmallForOneEpochIsExcludedOverTime) {
       }
     }
     if (enabled) {
-      EXPECT_GE(first_drift, static_cast<int>(o.health.drift_min_time / kDt) - 1);
+      const double k = o.health.drift_shift;
+      const double arl = 4.0 * o.health.drift_false_alarm_time / kDt;
+      double hp = 0.0;  // smallest h' (step 1e-4) whose run length reaches arl
+      while ((std::exp(2 * k * hp) - 2 * k * hp - 1) / (2 * k * k) < arl) hp += 1e-4;
+      const double h = hp - 1.166, clip = std::sqrt(-2.0 * std::log(o.alpha));
+      EXPECT_GE(first_drift, static_cast<int>(std::floor(h / (clip - k))));
       EXPECT_LT(first_drift, 149);
     } else {
       EXPECT_EQ(first_drift, -1);

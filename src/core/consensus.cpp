@@ -264,8 +264,8 @@ RobustEstimate ConsensusEstimator::one_sensor(int i, SensorMask candidates,
     if (n_ > 1) {
       // The others left out are still tested against this twist (and may
       // come back).
-      health_.observe(solver_, sample, measurements_, out.estimate.twist, out.estimate.used,
-                      candidates, out.noise_flags);
+      health_.observe(solver_, sample, measurements_, out.estimate.used, candidates,
+                      out.noise_flags);
     }
     test_sensors(out.estimate.twist, out.tests);
     return out;
@@ -376,8 +376,7 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
     }
     fallback_.good(out.estimate.twist, out.estimate.covariance, sample.t);
     prior_.trust(out.estimate.twist, out.estimate.covariance, sample.t);
-    health_.observe(solver_, sample, measurements_, out.estimate.twist, best->mask, candidates,
-                    out.noise_flags);
+    health_.observe(solver_, sample, measurements_, best->mask, candidates, out.noise_flags);
     test_sensors(out.estimate.twist, out.tests);
     return out;
   }

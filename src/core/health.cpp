@@ -1,5 +1,6 @@
 #include "moa/core/health.hpp"
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 
@@ -15,14 +16,10 @@ OptionCheck HealthOptions::validate() const {
       .at_least("frozen_long_run", frozen_long_run, frozen_run)
       .at_least("zero_run", zero_run, 1)
       .non_negative("zero_speed", zero_speed)
-      .positive("drift_tau", drift_tau)
       .non_negative("drift_min_speed", drift_min_speed)
-      .non_negative("drift_min_time", drift_min_time)
-      .non_negative("drift_release", drift_release)
-      .at_least_field("drift_suspect", drift_suspect, "drift_release", drift_release)
-      .at_least_field("drift_exclude", drift_exclude, "drift_suspect", drift_suspect)
-      .positive("drift_step_tau", drift_step_tau)
-      .non_negative("drift_step", drift_step)
+      .positive("drift_shift", drift_shift)
+      .positive("drift_false_alarm_time", drift_false_alarm_time)
+      .positive("drift_release_time", drift_release_time)
       .non_negative("probation", probation);
   return c.result();
 }
@@ -30,26 +27,32 @@ OptionCheck HealthOptions::validate() const {
 HealthMonitor::HealthMonitor(int sensors, HealthOptions options, real alpha)
     : options_(options),
       residual_gate_(static_cast<real>(chi2_quantile(1.0 - alpha, 2))),
+      clip_(std::sqrt(residual_gate_)),
       n_(sensors) {}
 
+void HealthMonitor::set_threshold(real dt) {
+  // Siegmund: ARL0 = (exp(2 k h') - 2 k h' - 1) / (2 k^2), h' = h + 1.166,
+  // increasing in h': solved by bisection for ARL0 = 4 T / dt.
+  const real k = options_.drift_shift;
+  const real arl = 4.0 * options_.drift_false_alarm_time / dt;
+  const auto run_length = [k](real hp) {
+    return (std::exp(2.0 * k * hp) - 2.0 * k * hp - 1.0) / (2.0 * k * k);
+  };
+  real lo = 0.0, hi = 1.0;
+  while (run_length(hi) < arl && hi < 1e6) hi *= 2.0;
+  for (int it = 0; it < 100; ++it) {
+    const real mid = 0.5 * (lo + hi);
+    (run_length(mid) < arl ? lo : hi) = mid;
+  }
+  h_ = std::max<real>(hi - 1.166, 0.0);
+}
+
 real HealthMonitor::drift(const SensorState& s) const {
-  if (s.weight <= 0.0 || s.time < options_.drift_min_time) return 0.0;
-  return std::max(std::abs(s.sum_par), std::abs(s.sum_perp)) / s.weight;
+  return *std::max_element(s.g.begin(), s.g.end());
 }
 
-real HealthMonitor::step(const SensorState& s) const {
-  if (s.step_weight <= 0.0 || s.time < options_.drift_step_tau) return 0.0;
-  return std::max(std::abs(s.step_par), std::abs(s.step_perp)) / s.step_weight;
-}
-
-real HealthMonitor::drift_scale(int i) const {
-  const SensorState& s = state_[static_cast<std::size_t>(i)];
-  return s.weight > 0.0 ? s.sum_par / s.weight : 0.0;
-}
-
-real HealthMonitor::drift_yaw(int i) const {
-  const SensorState& s = state_[static_cast<std::size_t>(i)];
-  return s.weight > 0.0 ? s.sum_perp / s.weight : 0.0;
+real HealthMonitor::drift_statistic(int i) const {
+  return drift(state_[static_cast<std::size_t>(i)]);
 }
 
 SensorMask HealthMonitor::screen(const SubsetSolver& solver, const ArraySample& sample,
@@ -60,15 +63,16 @@ SensorMask HealthMonitor::screen(const SubsetSolver& solver, const ArraySample& 
   const Vec3 x = predicted.vector();
   // One bad sensor biases the leave-one-out twists the others are judged
   // against, so their drift statistics rise with its own (by about 1/(N-1)
-  // of it): only the largest of them may be newly excluded as drift.
-  real largest_drift = 0.0, largest_step = 0.0;
+  // of it): only the largest of them may be newly excluded as drift, and
+  // the others then restart.
+  real largest_drift = 0.0;
   for (int i = 0; i < n_; ++i) {
-    if (contains(candidates, i)) {
-      const SensorState& s = state_[static_cast<std::size_t>(i)];
+    const SensorState& s = state_[static_cast<std::size_t>(i)];
+    if (contains(candidates, i) && s.health != Health::kExcluded) {
       largest_drift = std::max(largest_drift, drift(s));
-      largest_step = std::max(largest_step, step(s));
     }
   }
+  int newly_drifting = -1;
   // Zero is a fault of one sensor among others that move: when every
   // candidate reads zero together the array either stands still or lost the
   // floor as a whole, which is the consensus's common-mode test to judge
@@ -105,23 +109,31 @@ SensorMask HealthMonitor::screen(const SubsetSolver& solver, const ArraySample& 
     const real speed = p.norm();
     if (!all_zero) s.zeros = c.isZero() && speed >= options_.zero_speed ? s.zeros + 1 : 0;
     if (!contains(candidates, i)) continue;  // lifted: nothing to judge
-    const real d = drift(s), f = step(s);
+    const real d = drift(s);
+    const bool drifting = s.health == Health::kExcluded && s.reason == Exclusion::kDrift;
+    // Excluded as drift: out until the release test (observe()) clears it.
+    const bool released = drifting && s.time >= options_.drift_release_time &&
+                          s.weight > 0.0 &&
+                          (s.mean / s.weight).cwiseAbs().maxCoeff() < 0.5 * options_.drift_shift;
     Exclusion bad = Exclusion::kNone;
     if (frozen) {
       bad = Exclusion::kFrozen;
     } else if (s.zeros >= options_.zero_run) {
       bad = Exclusion::kZero;
-    } else if ((d > options_.drift_exclude && d >= largest_drift) ||
-               (f > options_.drift_step && f >= largest_step)) {
+    } else if ((drifting && !released) ||
+               (h_ > 0.0 && d > h_ && d >= largest_drift && newly_drifting < 0)) {
       bad = Exclusion::kDrift;
+      if (!drifting) newly_drifting = i;
     }
-    if (bad == Exclusion::kFrozen || bad == Exclusion::kZero) {
-      // The residuals fed before the test fired were the fault's, not a
-      // drift's: the windows start again when the sensor comes back.
-      s.sum_par = s.sum_perp = s.weight = s.time = 0.0;
-      s.step_par = s.step_perp = s.step_weight = 0.0;
+    if (bad != Exclusion::kNone && !(drifting && bad == Exclusion::kDrift)) {
+      // Newly excluded: the statistics restart (for a frozen or zero sensor
+      // they were the fault's), and the release test begins.
+      s.g.fill(0.0);
+      s.mean.setZero();
+      s.weight = s.time = 0.0;
     }
-    const bool half = s.repeats >= 1 || s.zeros >= 1 || d > options_.drift_suspect;
+    if (released) s.g.fill(0.0);
+    const bool half = s.repeats >= 1 || s.zeros >= 1 || (h_ > 0.0 && d > 0.5 * h_);
     switch (s.health) {
       case Health::kTrusted:
       case Health::kSuspect:
@@ -133,9 +145,7 @@ SensorMask HealthMonitor::screen(const SubsetSolver& solver, const ArraySample& 
         }
         break;
       case Health::kExcluded:
-        if (bad == Exclusion::kNone &&
-            (s.reason != Exclusion::kDrift ||
-             (d < options_.drift_release && f < options_.drift_release))) {
+        if (bad == Exclusion::kNone) {
           s.health = Health::kProbation;
           s.since = sample.t;
         } else if (bad != Exclusion::kNone) {
@@ -156,48 +166,65 @@ SensorMask HealthMonitor::screen(const SubsetSolver& solver, const ArraySample& 
       excluded[k] = s.health == Health::kExcluded ? s.reason : Exclusion::kProbation;
     }
   }
+  if (newly_drifting >= 0) {
+    for (int i = 0; i < n_; ++i) {
+      if (i != newly_drifting) state_[static_cast<std::size_t>(i)].g.fill(0.0);
+    }
+  }
   return allowed;
 }
 
 void HealthMonitor::observe(const SubsetSolver& solver, const ArraySample& sample,
-                            const PointMeasurements& m, const Twist2& x, SensorMask used,
+                            const PointMeasurements& m, SensorMask used,
                             SensorMask candidates,
                             const std::array<std::uint8_t, kMaxSensors>& noise_flags) {
-  if (!options_.enabled) return;
-  const real a = std::min(1.0, sample.dt / options_.drift_tau);       // window weight of this epoch
-  const real b = std::min(1.0, sample.dt / options_.drift_step_tau);  // the short window's
+  if (!options_.enabled || !(sample.dt > 0.0)) return;
+  if (h_ == 0.0) set_threshold(static_cast<real>(sample.dt));
+  const real k = options_.drift_shift;
+  const real a = std::min<real>(1.0, sample.dt / options_.drift_release_time);
   for (int i = 0; i < n_; ++i) {
-    const auto k = static_cast<std::size_t>(i);
-    if (!contains(candidates, i) || noise_flags[k] != 0) continue;
+    const auto u = static_cast<std::size_t>(i);
+    // Near its rating a sensor is tested with the noise model's wider
+    // covariance (in S), as the consistency test does. Over the rating
+    // itself it fails by losing counts at random (gross errors, not a
+    // shift: the consistency test's), and a reading the sensor flags itself
+    // (low SQUAL, overflow) the noise model already all but ignores: this
+    // test watches the readings a sensor vouches for.
+    constexpr std::uint8_t kNotFed = kNoiseOverRating | kNoiseLowSqual | kNoiseOverflow;
+    if (!contains(candidates, i) || (noise_flags[u] & kNotFed)) continue;
+    SensorState& s = state_[u];
     // Out for another reason (frozen, zero): its residual says nothing of drift.
-    if (state_[k].health == Health::kExcluded && state_[k].reason != Exclusion::kDrift) continue;
-    // The twist of the others: leave-one-out when i was used and enough remain.
-    Vec3 xi = x.vector();
+    if (s.health == Health::kExcluded && s.reason != Exclusion::kDrift) continue;
+    // The twist of the others and its covariance: leave-one-out when i was
+    // used and enough remain, else the estimate's.
     const SensorMask others = used & ~(SensorMask{1} << i);
-    if (contains(used, i)) {
-      if (count_sensors(others) < 2) continue;
-      // The twist alone (no chi-square, no covariance): bit for bit fit()'s.
-      const auto twist = solver.twist(others, m);
-      if (!twist) continue;
-      xi = twist->vector();
+    const SensorMask from = contains(used, i) ? others : used;
+    if (count_sensors(from) < 2) continue;
+    const auto fit = solver.fit(from, m);
+    if (!fit) continue;
+    const Mat<2, 3>& j = solver.jacobian(i);
+    const Vec2 p = j * fit->twist.vector();
+    const real speed = p.norm();
+    if (!(speed >= options_.drift_min_speed) || speed == 0.0) continue;
+    const Mat2 cov = m.info[u].inverse() + j * fit->covariance * j.transpose();
+    const Vec2 e_par = p / speed, e_perp(-e_par.y(), e_par.x());
+    const Vec2 r = m.u[u] - p;
+    const real v_par = e_par.dot(cov * e_par), v_perp = e_perp.dot(cov * e_perp);
+    if (!(v_par > 0.0 && v_perp > 0.0)) continue;
+    const Vec2 z = Vec2(e_par.dot(r) / std::sqrt(v_par), e_perp.dot(r) / std::sqrt(v_perp))
+                       .cwiseMax(-clip_)
+                       .cwiseMin(clip_);
+    if (s.health == Health::kExcluded) {
+      // The release test: exponential means of z clipped to +-2k, the shift
+      // sought (beyond it a sample says "shifted" no louder, so the mean
+      // forgets a gross fault within about drift_release_time ln 4).
+      s.mean = (1.0 - a) * s.mean + a * z.cwiseMax(-2.0 * k).cwiseMin(2.0 * k);
+      s.weight = (1.0 - a) * s.weight + a;
+      s.time += static_cast<real>(sample.dt);
+      continue;
     }
-    const Vec2 p = solver.jacobian(i) * xi;
-    const real p2 = p.squaredNorm();
-    if (p2 < options_.drift_min_speed * options_.drift_min_speed) continue;
-    const Vec2 r = m.u[k] - p;
-    // A gross error (a spike, a lost frame) is not drift: left out when it is
-    // both beyond the epoch's chi-square gate and over a quarter of the point's
-    // displacement. A step of the scale (a change of floor, 10 %) is beyond
-    // the gate at speed yet is what this test is for: it stays in.
-    if (r.dot(m.info[k] * r) > residual_gate_ && r.squaredNorm() > 0.0625 * p2) continue;
-    SensorState& s = state_[k];
-    s.sum_par = (1.0 - a) * s.sum_par + a * p.dot(r) / p2;
-    s.sum_perp = (1.0 - a) * s.sum_perp + a * (p.x() * r.y() - p.y() * r.x()) / p2;
-    s.weight = (1.0 - a) * s.weight + a;
-    s.step_par = (1.0 - b) * s.step_par + b * p.dot(r) / p2;
-    s.step_perp = (1.0 - b) * s.step_perp + b * (p.x() * r.y() - p.y() * r.x()) / p2;
-    s.step_weight = (1.0 - b) * s.step_weight + b;
-    s.time += sample.dt;
+    const std::array<real, 4> zs{z.x(), -z.x(), z.y(), -z.y()};
+    for (std::size_t c = 0; c < 4; ++c) s.g[c] = std::max<real>(0.0, s.g[c] + zs[c] - k);
   }
 }
 

@@ -60,6 +60,7 @@ void NoiseModel::measure(const ArraySample& sample, const Twist2& predicted, Poi
     if (max_speed_[s] > 0.0) {
       factor *= options_.speed_factor(predicted_speed, max_speed_[s]);
       if (predicted_speed >= options_.speed_onset * max_speed_[s]) f |= kNoiseOverSpeed;
+      if (predicted_speed >= max_speed_[s]) f |= kNoiseOverRating;
     }
     if (sample.squal[s] < options_.min_squal) {
       factor *= options_.low_squal_factor;

@@ -173,10 +173,28 @@ class RobustFaults(unittest.TestCase):
             not_worse(self, consensus, row(result, fault=fault, method="voting (Sekimori)"),
                       f"{fault}: consensus vs voting")
             # Known limits (docs/experiments.md): a frozen register in a steady cruise is
-            # consistent until the motion changes; a drifting sensor pulls until excluded at 3 %.
-            if fault not in ("stuck", "drift", "drift, step", "common-mode dropout"):
+            # consistent until the motion changes; the dropouts are bridged (its own test).
+            if fault not in ("stuck", "common-mode dropout"):
                 not_worse(self, consensus, row(result, fault=fault, method="oracle selection"),
                           f"{fault}: consensus vs oracle")
+
+    def test_every_fault_within_twice_the_oracle(self):
+        # Issue #27's bound for every case, per seed: the selection that
+        # knows the faults at most halves the error of the consensus; for the
+        # register frozen while another sensor drifts, of the consensus with
+        # self-calibration, the issue's check (alone it is 1.5-3 times: the
+        # drift pulls until the test alarms, docs/experiments.md).
+        result = experiment("robust-faults")
+        for fault in ("tracking loss", "liftoff, no flag", "dirty floor", "spikes", "stuck",
+                      "zero reading", "drift", "drift, step", "frozen, other drifts",
+                      "common-mode dropout"):
+            method = ("consensus + self-calibration" if fault == "frozen, other drifts" else
+                      "consensus")
+            consensus = per_seed(row(result, fault=fault, method=method), "max_translation_m")
+            oracle = per_seed(row(result, fault=fault, method="oracle selection"),
+                              "max_translation_m")
+            for seed, error in consensus.items():
+                self.assertLessEqual(error, 2 * oracle[seed] + FLOOR_M, f"{fault}: seed {seed}")
 
     def test_common_mode_dropout_is_bridged(self):
         # Issue #27's bound: every case within twice the selection that knows

@@ -22,26 +22,47 @@
 //    of its counts in the neighbouring epoch.
 //  - zero: c_i = 0 while the predicted point speed |A_i x| is at least
 //    zero_speed, for zero_run epochs in a row (the others move).
-//  - drift: the relative residual against the twist x_(i) of the other
-//    sensors used (leave-one-out; the estimate itself when i was not used),
-//      rho_par  = p^T (u_i - p) / |p|^2      (scale error along the motion)
-//      rho_perp = p x (u_i - p) / |p|^2      (yaw offset, rad)
-//    with p = A_i x_(i), averaged by an exponential window of drift_tau
-//    seconds (weights normalised, so the mean is unbiased from the start),
-//    and by a short one of drift_step_tau seconds that sees a step of the
-//    scale (a change of floor) before the long mean reaches drift_exclude.
-//    Fed only on epochs where |p| >= drift_min_speed, the sensor's noise was
-//    not inflated (over speed, low SQUAL, overflow) and its whitened
-//    residual passes q(1 - alpha, 2): gross errors are the consistency
-//    test's, drift is the slow part.
-// States: trusted -> suspect (a test half-way: a repeat, a zero, the drift
-// mean over drift_suspect) -> excluded (a test fires; the reason is kept)
+//  - drift: a sequential test (Page's CUSUM) of the residual against the
+//    twist x_(i) of the other sensors used (leave-one-out, with its
+//    covariance; the estimate itself when i was not used), r = u_i - p,
+//    p = A_i x_(i), whitened along and across the motion:
+//      z_par  = e_par^T r / sqrt(e_par^T S e_par)   (scale error)
+//      z_perp = e_perp^T r / sqrt(e_perp^T S e_perp) (yaw offset)
+//    e_par = p / |p|, e_perp its normal, S = S_i + A_i C_(i) A_i^T the
+//    noise model's covariance of the residual. Under the noise model each z
+//    is N(0, 1) epoch after epoch; a fault shifts its mean. Four one-sided
+//    statistics per sensor, g <- max(0, g + z - k) for z = +-z_par,
+//    +-z_perp, each z clipped to +-sqrt(q(1 - alpha, 2)) (one gross error,
+//    the consistency test's, moves g by a bounded step); an alarm when a g
+//    exceeds h. k = drift_shift (in sd: half the smallest persistent shift
+//    worth an exclusion, one sd); h from the mean time between false alarms
+//    under the noise model, drift_false_alarm_time, by Siegmund's
+//    approximation of the in-control run length of each statistic,
+//      ARL0 = (exp(2 k h') - 2 k h' - 1) / (2 k^2),  h' = h + 1.166,
+//    with ARL0 = 4 drift_false_alarm_time / dt (four statistics): at
+//    100 Hz, one hour and k = 0.5, h = 12.3. A shift of mu sd is found
+//    after about h / (mu - k) epochs (docs/math.md). Fed only on epochs where
+//    |p| >= drift_min_speed, the sensor is not over its rating (there it
+//    loses counts at random: gross errors, the consistency test's) and does
+//    not flag its reading (low SQUAL, overflow: the noise model all but
+//    ignores it); near the rating the noise model's wider covariance is in
+//    S. Only the sensor with the largest
+//    statistic may be newly excluded in an epoch (a bad sensor biases the
+//    others' leave-one-out predictions too), and an exclusion restarts the
+//    others' statistics, fed by that biased prediction.
+//    An excluded sensor is still tested: the exponential means of its z_par
+//    and z_perp, each clipped to +-2 k, over drift_release_time release it
+//    once both are within k / 2 (1.6 sd of such a mean at 100 Hz and 0.2 s
+//    under the noise model; a shift of 2 k keeps it out), after
+//    drift_release_time of samples; its statistics then restart.
+// States: trusted -> suspect (a test half-way: a repeat, a zero, a
+// statistic over h / 2) -> excluded (a test fires; the reason is kept)
 // -> probation (the test no longer fires; the sensor stays out for
 // probation seconds) -> trusted. Suspect sensors are used; excluded and
-// probation ones are not. A drift exclusion is released when the mean falls
-// under drift_release.
-// Thresholds tuned on simulator seeds 1-100 (tests use 101+, docs 201+).
-// Fixed-size state, no allocation.
+// probation ones are not.
+// The frozen and zero thresholds were tuned on simulator seeds 1-100 (tests
+// use 101+, docs 201+); the drift test's follow from k, the false-alarm time
+// and the noise model. Fixed-size state, no allocation.
 #pragma once
 
 #include <Eigen/Core>
@@ -64,17 +85,11 @@ struct HealthOptions {
   int frozen_long_run = 40;      ///< epochs of identical counts, whatever the motion
   int zero_run = 5;              ///< epochs of zero counts while moving
   real zero_speed = 0.02;        ///< m/s, predicted point speed
-  real drift_tau = 2.0;          ///< s, averaging window of the residual
   real drift_min_speed = 0.05;   ///< m/s, predicted point speed for a drift sample
-  real drift_min_time = 0.5;     ///< s of drift samples before the test acts
-  real drift_suspect = 0.015;    ///< relative scale or yaw (rad)
-  real drift_exclude = 0.03;
-  real drift_release = 0.01;
-  /// A step (a change of floor) is seen sooner by a short window: its mean
-  /// over drift_step_tau (s) beyond drift_step excludes too, once the
-  /// window has drift_step_tau of samples.
-  real drift_step_tau = 0.2;
-  real drift_step = 0.06;
+  real drift_shift = 0.5;        ///< k, sd: the CUSUM's reference (half the shift sought)
+  /// s, mean time between false alarms of one sensor under the noise model
+  real drift_false_alarm_time = 3600.0;
+  real drift_release_time = 0.2;  ///< s, the release test's window
   real probation = 0.1;  ///< s an excluded sensor must behave before it is used again
   /// nullopt when usable, else the first field out of its bounds, its path
   /// relative to this struct (options_check.hpp).
@@ -101,15 +116,15 @@ class HealthMonitor {
   /// among `candidates` (kFrozen, kZero, kDrift or kProbation).
   SensorMask screen(const SubsetSolver& solver, const ArraySample& sample, const Twist2& predicted,
                     SensorMask candidates, std::array<Exclusion, kMaxSensors>& excluded);
-  /// The drift test's update after an estimate x from the sensors `used`.
+  /// The drift test's update after an estimate from the sensors `used`.
   void observe(const SubsetSolver& solver, const ArraySample& sample, const PointMeasurements& m,
-               const Twist2& x, SensorMask used, SensorMask candidates,
+               SensorMask used, SensorMask candidates,
                const std::array<std::uint8_t, kMaxSensors>& noise_flags);
 
   Health health(int i) const { return state_[static_cast<std::size_t>(i)].health; }
-  /// Window means of the relative residual (scale, yaw); 0 before any sample.
-  real drift_scale(int i) const;
-  real drift_yaw(int i) const;
+  /// The largest of sensor i's four drift statistics (sd), and its alarm level h.
+  real drift_statistic(int i) const;
+  real drift_threshold() const { return h_; }
 
  private:
   struct SensorState {
@@ -119,14 +134,18 @@ class HealthMonitor {
     Vec2 last_counts{0.0, 0.0};
     Vec2 run_start{0.0, 0.0};  ///< m/s, predicted point velocity when the run began
     int repeats = 0, zeros = 0;
-    real sum_par = 0.0, sum_perp = 0.0, weight = 0.0, time = 0.0;
-    real step_par = 0.0, step_perp = 0.0, step_weight = 0.0;  ///< the short window's
+    std::array<real, 4> g{};           ///< CUSUMs of +z_par, -z_par, +z_perp, -z_perp
+    Vec2 mean{0.0, 0.0};               ///< release test: means of (z_par, z_perp)
+    real weight = 0.0, time = 0.0;     ///< of the means; s of samples since excluded
   };
   real drift(const SensorState& s) const;
-  real step(const SensorState& s) const;
+  /// h for epochs of dt s (computed once, on the first sample).
+  void set_threshold(real dt);
 
   HealthOptions options_;
   real residual_gate_;
+  real clip_;            ///< sqrt(q(1 - alpha, 2)), sd
+  real h_ = 0.0;         ///< CUSUM alarm level, sd; 0 until the first sample
   int n_;
   std::array<SensorState, kMaxSensors> state_{};
 };

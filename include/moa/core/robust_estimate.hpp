@@ -70,6 +70,10 @@ enum NoiseFlag : std::uint8_t {
   kNoiseOverSpeed = 1u << 0,  ///< predicted speed near or over the rated max_speed
   kNoiseLowSqual = 1u << 1,   ///< SQUAL below the threshold
   kNoiseOverflow = 1u << 2,   ///< counter overflow reported
+  /// predicted speed over the rated max_speed itself (with kNoiseOverSpeed):
+  /// where a sensor fails by losing counts, not by a wider Gaussian. Not
+  /// written to odometry.csv (over-speed says it).
+  kNoiseOverRating = 1u << 3,
 };
 /// An epoch's test ratios, in the manner of PX4 EKF2's aid-source status:
 /// each source's test statistic divided by its gate, so 1 is the gate and a
