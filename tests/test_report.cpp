@@ -348,11 +348,12 @@ TEST(Report, TimelineShowsTheFaultySensorExcludedWithItsReason) {
       if (state_of(row, "b") != "used") ++fault_excluded;
     }
   }
-  // The doubled counts of b contradict the rigid motion the other three agree on.
+  // The doubled counts of b contradict the rigid motion the other three
+  // agree on: each epoch's test rejects them (`inconsistent`); where b is
+  // under its rating the drift test's statistic alarms within a few epochs
+  // too (`drift`, the named outcome of a persistent shift).
   EXPECT_GT(fault_excluded, 9 * fault_epochs / 10);
-  const int inconsistent = static_cast<int>(
-      std::find(m.states.begin(), m.states.end(), "inconsistent") - m.states.begin());
-  ASSERT_LT(inconsistent, static_cast<int>(m.states.size()));
+  EXPECT_GT(excluded_b["drift"] + excluded_b["drift/over-speed"], 0u);
   const auto mids = segments_at(1, 0.5 * (kFaultStart + kFaultEnd) + 1e-3);
   ASSERT_EQ(mids.size(), 1u);
   const io::TimelineSegment* mid = mids.front();
