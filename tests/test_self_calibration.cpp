@@ -168,8 +168,8 @@ TEST(SelfCalibration, DoesNoHarmOnACleanLog) {
 // counts from 71 s to 74 s in a cruise, wheel slip random 0.05): with
 // self-calibration the maximum error stays within 2 times that of the
 // oracle (least squares over the sensors the simulator says are sound) on
-// every seed (issue #27's bound for every fault case), m2's final scale is within 2 % of the simulated 0.9 on both
-// axes, and it beats the estimate without self-calibration, which uses m2
+// every seed (issue #27's bound for every fault case), m2's final scale is within 2 % of the
+// simulated 0.9 on both axes, and it beats the estimate without self-calibration, which uses m2
 // uncorrected until its drift is excluded.
 TEST(SelfCalibration, DriftAndAFrozenRegisterInACruise) {
   std::vector<double> plain, calibrated;

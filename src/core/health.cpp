@@ -112,8 +112,7 @@ SensorMask HealthMonitor::screen(const SubsetSolver& solver, const ArraySample& 
     const real d = drift(s);
     const bool drifting = s.health == Health::kExcluded && s.reason == Exclusion::kDrift;
     // Excluded as drift: out until the release test (observe()) clears it.
-    const bool released = drifting && s.time >= options_.drift_release_time &&
-                          s.weight > 0.0 &&
+    const bool released = drifting && s.time >= options_.drift_release_time && s.weight > 0.0 &&
                           (s.mean / s.weight).cwiseAbs().maxCoeff() < 0.5 * options_.drift_shift;
     Exclusion bad = Exclusion::kNone;
     if (frozen) {
@@ -175,8 +174,7 @@ SensorMask HealthMonitor::screen(const SubsetSolver& solver, const ArraySample& 
 }
 
 void HealthMonitor::observe(const SubsetSolver& solver, const ArraySample& sample,
-                            const PointMeasurements& m, SensorMask used,
-                            SensorMask candidates,
+                            const PointMeasurements& m, SensorMask used, SensorMask candidates,
                             const std::array<std::uint8_t, kMaxSensors>& noise_flags) {
   if (!options_.enabled || !(sample.dt > 0.0)) return;
   if (h_ == 0.0) set_threshold(static_cast<real>(sample.dt));

@@ -113,10 +113,10 @@ void SelfCalibration::renew(int i) {
   const bool dimmed = std::abs(g - 1.0) > options_.isotropic_deadband;
   s.corrected = off || dimmed || std::abs(rel.yaw_offset) > options_.deadband;
   const SelfCalibrationEstimate common = applied_gauge();
-  s.applied = {
-      common.scale_x * (off ? rel.scale_x : (dimmed ? g : 1.0)),
-      common.scale_y * (off ? rel.scale_y : (dimmed ? g : 1.0)),
-      common.yaw_offset + (off || std::abs(rel.yaw_offset) > options_.deadband ? rel.yaw_offset : 0.0)};
+  s.applied = {common.scale_x * (off ? rel.scale_x : (dimmed ? g : 1.0)),
+               common.scale_y * (off ? rel.scale_y : (dimmed ? g : 1.0)),
+               common.yaw_offset +
+                   (off || std::abs(rel.yaw_offset) > options_.deadband ? rel.yaw_offset : 0.0)};
   const SelfCalibrationEstimate& used = s.applied;
   // counts -> robot velocity (configured), into the configured sensor frame,
   // C^-1 = R(delta) diag(1/s), back to the robot frame and to counts.
@@ -243,7 +243,8 @@ void SelfCalibration::observe_wheels(const ArraySample& raw, SensorMask used,
     const auto u = static_cast<std::size_t>(k);
     const SensorState& s = state_[u];
     const Vec2 u_raw = velocity_from_counts_[u] * raw.counts[u] / dt;
-    w.factor = std::max(w.factor, noise_.speed_factor(u_raw.norm(), array_[k].max_speed.value_or(0.0)));
+    w.factor =
+        std::max(w.factor, noise_.speed_factor(u_raw.norm(), array_[k].max_speed.value_or(0.0)));
     const Mat2 r = rotation(array_[k].yaw);
     const Mat2 c_inv =
         rotation(s.theta.yaw_offset - common.yaw_offset) *

@@ -90,7 +90,7 @@ struct HealthOptions {
   /// s, mean time between false alarms of one sensor under the noise model
   real drift_false_alarm_time = 3600.0;
   real drift_release_time = 0.2;  ///< s, the release test's window
-  real probation = 0.1;  ///< s an excluded sensor must behave before it is used again
+  real probation = 0.1;           ///< s an excluded sensor must behave before it is used again
   /// nullopt when usable, else the first field out of its bounds, its path
   /// relative to this struct (options_check.hpp).
   OptionCheck validate() const;
@@ -134,9 +134,9 @@ class HealthMonitor {
     Vec2 last_counts{0.0, 0.0};
     Vec2 run_start{0.0, 0.0};  ///< m/s, predicted point velocity when the run began
     int repeats = 0, zeros = 0;
-    std::array<real, 4> g{};           ///< CUSUMs of +z_par, -z_par, +z_perp, -z_perp
-    Vec2 mean{0.0, 0.0};               ///< release test: means of (z_par, z_perp)
-    real weight = 0.0, time = 0.0;     ///< of the means; s of samples since excluded
+    std::array<real, 4> g{};        ///< CUSUMs of +z_par, -z_par, +z_perp, -z_perp
+    Vec2 mean{0.0, 0.0};            ///< release test: means of (z_par, z_perp)
+    real weight = 0.0, time = 0.0;  ///< of the means; s of samples since excluded
   };
   real drift(const SensorState& s) const;
   /// h for epochs of dt s (computed once, on the first sample).
@@ -144,8 +144,8 @@ class HealthMonitor {
 
   HealthOptions options_;
   real residual_gate_;
-  real clip_;            ///< sqrt(q(1 - alpha, 2)), sd
-  real h_ = 0.0;         ///< CUSUM alarm level, sd; 0 until the first sample
+  real clip_;     ///< sqrt(q(1 - alpha, 2)), sd
+  real h_ = 0.0;  ///< CUSUM alarm level, sd; 0 until the first sample
   int n_;
   std::array<SensorState, kMaxSensors> state_{};
 };

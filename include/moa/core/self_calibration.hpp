@@ -115,8 +115,8 @@
 #include <string_view>
 
 #include "moa/core/array.hpp"
-#include "moa/core/names.hpp"
 #include "moa/core/health.hpp"
+#include "moa/core/names.hpp"
 #include "moa/core/noise_model.hpp"
 #include "moa/core/options_check.hpp"
 #include "moa/core/robust_estimate.hpp"
@@ -199,8 +199,7 @@ class SelfCalibration {
   /// `frozen_run`: the health monitor's (a block with such a run of repeated
   /// counts is dropped).
   SelfCalibration(const SensorArray& array, SelfCalibrationOptions options,
-                  const NoiseModelOptions& noise = {},
-                  int frozen_run = HealthOptions{}.frozen_run);
+                  const NoiseModelOptions& noise = {}, int frozen_run = HealthOptions{}.frozen_run);
 
   /// Applies each sensor's correction to the counts of `sample` (in place).
   /// The applied correction changes only when an estimate moved by
