@@ -51,10 +51,6 @@ real HealthMonitor::drift(const SensorState& s) const {
   return *std::max_element(s.g.begin(), s.g.end());
 }
 
-real HealthMonitor::drift_statistic(int i) const {
-  return drift(state_[static_cast<std::size_t>(i)]);
-}
-
 SensorMask HealthMonitor::screen(const SubsetSolver& solver, const ArraySample& sample,
                                  const Twist2& predicted, SensorMask candidates,
                                  std::array<Exclusion, kMaxSensors>& excluded) {

@@ -122,9 +122,6 @@ class HealthMonitor {
                const std::array<std::uint8_t, kMaxSensors>& noise_flags);
 
   Health health(int i) const { return state_[static_cast<std::size_t>(i)].health; }
-  /// The largest of sensor i's four drift statistics (sd), and its alarm level h.
-  real drift_statistic(int i) const;
-  real drift_threshold() const { return h_; }
 
  private:
   struct SensorState {
