@@ -87,8 +87,7 @@ SensorMask HealthMonitor::screen(const SubsetSolver& solver, const ArraySample& 
     // Frozen: exact repeats (to 1e-6 counts: the synchroniser's rounding)
     // of a count large enough to carry noise.
     const real big = c.cwiseAbs().maxCoeff();
-    if ((c - s.last_counts).cwiseAbs().maxCoeff() <= 1e-6 * std::max<real>(1.0, big) &&
-        big >= options_.frozen_min_counts) {
+    if (same_counts(c, s.last_counts) && big >= options_.frozen_min_counts) {
       ++s.repeats;
     } else {
       s.repeats = 0;

@@ -155,10 +155,7 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
   for (int i = 0; i < n_; ++i) {
     const auto u = static_cast<std::size_t>(i);
     SensorState& d = state_[u];
-    // To the synchroniser's rounding, as health.cpp's frozen test.
-    const real big = std::max<real>(1.0, raw.counts[u].cwiseAbs().maxCoeff());
-    const bool repeated = (raw.counts[u] - d.last_raw).cwiseAbs().maxCoeff() <= 1e-6 * big;
-    d.repeats = repeated ? d.repeats + 1 : 0;
+    d.repeats = same_counts(raw.counts[u], d.last_raw) ? d.repeats + 1 : 0;
     d.last_raw = raw.counts[u];
     if (estimate.excluded[u] == Exclusion::kDrift) {
       d.drifted = true;
@@ -188,12 +185,7 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
     // frozen_run is dropped; shorter runs are chance and kept (leaving out
     // epochs by their counts would break the block's telescoping sum).
     if (d.repeats + 1 >= frozen_run_) {
-      SensorState& s = state_[u];
-      s.sum_pred.setZero();
-      s.sum_meas.setZero();
-      s.sum_var = 0.0;
-      s.factor = 1.0;
-      s.time = 0.0;
+      d.clear_block();
       continue;
     }
     const SensorMask others = used & ~(SensorMask{1} << i);
@@ -218,11 +210,7 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
     s.time += dt;
     if (s.time >= options_.block - 1e-9 && d.repeats == 0) {
       update(i, raw.t);
-      s.sum_pred.setZero();
-      s.sum_meas.setZero();
-      s.sum_var = 0.0;
-      s.factor = 1.0;
-      s.time = 0.0;
+      s.clear_block();
     }
   }
   if (options_.gauge == SelfCalibrationGauge::kWheels && wheels) observe_wheels(raw, used, *wheels);

@@ -66,6 +66,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <cstdint>
 
@@ -95,6 +96,13 @@ struct HealthOptions {
   /// relative to this struct (options_check.hpp).
   OptionCheck validate() const;
 };
+
+/// Counts equal to the synchroniser's rounding (1e-6 counts: a row off the
+/// epoch grid by a rounding error leaves 1e-12 of its counts in the next
+/// epoch): the repeat a frozen register makes.
+inline bool same_counts(const Vec2& a, const Vec2& b) {
+  return (a - b).cwiseAbs().maxCoeff() <= 1e-6 * std::max<real>(1.0, a.cwiseAbs().maxCoeff());
+}
 
 enum class Health : std::uint8_t { kTrusted, kSuspect, kExcluded, kProbation };
 template <>

@@ -264,8 +264,15 @@ class SelfCalibration {
     real factor = 1.0;                            ///< the block's largest speed factor
     Vec2 last_raw{0.0, 0.0};                      ///< counts of the last epoch observed
     int repeats = 0;                              ///< epochs last_raw has repeated
-    real time = 0.0;                              ///< s in the block
-    double last_update = -1.0;                    ///< s; < 0: never
+    void clear_block() {
+      sum_pred.setZero();
+      sum_meas.setZero();
+      sum_var = 0.0;
+      factor = 1.0;
+      time = 0.0;
+    }
+    real time = 0.0;            ///< s in the block
+    double last_update = -1.0;  ///< s; < 0: never
     long updates = 0;
     bool runaway = false;
     long reacquired = 0;                 ///< restarts by reacquire()
