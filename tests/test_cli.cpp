@@ -211,7 +211,8 @@ TEST(Cli, BenchJsonHasTheContractKeys) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   for (const char* key : {"\"ls_ns_per_update\"", "\"naive_ls_ns_per_update\"",
                           "\"sekimori_ns_per_update\"", "\"naive_sekimori_ns_per_update\"",
-                          "\"consensus_ns_per_update\"", "\"machine\"", "\"compiler\""}) {
+                          "\"consensus_ns_per_update\"", "\"consensus_over_sekimori\"",
+                          "\"machine\"", "\"compiler\""}) {
     EXPECT_THAT(r.out, HasSubstr(key));
   }
   EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1);

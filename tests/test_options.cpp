@@ -146,18 +146,6 @@ TEST(OdometryOptions, EveryFieldIsCheckedNamingPathBoundAndValue) {
        "must be > 0, is 0"},
       {"consensus.limits.angular_accel", [&](auto& o) { o.consensus.limits.angular_accel = nan; },
        finite_nan},
-      {"consensus.health.frozen_run", [](auto& o) { o.consensus.health.frozen_run = 1; },
-       "must be >= 2, is 1"},
-      {"consensus.health.frozen_min_counts",
-       [](auto& o) { o.consensus.health.frozen_min_counts = -1; }, "must be >= 0, is -1"},
-      {"consensus.health.frozen_change", [&](auto& o) { o.consensus.health.frozen_change = nan; },
-       finite_nan},
-      {"consensus.health.frozen_long_run", [](auto& o) { o.consensus.health.frozen_long_run = 5; },
-       "must be >= 10, is 5"},
-      {"consensus.health.zero_run", [](auto& o) { o.consensus.health.zero_run = 0; },
-       "must be >= 1, is 0"},
-      {"consensus.health.zero_speed", [](auto& o) { o.consensus.health.zero_speed = -0.5; },
-       "must be >= 0, is -0.5"},
       {"consensus.health.drift_min_speed",
        [&](auto& o) { o.consensus.health.drift_min_speed = inf; }, finite_inf},
       {"consensus.health.drift_shift", [](auto& o) { o.consensus.health.drift_shift = 0; },
@@ -178,8 +166,7 @@ TEST(OdometryOptions, EveryFieldIsCheckedNamingPathBoundAndValue) {
        "must be >= 0, is -0.05"},
       {"ekf.max_consecutive_rejections", [](auto& o) { o.ekf.max_consecutive_rejections = 0; },
        "must be >= 1, is 0"},
-      {"ekf.gate_position", [](auto& o) { o.ekf.gate_position = 0; }, "must be > 0, is 0"},
-      {"ekf.gate_pose", [&](auto& o) { o.ekf.gate_pose = nan; }, finite_nan},
+      {"ekf.alpha", [](auto& o) { o.ekf.alpha = 0.6; }, "must be in [0, 0.5], is 0.6"},
       {"ekf.estimate_scale", [](auto& o) { o.ekf.estimate_scale = true; },
        "needs fuse_camera (the scales are estimated from camera fixes)"},
       {"self_calibration.gauge",
@@ -218,6 +205,8 @@ TEST(OdometryOptions, EveryFieldIsCheckedNamingPathBoundAndValue) {
        "must be > 0, is 0"},
       {"self_calibration.settle_threshold",
        [](auto& o) { o.self_calibration.settle_threshold = -1; }, "must be > 0, is -1"},
+      {"self_calibration.repeat_run", [](auto& o) { o.self_calibration.repeat_run = 1; },
+       "must be >= 2, is 1"},
       {"self_calibration.apply_step", [](auto& o) { o.self_calibration.apply_step = -1; },
        "must be >= 0, is -1"},
       {"self_calibration.gauge_walk", [](auto& o) { o.self_calibration.gauge_walk = -1; },
@@ -246,7 +235,6 @@ TEST(OdometryOptions, BoundsAreInclusiveWhereTheyAreStatedSo) {
             "");
   EXPECT_EQ(valid([](auto& o) { o.max_gap = std::numeric_limits<double>::infinity(); }), "");
   EXPECT_EQ(valid([](auto& o) { o.ekf.scale_random_walk.setZero(); }), "");
-  EXPECT_EQ(valid([](auto& o) { o.consensus.health.frozen_long_run = 10; }), "");
   EXPECT_EQ(valid([](auto& o) { o.sekimori.r_th = 16; }), "");
   EXPECT_EQ(valid([](auto& o) { o.consensus.noise.speed_cap = 1; }), "");
   EXPECT_EQ(valid([](auto& o) {
@@ -258,8 +246,8 @@ TEST(OdometryOptions, BoundsAreInclusiveWhereTheyAreStatedSo) {
 
 TEST(OptionsCheck, ANestedStructNamesItsFieldsRelativeToItself) {
   HealthOptions h;
-  h.zero_run = 0;
-  EXPECT_EQ(message(h.validate()), "zero_run: must be >= 1, is 0");
+  h.drift_shift = 0;
+  EXPECT_EQ(message(h.validate()), "drift_shift: must be > 0, is 0");
   RobotLimits limits;
   limits.accel = -1;
   EXPECT_EQ(message(limits.validate()), "accel: must be > 0, is -1");

@@ -435,13 +435,32 @@ ArraySample varying_sample(const SensorArray& a, int k, double amplitude = 0.05)
   return s;
 }
 
-TEST(Health, FrozenSensorIsExcludedAndReturnsThroughProbation) {
-  // The twist varies by +-20 %: over the first frozen_run epochs of the
-  // freeze sensor 1's point velocity changes by about 0.08 m/s, beyond
-  // frozen_change.
+/// The drift test's alarm level h (sd), solved from Siegmund's in-control
+/// run length independently of the monitor, and the most one epoch moves a
+/// statistic, clip - k (z clipped to sqrt(q(1 - alpha, 2)) = sqrt(-2 ln alpha)).
+struct CusumBound {
+  double h = 0.0, step = 0.0;
+  /// No alarm before this many fed epochs.
+  int fewest() const { return static_cast<int>(std::floor(h / step)); }
+};
+CusumBound cusum_bound(const ConsensusOptions& o) {
+  const double k = o.health.drift_shift;
+  const double arl = 4.0 * o.health.drift_false_alarm_time / kDt;
+  double hp = 0.0;  // smallest h' (step 1e-4) whose run length reaches arl
+  while ((std::exp(2 * k * hp) - 2 * k * hp - 1) / (2 * k * k) < arl) hp += 1e-4;
+  return {hp - 1.166, std::sqrt(-2.0 * std::log(o.alpha)) - k};
+}
+
+TEST(Health, FrozenSensorIsNamedFrozenAndReturnsOnceItsReadingsAreFresh) {
+  // The twist varies by +-20 %: from k = 20 sensor 1 repeats its counts,
+  // which soon disagree with the motion. The drift test's alarm (not before
+  // its fewest epochs) is named frozen by the repeats. At k = 100 the counts
+  // move again: the hypothesis is refuted, and the sensor is back after
+  // drift_release_time of fresh samples and the probation.
   const SensorArray a = sekimori_array();
-  const HealthOptions h;
-  auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a));
+  const ConsensusOptions o;
+  const CusumBound bound = cusum_bound(o);
+  auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a, o));
   ArraySample frozen;
   int first_frozen = -1, first_back = -1;
   for (int k = 0; k < 200; ++k) {
@@ -450,35 +469,47 @@ TEST(Health, FrozenSensorIsExcludedAndReturnsThroughProbation) {
     if (k >= 20 && k < 100) s.counts[1] = frozen.counts[1];
     const auto e = est.estimate(s);
     ASSERT_TRUE(e.has_value());
+    EXPECT_NE(e->excluded[1], Exclusion::kDrift) << k;  // named by its readings
     if (first_frozen < 0 && e->excluded[1] == Exclusion::kFrozen) first_frozen = k;
-    if (k >= 100 && first_back < 0 && contains(e->estimate.used, 1)) first_back = k;
-    if (k >= 100 && k < 100 + static_cast<int>(h.probation / kDt)) {
-      EXPECT_EQ(e->excluded[1], Exclusion::kProbation) << k;
+    if (first_frozen >= 0 && k < 100) {
+      EXPECT_EQ(e->excluded[1], Exclusion::kFrozen) << k;  // while it repeats
     }
+    if (k >= 100 && first_back < 0 && contains(e->estimate.used, 1)) first_back = k;
   }
-  // The frozen_run-th identical epoch is the first one excluded as frozen.
-  EXPECT_EQ(first_frozen, 20 + h.frozen_run - 1);
-  // Back after the probation (the counts move again at k = 100).
-  EXPECT_GE(first_back, 100 + static_cast<int>(h.probation / kDt));
-  EXPECT_LE(first_back, 100 + static_cast<int>(h.probation / kDt) + 2);
+  EXPECT_GE(first_frozen, 20 + bound.fewest());
+  EXPECT_LT(first_frozen, 40);  // the point speed changes 20 % in 10 epochs
+  const int release = static_cast<int>(std::ceil(o.health.drift_release_time / kDt));
+  const int probation = static_cast<int>(std::ceil(o.health.probation / kDt));
+  EXPECT_GE(first_back, 100 + release + probation);
+  EXPECT_LE(first_back, 100 + release + probation + 3);
 }
 
-TEST(Health, ZeroWhileTheOthersMoveIsExcludedAsZero) {
+TEST(Health, ZeroWhileTheOthersMoveIsNamedZero) {
+  // Sensor 2 reads zero from k = 10: each epoch the consistency test leaves
+  // it out, and the drift test's alarm, after the fewest epochs it allows
+  // (each fed sample is clipped), names it zero.
   const SensorArray a = sekimori_array();
-  auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a));
-  const HealthOptions h;
+  const ConsensusOptions o;
+  const CusumBound bound = cusum_bound(o);
+  auto est = std::get<ConsensusEstimator>(ConsensusEstimator::create(a, o));
+  int first_zero = -1;
   for (int k = 0; k < 50; ++k) {
     ArraySample s = varying_sample(a, k);
     if (k >= 10) s.counts[2].setZero();
     const auto e = est.estimate(s);
     ASSERT_TRUE(e.has_value());
-    if (k >= 10 && k < 10 + h.zero_run - 1) {
-      EXPECT_EQ(e->excluded[2], Exclusion::kInconsistent);
+    if (first_zero < 0 && e->excluded[2] == Exclusion::kZero) first_zero = k;
+    if (k >= 10 && first_zero < 0) {
+      EXPECT_EQ(e->excluded[2], Exclusion::kInconsistent) << k;
     }
-    if (k >= 10 + h.zero_run) {
+    if (first_zero >= 0) {
       EXPECT_EQ(e->excluded[2], Exclusion::kZero) << k;
     }
   }
+  // Fed from k = 10, judged the epoch after: at full clip the alarm comes
+  // at the first whole step past h.
+  EXPECT_GE(first_zero, 10 + bound.fewest());
+  EXPECT_LE(first_zero, 10 + bound.fewest() + 2);
 }
 
 TEST(Health, DriftTooSmallForOneEpochIsExcludedOverTime) {
@@ -513,12 +544,7 @@ TEST(Health, DriftTooSmallForOneEpochIsExcludedOverTime) {
       }
     }
     if (enabled) {
-      const double k = o.health.drift_shift;
-      const double arl = 4.0 * o.health.drift_false_alarm_time / kDt;
-      double hp = 0.0;  // smallest h' (step 1e-4) whose run length reaches arl
-      while ((std::exp(2 * k * hp) - 2 * k * hp - 1) / (2 * k * k) < arl) hp += 1e-4;
-      const double h = hp - 1.166, clip = std::sqrt(-2.0 * std::log(o.alpha));
-      EXPECT_GE(first_drift, static_cast<int>(std::floor(h / (clip - k))));
+      EXPECT_GE(first_drift, cusum_bound(o).fewest());
       EXPECT_LT(first_drift, 149);
     } else {
       EXPECT_EQ(first_drift, -1);

@@ -265,7 +265,7 @@ RobustEstimate ConsensusEstimator::one_sensor(int i, SensorMask candidates,
       // The others left out are still tested against this twist (and may
       // come back).
       health_.observe(solver_, sample, measurements_, out.estimate.used, candidates,
-                      out.noise_flags);
+                      out.noise_flags, &out.estimate);
     }
     test_sensors(out.estimate.twist, out.tests);
     return out;
@@ -336,7 +336,7 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
   }
   if (n_ == 1) return one_sensor(0, candidates, sample, refs, wheels, gyro, rate, out);
   const SensorMask screened =
-      health_.screen(solver_, sample, fallback_.last_twist(), candidates, out.excluded);
+      health_.screen(sample, candidates, out.excluded);
   // The health monitor left one sensor: with the gyro it is an array of one.
   if (options_.gyro_fed && rate && count_sensors(screened) == 1) {
     int i = 0;
@@ -395,6 +395,13 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
   }
   if (out.source == Source::kWheels) {
     prior_.trust(out.estimate.twist, out.estimate.covariance, sample.t);
+  }
+  // No set of sensors agreed: each is still tested, against the wheels' or
+  // the hold's twist (two sensors that disagree: which one is wrong). Not
+  // when the array as a whole was rejected (common-mode: every sensor's
+  // reading is the fault, none is to be named).
+  if (!common && n_ > 1) {
+    health_.observe(solver_, sample, measurements_, 0, candidates, out.noise_flags, &out.estimate);
   }
   test_sensors(out.estimate.twist, out.tests);
   return out;

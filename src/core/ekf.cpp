@@ -2,6 +2,10 @@
 
 #include <Eigen/LU>
 #include <cmath>
+#include <limits>
+
+#include "moa/core/chi2.hpp"
+#include "moa/core/kalman.hpp"
 
 namespace moa {
 
@@ -12,8 +16,7 @@ OptionCheck EkfOptions::validate() const {
       .non_negative("twist_noise_floor", twist_noise_floor)
       .non_negative("twist_noise_relative", twist_noise_relative)
       .at_least("max_consecutive_rejections", max_consecutive_rejections, 1)
-      .positive("gate_position", gate_position)
-      .positive("gate_pose", gate_pose)
+      .closed("alpha", alpha, 0.0, 0.5)
       .result();
 }
 
@@ -46,8 +49,20 @@ Mat<3, 2> exact_step_scale_jacobian(const Pose2& pose, const Twist2& twist, cons
   return out;
 }
 
+namespace {
+/// q(1 - alpha, dof); alpha = 0: no test (every fix is fused).
+real fix_gate(real alpha, int dof) {
+  return alpha > 0 ? static_cast<real>(chi2_quantile(1.0 - alpha, dof))
+                   : std::numeric_limits<real>::infinity();
+}
+}  // namespace
+
 PoseEkf::PoseEkf(double t0, const Pose2& initial, const Mat3& covariance, EkfOptions options)
-    : options_(options), t_(t0), pose_(initial) {
+    : options_(options),
+      gate_position_(fix_gate(options.alpha, 2)),
+      gate_pose_(fix_gate(options.alpha, 3)),
+      t_(t0),
+      pose_(initial) {
   cov_.topLeftCorner<3, 3>() = covariance;
   if (options_.estimate_scale) {
     cov_.bottomRightCorner<2, 2>() = options_.scale_sd.cwiseAbs2().asDiagonal();
@@ -104,37 +119,29 @@ FixResult PoseEkf::correct(const Mat<M, 1>& z, const Mat<M, M>& r, real gate) {
 template <int N, int M>
 FixResult PoseEkf::correct_states(const Mat<M, 1>& z, const Mat<M, M>& r, real gate) {
   using HMatrix = Mat<M, N>;
-  using Covariance = Mat<N, N>;
   const HMatrix h = HMatrix::Identity();
-  Covariance cov = cov_.topLeftCorner<N, N>();
+  Mat<N, N> cov = cov_.topLeftCorner<N, N>();
   // 1. innovation, heading wrapped
   Mat<M, 1> y = z - h.template leftCols<3>() * Vec3(pose_.t.x(), pose_.t.y(), pose_.theta);
   if constexpr (M == 3) y(2) = wrap_angle(y(2));
-  // 2. innovation covariance
-  const Mat<M, M> s = h * cov * h.transpose() + r;
-  const Mat<M, M> s_inv = s.inverse();
+  // 2. its Mahalanobis distance y^T S^-1 y, S = H P H^T + R (kalman.hpp)
+  last_distance_ = test_ratio<M>(y, h * cov * h.transpose() + r, real(1));
   // 3. gate (with recovery after too many rejections in a row)
-  last_distance_ = y.dot(s_inv * y);
-  Mat<M, M> s_used_inv = s_inv;
   if (!(last_distance_ <= gate)) {
     if (++consecutive_rejections_ <= options_.max_consecutive_rejections) {
       return FixResult::kRejected;
     }
     for (int i = 0; i < M; ++i) cov(i, i) += y(i) * y(i);
     if constexpr (M == 2) cov(2, 2) += 0.01;  // heading unknown to this fix: 0.1 rad more
-    s_used_inv = (h * cov * h.transpose() + r).inverse();
   }
   consecutive_rejections_ = 0;
-  // 4. gain
-  const Mat<N, M> k = cov * h.transpose() * s_used_inv;
-  // 5. state
-  const Mat<N, 1> dx = k * y;
+  // 4. the core's Kalman update (kalman.hpp, Joseph form) of the correction
+  Mat<N, 1> dx = Mat<N, 1>::Zero();
+  joseph_update<N, M>(dx, cov, y, h, r);
   pose_.t += dx.template head<2>();
   pose_.theta += dx(2);
   if constexpr (N == kStates) scale_ += dx.template tail<2>();
-  // 6. Joseph-form covariance
-  const Covariance a = Covariance::Identity() - k * h;
-  cov_.topLeftCorner<N, N>() = a * cov * a.transpose() + k * r * k.transpose();
+  cov_.topLeftCorner<N, N>() = cov;
   return FixResult::kApplied;
 }
 
@@ -202,11 +209,11 @@ FixResult PoseEkf::update(double t, const Mat<M, 1>& z, const Mat<M, M>& r, real
 }
 
 FixResult PoseEkf::update_position(double t, const Vec2& z, const Mat2& r) {
-  return update<2>(t, z, r, options_.gate_position);
+  return update<2>(t, z, r, gate_position_);
 }
 
 FixResult PoseEkf::update_pose(double t, const Vec3& z, const Mat3& r) {
-  return update<3>(t, z, r, options_.gate_pose);
+  return update<3>(t, z, r, gate_pose_);
 }
 
 }  // namespace moa

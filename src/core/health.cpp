@@ -3,6 +3,7 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "moa/core/chi2.hpp"
 
@@ -10,13 +11,7 @@ namespace moa {
 
 OptionCheck HealthOptions::validate() const {
   OptionsCheck c;
-  c.at_least("frozen_run", frozen_run, 2)
-      .non_negative("frozen_min_counts", frozen_min_counts)
-      .non_negative("frozen_change", frozen_change)
-      .at_least("frozen_long_run", frozen_long_run, frozen_run)
-      .at_least("zero_run", zero_run, 1)
-      .non_negative("zero_speed", zero_speed)
-      .non_negative("drift_min_speed", drift_min_speed)
+  c.non_negative("drift_min_speed", drift_min_speed)
       .positive("drift_shift", drift_shift)
       .positive("drift_false_alarm_time", drift_false_alarm_time)
       .positive("drift_release_time", drift_release_time)
@@ -51,12 +46,10 @@ real HealthMonitor::drift(const SensorState& s) const {
   return *std::max_element(s.g.begin(), s.g.end());
 }
 
-SensorMask HealthMonitor::screen(const SubsetSolver& solver, const ArraySample& sample,
-                                 const Twist2& predicted, SensorMask candidates,
+SensorMask HealthMonitor::screen(const ArraySample& sample, SensorMask candidates,
                                  std::array<Exclusion, kMaxSensors>& excluded) {
   SensorMask allowed = candidates;
   if (!options_.enabled) return allowed;
-  const Vec3 x = predicted.vector();
   // One bad sensor biases the leave-one-out twists the others are judged
   // against, so their drift statistics rise with its own (by about 1/(N-1)
   // of it): only the largest of them may be newly excluded as drift, and
@@ -79,55 +72,48 @@ SensorMask HealthMonitor::screen(const SubsetSolver& solver, const ArraySample& 
       all_zero = false;
     }
   }
+  // Three readings alike name an alarm frozen or zero (health.hpp).
+  constexpr int kPattern = 2;
   for (int i = 0; i < n_; ++i) {
     const auto k = static_cast<std::size_t>(i);
     SensorState& s = state_[k];
     const Vec2 c = sample.counts[k];
-    const Vec2 p = solver.jacobian(i) * x;  // predicted point velocity, m/s
-    // Frozen: exact repeats (to 1e-6 counts: the synchroniser's rounding)
-    // of a count large enough to carry noise.
-    const real big = c.cwiseAbs().maxCoeff();
-    if (same_counts(c, s.last_counts) && big >= options_.frozen_min_counts) {
-      ++s.repeats;
-    } else {
-      s.repeats = 0;
-      s.run_start = p;
-    }
+    // Exact repeats to 1e-6 counts: the synchroniser's rounding.
+    s.repeats = !c.isZero() && same_counts(c, s.last_counts) ? s.repeats + 1 : 0;
+    if (!all_zero) s.zeros = c.isZero() ? s.zeros + 1 : 0;
     s.last_counts = c;
-    const int run = s.repeats + 1;  // epochs with these counts
-    // Once found frozen it stays so while the counts keep repeating.
-    const bool was_frozen = s.health == Health::kExcluded && s.reason == Exclusion::kFrozen;
-    const bool frozen = run >= options_.frozen_long_run ||
-                        (run >= options_.frozen_run &&
-                         (was_frozen || (p - s.run_start).norm() >= options_.frozen_change));
-    // Zero while the point should move.
-    const real speed = p.norm();
-    if (!all_zero) s.zeros = c.isZero() && speed >= options_.zero_speed ? s.zeros + 1 : 0;
     if (!contains(candidates, i)) continue;  // lifted: nothing to judge
-    const real d = drift(s);
-    const bool drifting = s.health == Health::kExcluded && s.reason == Exclusion::kDrift;
-    // Excluded as drift: out until the release test (observe()) clears it.
-    const bool released = drifting && s.time >= options_.drift_release_time && s.weight > 0.0 &&
-                          (s.mean / s.weight).cwiseAbs().maxCoeff() < 0.5 * options_.drift_shift;
-    Exclusion bad = Exclusion::kNone;
-    if (frozen) {
-      bad = Exclusion::kFrozen;
-    } else if (s.zeros >= options_.zero_run) {
-      bad = Exclusion::kZero;
-    } else if ((drifting && !released) ||
-               (h_ > 0.0 && d > h_ && d >= largest_drift && newly_drifting < 0)) {
-      bad = Exclusion::kDrift;
-      if (!drifting) newly_drifting = i;
-    }
-    if (bad != Exclusion::kNone && !(drifting && bad == Exclusion::kDrift)) {
-      // Newly excluded: the statistics restart (for a frozen or zero sensor
-      // they were the fault's), and the release test begins.
-      s.g.fill(0.0);
+    const bool out = s.health == Health::kExcluded;
+    // A frozen or zero hypothesis stands while its pattern holds; the first
+    // fresh reading refutes it, and the release test starts on fresh samples.
+    if (out && s.held &&
+        !(s.reason == Exclusion::kFrozen ? s.repeats > 0 : s.zeros > 0 || all_zero)) {
+      s.held = false;
       s.mean.setZero();
       s.weight = s.time = 0.0;
     }
+    const real d = drift(s);
+    const bool released = out && !s.held && s.time >= options_.drift_release_time &&
+                          s.weight > 0.0 &&
+                          (s.mean / s.weight).cwiseAbs().maxCoeff() < 0.5 * options_.drift_shift;
+    Exclusion bad = Exclusion::kNone;
+    if (out && !released) {
+      bad = s.reason;
+    } else if (!out && h_ > 0.0 && d > h_ && d >= largest_drift && newly_drifting < 0) {
+      // A new alarm, named by the readings that raised it.
+      bad = s.repeats >= kPattern ? Exclusion::kFrozen
+            : s.zeros >= kPattern ? Exclusion::kZero
+                                  : Exclusion::kDrift;
+      newly_drifting = i;
+      // The statistics restart (they were the fault's) and the release test
+      // begins; a frozen or zero sensor's only once its pattern is broken.
+      s.g.fill(0.0);
+      s.mean.setZero();
+      s.weight = s.time = 0.0;
+      s.held = bad != Exclusion::kDrift;
+    }
     if (released) s.g.fill(0.0);
-    const bool half = s.repeats >= 1 || s.zeros >= 1 || (h_ > 0.0 && d > 0.5 * h_);
+    const bool half = h_ > 0.0 && d > 0.5 * h_;
     switch (s.health) {
       case Health::kTrusted:
       case Health::kSuspect:
@@ -142,8 +128,6 @@ SensorMask HealthMonitor::screen(const SubsetSolver& solver, const ArraySample& 
         if (bad == Exclusion::kNone) {
           s.health = Health::kProbation;
           s.since = sample.t;
-        } else if (bad != Exclusion::kNone) {
-          s.reason = bad;
         }
         break;
       case Health::kProbation:
@@ -170,7 +154,8 @@ SensorMask HealthMonitor::screen(const SubsetSolver& solver, const ArraySample& 
 
 void HealthMonitor::observe(const SubsetSolver& solver, const ArraySample& sample,
                             const PointMeasurements& m, SensorMask used, SensorMask candidates,
-                            const std::array<std::uint8_t, kMaxSensors>& noise_flags) {
+                            const std::array<std::uint8_t, kMaxSensors>& noise_flags,
+                            const TwistEstimate* reference) {
   if (!options_.enabled || !(sample.dt > 0.0)) return;
   if (h_ == 0.0) set_threshold(static_cast<real>(sample.dt));
   const real k = options_.drift_shift;
@@ -186,14 +171,18 @@ void HealthMonitor::observe(const SubsetSolver& solver, const ArraySample& sampl
     constexpr std::uint8_t kNotFed = kNoiseOverRating | kNoiseLowSqual | kNoiseOverflow;
     if (!contains(candidates, i) || (noise_flags[u] & kNotFed)) continue;
     SensorState& s = state_[u];
-    // Out for another reason (frozen, zero): its residual says nothing of drift.
-    if (s.health == Health::kExcluded && s.reason != Exclusion::kDrift) continue;
+    // Frozen or zero and still so: the release test waits for a fresh reading.
+    if (s.held) continue;
     // The twist of the others and its covariance: leave-one-out when i was
-    // used and enough remain, else the estimate's.
+    // used and enough remain, else the estimate's, else the reference's.
     const SensorMask others = used & ~(SensorMask{1} << i);
     const SensorMask from = contains(used, i) ? others : used;
-    if (count_sensors(from) < 2) continue;
-    const auto fit = solver.fit(from, m);
+    std::optional<SubsetFit> fit;
+    if (count_sensors(from) >= 2) {
+      fit = solver.fit(from, m);
+    } else if (reference != nullptr) {
+      fit = SubsetFit{reference->twist, reference->covariance};
+    }
     if (!fit) continue;
     const Mat<2, 3>& j = solver.jacobian(i);
     const Vec2 p = j * fit->twist.vector();

@@ -115,8 +115,7 @@ Odometry::Odometry(const SensorArray& array, double t0, const OdometryOptions& o
       SensorArray(std::span<const SensorMount>(mounts.data(), static_cast<std::size_t>(m_)));
   noise_ = NoiseModel(sub_array_, options_.consensus.noise);
   if (options_.self_calibration.enabled) {
-    self_calibration_.emplace(sub_array_, options_.self_calibration, options_.consensus.noise,
-                              options_.consensus.health.frozen_run);
+    self_calibration_.emplace(sub_array_, options_.self_calibration, options_.consensus.noise);
   }
   const double period = 1.0 / options_.rate;
   const auto take = [&](auto built) {

@@ -181,12 +181,6 @@ OptionsCheck& OptionsCheck::at_least(const char* field, long long x, long long l
   return *this;
 }
 
-OptionsCheck& OptionsCheck::at_least_field(const char* field, double x, const char* bound_field,
-                                           double bound) {
-  if (finite(field, x)) compare(field, x, x >= bound, ">= ", bound_field, bound);
-  return *this;
-}
-
 OptionsCheck& OptionsCheck::at_most_named(const char* field, double x, const char* bound_name,
                                           double bound) {
   if (finite(field, x)) compare(field, x, x <= bound, "<= ", bound_name, bound);

@@ -108,10 +108,10 @@ struct EkfOptions {
   /// lost, not the camera: the next fix is applied after the position and
   /// heading covariance are widened by its innovation.
   int max_consecutive_rejections = 5;
-  /// Mahalanobis gate on the innovation: chi-square 2 dof at 1 - 1e-3.
-  real gate_position = 13.815510557964274;
-  /// With heading: chi-square 3 dof at 1 - 1e-3.
-  real gate_pose = 16.26623619623813;
+  /// False-alarm rate of a fix's test: its Mahalanobis distance against
+  /// q(1 - alpha, M) (chi2.hpp), M = 2 for a position, 3 with heading;
+  /// 0: no test, every fix is fused.
+  real alpha = 0.001;
   /// nullopt when usable, else the first field out of its bounds, its path
   /// relative to this struct (options_check.hpp).
   OptionCheck validate() const;
@@ -181,6 +181,7 @@ class PoseEkf {
   FixResult correct_states(const Mat<M, 1>& z, const Mat<M, M>& r, real gate);
 
   EkfOptions options_;
+  real gate_position_, gate_pose_;  ///< q(1 - alpha, 2), q(1 - alpha, 3)
   double t_;
   Pose2 pose_;
   Vec2 scale_{1.0, 1.0};

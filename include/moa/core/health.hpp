@@ -1,30 +1,12 @@
 // Faults over time: a per-sensor health state with hysteresis, for faults
 // one epoch's chi-square test cannot see.
 //
-// Per sensor i and epoch (counts c_i, point velocity u_i, robot frame m/s):
-//  - frozen: c_i exactly equal to the previous epoch's, not zero and at
-//    least frozen_min_counts on an axis, for frozen_run epochs in a row,
-//    while the predicted point velocity changed by frozen_change since the
-//    run began (a constant rate while the others vary), or for
-//    frozen_long_run epochs whatever the motion. A good sensor in a steady
-//    cruise repeats too: at 0.3 m/s an HDNS-2051 row of 23 frames carries
-//    about 0.3 counts of noise, so both axes repeat often (seen on the
-//    faults-liftoff runs with the first rule alone, at 10 epochs); while its
-//    point velocity changes by 0.02 m/s (6 counts per 10 ms epoch at
-//    800 cpi) it cannot. In a cruise at constant speed only the long run
-//    tells: the longest run of a good sensor's repeats (counts >= 4) on
-//    simulator seeds 1-30 of cruise, sekimori-a, sekimori-b, differential
-//    and guided was 22 epochs, and each epoch more about halved how often a
-//    run reached it, so 40 (0.4 s) leaves a margin of 2^-18; a register
-//    frozen in a cruise (one frame's counts repeated: faults-cruise) is out
-//    after 0.4 s instead of 1 s. "Equal" is to 1e-6 counts: a row whose time
-//    is off the epoch grid by a rounding error leaves a fraction of 1e-12
-//    of its counts in the neighbouring epoch.
-//  - zero: c_i = 0 while the predicted point speed |A_i x| is at least
-//    zero_speed, for zero_run epochs in a row (the others move).
-//  - drift: a sequential test (Page's CUSUM) of the residual against the
+// Per sensor i and epoch (counts c_i, point velocity u_i, robot frame m/s),
+// one family of tests over time, on the normalised innovations:
+//  - a sequential test (Page's CUSUM) of the residual against the
 //    twist x_(i) of the other sensors used (leave-one-out, with its
-//    covariance; the estimate itself when i was not used), r = u_i - p,
+//    covariance; the estimate itself when i was not used; the wheels' or
+//    the hold's twist when fewer than two sensors remain), r = u_i - p,
 //    p = A_i x_(i), whitened along and across the motion:
 //      z_par  = e_par^T r / sqrt(e_par^T S e_par)   (scale error)
 //      z_perp = e_perp^T r / sqrt(e_perp^T S e_perp) (yaw offset)
@@ -55,14 +37,25 @@
 //    once both are within k / 2 (1.6 sd of such a mean at 100 Hz and 0.2 s
 //    under the noise model; a shift of 2 k keeps it out), after
 //    drift_release_time of samples; its statistics then restart.
-// States: trusted -> suspect (a test half-way: a repeat, a zero, a
-// statistic over h / 2) -> excluded (a test fires; the reason is kept)
-// -> probation (the test no longer fires; the sensor stays out for
-// probation seconds) -> trusted. Suspect sensors are used; excluded and
-// probation ones are not.
-// The frozen and zero thresholds were tuned on simulator seeds 1-100 (tests
-// use 101+, docs 201+); the drift test's follow from k, the false-alarm time
-// and the noise model. Fixed-size state, no allocation.
+// Named outcomes. An alarm is named by the pattern of the sensor's last
+// readings: frozen when its counts repeated exactly (not zero) for the last
+// three epochs (a stopped register), zero when it read zero for the last
+// three while some other sensor did not (a sensor off the floor or dead),
+// drift otherwise (a resolution or yaw gone off). The names add no test and
+// no threshold: the alarm is the CUSUM's, at its false-alarm rate, and comes
+// only once the readings disagree with the motion (a register frozen in a
+// perfectly steady cruise reads what a good sensor would, and costs nothing
+// until the motion changes; the self-calibration does not learn from such
+// runs, self_calibration.hpp). A frozen or zero sensor's hypothesis stands
+// while its pattern holds (its counts still repeat, it still reads zero);
+// the first fresh reading refutes it, and from there the release test
+// judges it as it judges a drifting one, on drift_release_time of fresh
+// samples. Nothing is latched.
+// States: trusted -> suspect (a statistic over h / 2) -> excluded (an alarm;
+// its name is kept) -> probation (released; out for probation seconds) ->
+// trusted. Suspect sensors are used; excluded and probation ones are not.
+// Every threshold follows from k, the false-alarm time and the noise model;
+// none was tuned on a scenario. Fixed-size state, no allocation.
 #pragma once
 
 #include <Eigen/Core>
@@ -71,6 +64,7 @@
 #include <cstdint>
 
 #include "moa/core/array.hpp"
+#include "moa/core/estimate.hpp"
 #include "moa/core/names.hpp"
 #include "moa/core/options_check.hpp"
 #include "moa/core/robust_estimate.hpp"
@@ -80,12 +74,6 @@ namespace moa {
 
 struct HealthOptions {
   bool enabled = true;
-  int frozen_run = 10;           ///< epochs of identical counts
-  real frozen_min_counts = 4.0;  ///< counts on the larger axis
-  real frozen_change = 0.02;     ///< m/s, change of the predicted point velocity
-  int frozen_long_run = 40;      ///< epochs of identical counts, whatever the motion
-  int zero_run = 5;              ///< epochs of zero counts while moving
-  real zero_speed = 0.02;        ///< m/s, predicted point speed
   real drift_min_speed = 0.05;   ///< m/s, predicted point speed for a drift sample
   real drift_shift = 0.5;        ///< k, sd: the CUSUM's reference (half the shift sought)
   /// s, mean time between false alarms of one sensor under the noise model
@@ -119,15 +107,21 @@ class HealthMonitor {
  public:
   HealthMonitor(int sensors, HealthOptions options, real alpha);
 
-  /// Frozen and zero tests on the epoch's counts, then the state machine.
+  /// The alarms of the statistics fed so far, named by the epoch's counts,
+  /// and the state machine.
   /// Returns the sensors that may be used; sets `excluded` for the others
   /// among `candidates` (kFrozen, kZero, kDrift or kProbation).
-  SensorMask screen(const SubsetSolver& solver, const ArraySample& sample, const Twist2& predicted,
-                    SensorMask candidates, std::array<Exclusion, kMaxSensors>& excluded);
+  SensorMask screen(const ArraySample& sample, SensorMask candidates,
+                    std::array<Exclusion, kMaxSensors>& excluded);
   /// The drift test's update after an estimate from the sensors `used`.
+  /// `reference`: the epoch's estimate when it was not the sensors' (the
+  /// wheels' or the hold's, with the gyro's rotation; nullptr when none):
+  /// a sensor whose leave-one-out fit has fewer than two others is tested
+  /// against it (two sensors that disagree: which one is wrong).
   void observe(const SubsetSolver& solver, const ArraySample& sample, const PointMeasurements& m,
                SensorMask used, SensorMask candidates,
-               const std::array<std::uint8_t, kMaxSensors>& noise_flags);
+               const std::array<std::uint8_t, kMaxSensors>& noise_flags,
+               const TwistEstimate* reference = nullptr);
 
   Health health(int i) const { return state_[static_cast<std::size_t>(i)].health; }
 
@@ -137,8 +131,9 @@ class HealthMonitor {
     Exclusion reason = Exclusion::kNone;
     double since = 0.0;  ///< s, when probation began
     Vec2 last_counts{0.0, 0.0};
-    Vec2 run_start{0.0, 0.0};  ///< m/s, predicted point velocity when the run began
-    int repeats = 0, zeros = 0;
+    int repeats = 0;    ///< epochs in a row whose counts repeat the previous (not zero)
+    int zeros = 0;      ///< epochs in a row read zero while another sensor did not
+    bool held = false;  ///< excluded as frozen or zero and the pattern still holds
     std::array<real, 4> g{};        ///< CUSUMs of +z_par, -z_par, +z_perp, -z_perp
     Vec2 mean{0.0, 0.0};            ///< release test: means of (z_par, z_perp)
     real weight = 0.0, time = 0.0;  ///< of the means; s of samples since excluded

@@ -112,7 +112,7 @@ struct OdometryOptions {
 
   /// nullopt when the options can be used, else the first field out of its
   /// bounds with its full path, the bound and the value
-  /// ("consensus.health.frozen_run: must be >= 2, is 1"), in the manner of
+  /// ("consensus.health.drift_shift: must be > 0, is 0"), in the manner of
   /// Ceres' Options::IsValid (options_check.hpp). Every nested struct
   /// included.
   OptionCheck validate() const;

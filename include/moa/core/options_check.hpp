@@ -2,7 +2,7 @@
 // manner of Ceres' Options::IsValid: the first field out of its bounds gives
 // one message naming the field's path as the user sees it, the bound it
 // breaks and its value:
-//   "consensus.health.frozen_run: must be >= 2, is 1"
+//   "consensus.health.drift_shift: must be > 0, is 0"
 //   "ekf.scale_sd[1]: must be > 0, is -0.5"
 //   "rate: must be finite, is nan"
 // A real field is always required to be finite (NaN and infinities are
@@ -37,8 +37,8 @@ class InvalidOption {
   /// printf's %.6g would write it ("nan", "inf", "-inf").
   void append_number(double x);
   void append_integer(long long x);
-  /// Prefixes `parent` and a '.' to the path: "frozen_run: ..." becomes
-  /// "consensus.health.frozen_run: ...".
+  /// Prefixes `parent` and a '.' to the path: "drift_shift: ..." becomes
+  /// "consensus.health.drift_shift: ...".
   void prefix(std::string_view parent);
 
  private:
@@ -51,7 +51,7 @@ using OptionCheck = std::optional<InvalidOption>;
 
 /// Collects the first failure of a sequence of checks; the later checks are
 /// skipped once one failed. `field` is a path relative to the struct being
-/// validated ("frozen_run", "noise.speed_cap").
+/// validated ("drift_shift", "noise.speed_cap").
 class OptionsCheck {
  public:
   /// x > lo.
@@ -73,8 +73,6 @@ class OptionsCheck {
   OptionsCheck& at_least(const char* field, int x, int lo) {
     return at_least(field, static_cast<long long>(x), static_cast<long long>(lo));
   }
-  /// x >= the field `bound_field` (of value `bound`): "must be >= frozen_run (10), is 5".
-  OptionsCheck& at_least_field(const char* field, double x, const char* bound_field, double bound);
   /// x <= the bound named `bound_name` (of value `bound`):
   /// "must be <= 61 periods (0.61), is 1".
   OptionsCheck& at_most_named(const char* field, double x, const char* bound_name, double bound);
