@@ -209,10 +209,10 @@ TEST(Cli, BenchJsonHasTheContractKeys) {
   // Keys only: speed figures are measured by `moa bench` itself, not asserted here.
   const auto r = test::run_moa("bench --json --batches 3 --updates 20");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  for (const char* key : {"\"ls_ns_per_update\"", "\"naive_ls_ns_per_update\"",
-                          "\"sekimori_ns_per_update\"", "\"naive_sekimori_ns_per_update\"",
-                          "\"consensus_ns_per_update\"", "\"consensus_over_sekimori\"",
-                          "\"machine\"", "\"compiler\""}) {
+  for (const char* key :
+       {"\"ls_ns_per_update\"", "\"naive_ls_ns_per_update\"", "\"sekimori_ns_per_update\"",
+        "\"naive_sekimori_ns_per_update\"", "\"consensus_ns_per_update\"",
+        "\"consensus_over_sekimori\"", "\"machine\"", "\"compiler\""}) {
     EXPECT_THAT(r.out, HasSubstr(key));
   }
   EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1);

@@ -93,8 +93,7 @@ int run_bench(const BenchArgs& args) {
   // consensus / sekimori: the robust estimator's cost against the paper's
   // voting over the same sensors, measured in the same run.
   fmt::print("{:>3} | {:>9} {:>9} {:>7} | {:>9} {:>14} {:>7} | {:>9} {:>10}\n", "N", "ls",
-             "naive_ls", "ratio", "sekimori", "naive_sekimori", "ratio", "consensus",
-             "/sekimori");
+             "naive_ls", "ratio", "sekimori", "naive_sekimori", "ratio", "consensus", "/sekimori");
   for (const Row& r : rows) {
     fmt::print(
         "{:>3} | {:>9.1f} {:>9.1f} {:>7.1f} | {:>9.1f} {:>14.1f} {:>7.1f} | {:>9.1f} {:>10.2f}\n",

@@ -335,8 +335,7 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
     add(prior_.twist(), prior_.covariance(sample.t, sample.dt));
   }
   if (n_ == 1) return one_sensor(0, candidates, sample, refs, wheels, gyro, rate, out);
-  const SensorMask screened =
-      health_.screen(sample, candidates, out.excluded);
+  const SensorMask screened = health_.screen(sample, candidates, out.excluded);
   // The health monitor left one sensor: with the gyro it is an array of one.
   if (options_.gyro_fed && rate && count_sensors(screened) == 1) {
     int i = 0;

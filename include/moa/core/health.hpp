@@ -74,8 +74,8 @@ namespace moa {
 
 struct HealthOptions {
   bool enabled = true;
-  real drift_min_speed = 0.05;   ///< m/s, predicted point speed for a drift sample
-  real drift_shift = 0.5;        ///< k, sd: the CUSUM's reference (half the shift sought)
+  real drift_min_speed = 0.05;  ///< m/s, predicted point speed for a drift sample
+  real drift_shift = 0.5;       ///< k, sd: the CUSUM's reference (half the shift sought)
   /// s, mean time between false alarms of one sensor under the noise model
   real drift_false_alarm_time = 3600.0;
   real drift_release_time = 0.2;  ///< s, the release test's window
@@ -131,9 +131,9 @@ class HealthMonitor {
     Exclusion reason = Exclusion::kNone;
     double since = 0.0;  ///< s, when probation began
     Vec2 last_counts{0.0, 0.0};
-    int repeats = 0;    ///< epochs in a row whose counts repeat the previous (not zero)
-    int zeros = 0;      ///< epochs in a row read zero while another sensor did not
-    bool held = false;  ///< excluded as frozen or zero and the pattern still holds
+    int repeats = 0;                ///< epochs in a row whose counts repeat the previous (not zero)
+    int zeros = 0;                  ///< epochs in a row read zero while another sensor did not
+    bool held = false;              ///< excluded as frozen or zero and the pattern still holds
     std::array<real, 4> g{};        ///< CUSUMs of +z_par, -z_par, +z_perp, -z_perp
     Vec2 mean{0.0, 0.0};            ///< release test: means of (z_par, z_perp)
     real weight = 0.0, time = 0.0;  ///< of the means; s of samples since excluded

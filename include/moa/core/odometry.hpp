@@ -91,7 +91,7 @@ struct OdometryOptions {
   /// world_T_robot at the first epoch's start. Unset: identity, or with
   /// fuse_camera the first fix fed before the first epoch is processed.
   std::optional<Pose2> initial;
-  bool fuse_camera = false;          ///< EKF with camera fixes
+  bool fuse_camera = false;  ///< EKF with camera fixes
   /// s, a fix's t minus its true capture time (the camera's stamp is its
   /// arrival, or another clock's): the fix is taken as captured at
   /// t - camera_latency and applied once the epochs reach t. nullopt: the
