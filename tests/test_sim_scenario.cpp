@@ -428,6 +428,7 @@ TEST(SimScenario, UnknownNameListsTheBuiltins) {
         "scenario 'sekimori-c': not a built-in scenario (calib-camera, calib-mocap, calibration, "
         "cruise, differential, "
         "faults-bump, faults-cruise, faults-dirty, faults-drift, faults-floor, faults-liftoff, "
+        "faults-runaway, "
         "faults-spikes, "
         "faults-stuck, faults-zero, guided, gyro-bump, gyro-compact, gyro-one, gyro-papers, "
         "kimlee, "

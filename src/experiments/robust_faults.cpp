@@ -3,8 +3,8 @@
 // turn along the Table 3 path at speed (a); tracking loss is speed (b)'s own
 // over-speed fault; drift, linear or a step at a change of floor, on one
 // sensor for the rest of the run; a register frozen in a cruise while
-// another sensor drifts slowly, faults-cruise; every sensor at once over a
-// bump, faults-bump), against plain least squares, Sekimori &
+// another sensor drifts slowly, faults-cruise; a resolution set wrong from
+// the start, faults-runaway; every sensor at once over a bump, faults-bump), against plain least squares, Sekimori &
 // Miyazaki's voting, the consensus, the consensus with online
 // self-calibration (`--self-calibrate`) and oracle selection.
 #include <fmt/core.h>
@@ -36,6 +36,8 @@ const FaultCase kCases[] = {
     {"drift, step", "faults-floor", "m2's scale steps 1 -> 0.9 at t = 5 s (change of floor)"},
     {"frozen, other drifts", "faults-cruise",
      "m2's scale 1 -> 0.9 over 90 s, m3 frozen 3 s in a cruise, 24 m run, noisy wheels"},
+    {"runaway", "faults-runaway",
+     "m2 built at 1020 cpi, configured at 800: 1.275 times the counts from t = 0"},
     {"common-mode dropout", "faults-bump",
      "every sensor reads zero for 0.3 s in three turns, 36 m run, slipping wheels"},
 };

@@ -168,7 +168,7 @@ class RobustFaults(unittest.TestCase):
     def test_consensus_against_voting_and_oracle(self):
         result = experiment("robust-faults")
         for fault in ("tracking loss", "liftoff, no flag", "dirty floor", "spikes", "stuck",
-                      "zero reading", "drift", "drift, step", "common-mode dropout"):
+                      "zero reading", "drift", "drift, step", "runaway", "common-mode dropout"):
             consensus = row(result, fault=fault, method="consensus")
             not_worse(self, consensus, row(result, fault=fault, method="voting (Sekimori)"),
                       f"{fault}: consensus vs voting")
@@ -187,7 +187,7 @@ class RobustFaults(unittest.TestCase):
         result = experiment("robust-faults")
         for fault in ("tracking loss", "liftoff, no flag", "dirty floor", "spikes", "stuck",
                       "zero reading", "drift", "drift, step", "frozen, other drifts",
-                      "common-mode dropout"):
+                      "runaway", "common-mode dropout"):
             method = ("consensus + self-calibration" if fault == "frozen, other drifts" else
                       "consensus")
             consensus = per_seed(row(result, fault=fault, method=method), "max_translation_m")
