@@ -573,6 +573,12 @@ TEST(Chi2, QuantilesMatchKnownValues) {
   EXPECT_NEAR(chi2_quantile(0.999, 1), 10.827566, 1e-5);
   EXPECT_NEAR(chi2_quantile(0.999, 5), 20.515006, 1e-5);
   EXPECT_NEAR(chi2_quantile(0.99, 29), 49.587884, 1e-5);
+  // Beyond kChi2LargeDof, Wilson-Hilferty: the table's 1106.969 at 1000 dof.
+  EXPECT_NEAR(chi2_quantile(0.99, 1000), 1106.969, 0.05);
+  // Where it takes over, its upper 1e-6 quantile leaves a tail within 10 %
+  // of 1e-6 by the incomplete gamma function.
+  const int dof = kChi2LargeDof + 1;
+  EXPECT_NEAR(1.0 - chi2_cdf(chi2_quantile(1.0 - 1e-6, dof), dof), 1e-6, 1e-7);
   // dof 2 has a closed form: P(x) = 1 - exp(-x/2).
   EXPECT_NEAR(chi2_cdf(3.0, 2), 1.0 - std::exp(-1.5), 1e-13);
 }

@@ -11,6 +11,8 @@
 #include <unsupported/Eigen/NonLinearOptimization>
 #include <utility>
 
+#include "moa/core/chi2.hpp"
+
 namespace moa {
 
 namespace {
@@ -351,14 +353,10 @@ Eigen::MatrixXd joint_displacements(const std::vector<SensorMount>& mounts, cons
   return z;
 }
 
-// Wilson-Hilferty approximation of the chi-square quantile; z_p the normal quantile.
-double chi_square_quantile(double dof, double z_p) {
-  const double a = 2.0 / (9.0 * dof);
-  const double c = 1.0 - a + z_p * std::sqrt(a);
-  return dof * c * c * c;
+// The chi-square quantile of 1 - kOutlierProbability at `dof` (core/chi2).
+double outlier_quantile(double dof) {
+  return chi2_quantile(1.0 - kOutlierProbability, static_cast<int>(std::lround(dof)));
 }
-// Normal quantile of 1 - kOutlierProbability (1e-6).
-constexpr double kOutlierZ = 4.753424;
 
 // The model check (ExactModelCheck in the header). Counts are integers: no
 // model predicts them better than their rounding, 1/12 count^2 per axis
@@ -390,7 +388,7 @@ ExactModelCheck check_model(const std::vector<SensorMount>& mounts, const Data& 
   check.noise_variance =
       std::max(noise_dof > 0.0 ? free_residual / noise_dof : 0.0, kCountRoundingVariance);
   const double dof = kk * per_sample;
-  check.bound = std::max(kMisfitVarianceRatio, chi_square_quantile(dof, kOutlierZ) / dof);
+  check.bound = std::max(kMisfitVarianceRatio, outlier_quantile(dof) / dof);
   check.tested = noise_dof >= kMinNoiseDof;
   check.min_eigenvalue = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < obs.size(); ++i) {
@@ -645,7 +643,7 @@ std::variant<ExactCalibration, CalibrationError> calibrate_exact(
     const Weights wt = weights_of(current.noise, n);
     const HMatrix h = stack_h(current.mounts);
     const Eigen::Matrix3d htdh = weighted_normal(h, wt);
-    const double limit = chi_square_quantile(2.0 * n, kOutlierZ);
+    const double limit = outlier_quantile(2.0 * n);
     std::vector<bool> keep(static_cast<std::size_t>(data.size()), true);
     Eigen::VectorXd rho(2 * n + 3);
     int rejected = 0;

@@ -39,7 +39,26 @@ double regularized_gamma_p(double a, double x) {
 
 double chi2_cdf(double x, int dof) { return regularized_gamma_p(0.5 * dof, 0.5 * x); }
 
+namespace {
+/// The standard normal quantile, by bisection on erfc (to 1e-12).
+double normal_quantile(double p) {
+  double lo = -40.0, hi = 40.0;
+  for (int k = 0; k < 200 && hi - lo > 1e-12; ++k) {
+    const double mid = 0.5 * (lo + hi);
+    (0.5 * std::erfc(-mid / std::sqrt(2.0)) < p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+}  // namespace
+
 double chi2_quantile(double p, int dof) {
+  if (dof > kChi2LargeDof) {
+    // Wilson-Hilferty: (x / dof)^(1/3) is close to normal with mean
+    // 1 - 2 / (9 dof) and variance 2 / (9 dof).
+    const double a = 2.0 / (9.0 * dof);
+    const double c = 1.0 - a + normal_quantile(p) * std::sqrt(a);
+    return dof * c * c * c;
+  }
   double lo = 0.0, hi = dof + 10.0 * std::sqrt(2.0 * dof) + 100.0;
   while (chi2_cdf(hi, dof) < p) hi *= 2.0;
   for (int k = 0; k < 200 && hi - lo > 1e-12 * hi; ++k) {
