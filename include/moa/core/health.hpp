@@ -54,8 +54,10 @@
 // States: trusted -> suspect (a statistic over h / 2) -> excluded (an alarm;
 // its name is kept) -> probation (released; out for probation seconds) ->
 // trusted. Suspect sensors are used; excluded and probation ones are not.
-// Every threshold follows from k, the false-alarm time and the noise model;
-// none was tuned on a scenario. Fixed-size state, no allocation.
+// The alarm level follows from k, the false-alarm time and the noise model;
+// k, the release window, the probation and drift_min_speed are chosen
+// values (docs/math.md), none fitted to a scenario. Fixed-size state, no
+// allocation.
 #pragma once
 
 #include <Eigen/Core>
