@@ -4,9 +4,9 @@
 // over-speed fault; drift, linear or a step at a change of floor, on one
 // sensor for the rest of the run; a register frozen in a cruise while
 // another sensor drifts slowly, faults-cruise; a resolution set wrong from
-// the start, faults-runaway; every sensor at once over a bump, faults-bump), against plain least squares, Sekimori &
-// Miyazaki's voting, the consensus, the consensus with online
-// self-calibration (`--self-calibrate`) and oracle selection.
+// the start, faults-runaway; every sensor at once over a bump, faults-bump), against plain least
+// squares, Sekimori & Miyazaki's voting, the consensus, the consensus with online self-calibration
+// (`--self-calibrate`) and oracle selection.
 #include <fmt/core.h>
 
 #include <numbers>
