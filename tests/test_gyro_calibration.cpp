@@ -219,12 +219,20 @@ TEST(GyroCalibrationCli, ExactCalibratesTheGyroAgainstTheArray) {
   EXPECT_EQ(cal.imu->max_rate, nominal.imu->max_rate);
   EXPECT_EQ(cal.imu->bias_random_walk, nominal.imu->bias_random_walk);
 
+  // By default against the array at the mounts calibrated: here forced
+  // through a misfit (the slipping wheels), so not usable, and the gyro is
+  // not calibrated to their rotation; nothing is written.
+  fs::remove(bump.dir / "cal.yaml");
+  const auto refused = test::run_moa(bump.calibrate(""));
+  EXPECT_EQ(refused.exit_code, 1) << refused.err;
+  EXPECT_THAT(refused.err, HasSubstr("gyro calibration against array refused: the mounts "
+                                     "calibrated here are not usable (model-misfit)"));
+  EXPECT_THAT(refused.err, HasSubstr("--imu-reference array-nominal"));
+  EXPECT_FALSE(fs::exists(bump.dir / "cal.yaml"));
   // The text report: the table with units; --no-imu leaves imu: as it was.
-  // By default against the array at the mounts calibrated (here from the
-  // slipping wheels: the gyro's scale follows their ~5 % over-read).
-  const auto text = test::run_moa(bump.calibrate(""));
+  const auto text = test::run_moa(bump.calibrate("--imu-reference array-nominal"));
   ASSERT_EQ(text.exit_code, 0) << text.err;
-  EXPECT_THAT(text.out, HasSubstr("gyro against the array\n"));
+  EXPECT_THAT(text.out, HasSubstr("gyro against the array-nominal\n"));
   EXPECT_THAT(text.out, HasSubstr("bias rad/s"));
   EXPECT_THAT(text.out, HasSubstr("latency ms"));
   const auto skipped = test::run_moa(bump.calibrate("--no-imu"));
@@ -249,7 +257,7 @@ TEST(GyroCalibrationCli, RefusesAGyroOfAnotherMotion) {
       imu << t << "," << other_run(t) << "\n";
     }
   }
-  for (const std::string reference : {"array", "array-nominal", "wheels"}) {
+  for (const std::string reference : {"array-nominal", "wheels"}) {
     const auto r = test::run_moa(a.calibrate("--imu-reference " + reference));
     EXPECT_NE(r.exit_code, 0);
     EXPECT_THAT(r.err, HasSubstr("imu.csv: gyro calibration against " + reference + " refused"));
@@ -260,6 +268,32 @@ TEST(GyroCalibrationCli, RefusesAGyroOfAnotherMotion) {
   const auto skipped = test::run_moa(a.calibrate("--no-imu"));
   EXPECT_EQ(skipped.exit_code, 0) << skipped.err;
   fs::remove_all(a.dir);
+}
+
+// Kim & Lee's positions on a compact array turning in place are
+// underdetermined (docs/calibration.md): a minimum-norm correction, not
+// usable, whose rotation the gyro must not be calibrated to.
+TEST(GyroCalibrationCli, RefusesTheArrayAtMountsThatAreNotUsable) {
+  const fs::path dir = test::scratch_dir("gyro-cal-kimlee");
+  const auto sim =
+      test::run_moa("simulate --scenario gyro-compact --seed 1 --out " + (dir / "log").string());
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const std::string args = "calibrate --config " + (dir / "log" / "robot.yaml").string() +
+                           " --log " + (dir / "log").string() + " --method kimlee --out " +
+                           (dir / "cal.yaml").string();
+  const auto r = test::run_moa(args);
+  EXPECT_EQ(r.exit_code, 1) << r.out;
+  EXPECT_THAT(r.err, HasSubstr("imu.csv: gyro calibration against array refused: the mounts "
+                               "calibrated here are not usable (underdetermined)"));
+  EXPECT_FALSE(fs::exists(dir / "cal.yaml"));
+  // At the config's mounts the gyro is calibrated; the mice's result is
+  // written as Kim & Lee give it, marked not usable.
+  const auto nominal = test::run_moa(args + " --imu-reference array-nominal");
+  ASSERT_EQ(nominal.exit_code, 0) << nominal.err;
+  EXPECT_THAT(nominal.out, HasSubstr("not usable (underdetermined)"));
+  EXPECT_THAT(nominal.out, HasSubstr("gyro against the array-nominal\n"));
+  EXPECT_TRUE(fs::exists(dir / "cal.yaml"));
+  fs::remove_all(dir);
 }
 
 // Against the camera's heading: camera.csv written from truth.csv every

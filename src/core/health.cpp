@@ -174,13 +174,15 @@ void HealthMonitor::observe(const SubsetSolver& solver, const ArraySample& sampl
     // Frozen or zero and still so: the release test waits for a fresh reading.
     if (s.held) continue;
     // The twist of the others and its covariance: leave-one-out when i was
-    // used and enough remain, else the estimate's, else the reference's.
+    // used and enough remain, else the estimate's, else the reference's (not
+    // for a sensor the reference was made with: it would test it against
+    // itself).
     const SensorMask others = used & ~(SensorMask{1} << i);
     const SensorMask from = contains(used, i) ? others : used;
     std::optional<SubsetFit> fit;
     if (count_sensors(from) >= 2) {
       fit = solver.fit(from, m);
-    } else if (reference != nullptr) {
+    } else if (reference != nullptr && !contains(reference->used, i)) {
       fit = SubsetFit{reference->twist, reference->covariance};
     }
     if (!fit) continue;

@@ -736,6 +736,17 @@ void run_gyro(CalibrationSummary& r, const RobotConfig& config, const LogFiles& 
     source = fmt::format("the camera's heading ({}, differenced)", files.camera->string());
   } else if (options.imu_reference != GyroReference::kWheels) {
     const bool nominal = options.imu_reference == GyroReference::kArrayNominal;
+    // The array at mounts this run could not determine (kimlee's minimum-norm
+    // correction, a forced misfit) reads rotation wrongly by as much as they
+    // are off: the gyro would be calibrated to that.
+    if (!nominal && r.termination != CalibrationTermination::kConverged) {
+      throw OptionError(fmt::format(
+          "{}: gyro calibration against array refused: the mounts calibrated here are not usable "
+          "({}), so neither is their rotation. Nothing written ({{imu_reference}} array-nominal, "
+          "wheels or camera calibrates the gyro against another reference, {{no_imu}} the mice "
+          "alone)",
+          OptionError::literal(files.imu->string()), to_name(r.termination)));
+    }
     reference =
         array_rates(nominal ? config : r.calibrated, files, t, options, report.reference_gaps);
     source = fmt::format("the array's rotation ({} at the {} mounts, least squares)",

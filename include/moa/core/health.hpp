@@ -119,7 +119,8 @@ class HealthMonitor {
   /// `reference`: the epoch's estimate when it was not the sensors' (the
   /// wheels' or the hold's, with the gyro's rotation; nullptr when none):
   /// a sensor whose leave-one-out fit has fewer than two others is tested
-  /// against it (two sensors that disagree: which one is wrong).
+  /// against it (two sensors that disagree: which one is wrong), unless it
+  /// is one of the reference's own (`reference->used`).
   void observe(const SubsetSolver& solver, const ArraySample& sample, const PointMeasurements& m,
                SensorMask used, SensorMask candidates,
                const std::array<std::uint8_t, kMaxSensors>& noise_flags,
