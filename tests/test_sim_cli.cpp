@@ -174,15 +174,16 @@ TEST(SimCli, UnknownScenarioIsAnErrorAndWritesNothing) {
   const auto r = simulate("sekimori-c", 1, dir);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_THAT(
-      r.err, HasSubstr("scenario 'sekimori-c': not a built-in scenario (calib-camera, "
-                       "calib-mocap, calibration, "
-                       "cruise, differential, faults-bump, faults-cruise, faults-dirty, "
-                       "faults-drift, faults-floor, faults-liftoff, faults-runaway, faults-spikes, "
-                       "faults-stuck, faults-zero, guided, gyro-bump, gyro-compact, "
-                       "gyro-one, gyro-papers, kimlee, sekimori-a, "
-                       "sekimori-b, "
-                       "selfcal-ramp, selfcal-step, speed-scale) and no "
-                       "such file"));
+      r.err,
+      HasSubstr("scenario 'sekimori-c': not a built-in scenario (calib-camera, "
+                "calib-mocap, calibration, "
+                "cruise, differential, faults-bump, faults-cruise, faults-dirty, "
+                "faults-drift, faults-floor, faults-liftoff, faults-runaway, faults-spikes, "
+                "faults-stuck, faults-zero, guided, gyro-bump, gyro-bump-quiet, gyro-compact, "
+                "gyro-one, gyro-papers, kimlee, sekimori-a, "
+                "sekimori-b, "
+                "selfcal-ramp, selfcal-step, speed-scale) and no "
+                "such file"));
   EXPECT_FALSE(fs::exists(dir));
 }
 
