@@ -302,11 +302,9 @@ void SelfCalibration::update_gauge(double t) {
       radius_ * w.sum_theta_wheels, 0.0;
   const Vec3 r = y - h * w.k;
   if (r.norm() > options_.gate * d) return;  // the wheels slipped grossly
-  // 4. Measurement variance, m^2 per component; Huber beyond three standard
-  // deviations (chi-square 27 on three components).
+  // 4. Measurement variance, m^2 per component; Huber's weight (kalman.hpp).
   real var = (options_.wheel_noise * options_.wheel_noise * d * d + w.sum_var) * w.factor + 1e-12;
-  const real nu2 = r.squaredNorm() / var;
-  if (nu2 > 27.0) var *= nu2 / 27.0;
+  var *= huber_inflation<3>(r.squaredNorm() / var);
   // 5. The core's Kalman update (kalman.hpp, Joseph form).
   joseph_update<2, 3>(w.k, w.p, r, h, Mat3(var * Mat3::Identity()));
   w.p = 0.5 * (w.p + w.p.transpose()).eval();
@@ -354,9 +352,8 @@ void SelfCalibration::update(int i, double t) {
     const real mpc = metres_per_count_[static_cast<std::size_t>(i)];
     const real rel = options_.relative_noise * w.norm();
     real var = (mpc * mpc / 3.0 + s.sum_var + rel * rel) * s.factor;
-    // Huber: a block far out weighs as one at three standard deviations.
-    const real nu2 = r.squaredNorm() / var;
-    if (nu2 > 18.0) var *= nu2 / 18.0;
+    // Huber's weight (kalman.hpp): a block far out weighs as one at the edge.
+    var *= huber_inflation<2>(r.squaredNorm() / var);
     // The core's Kalman update (kalman.hpp, Joseph form) of (s_x, s_y, delta).
     Vec3 x(s.theta.scale_x, s.theta.scale_y, s.theta.yaw_offset);
     joseph_update<3, 2>(x, s.p, r, hj, Mat2(var * Mat2::Identity()));
