@@ -31,7 +31,7 @@ class Config:
     def to_yaml(self) -> str:
         """The config as YAML text (what `moa calibrate --out` writes)."""
     def to_dict(self) -> dict[str, Any]:
-        """The sensors as arrays: see read_config."""
+        """The sensors as arrays and the optional blocks (imu): see read_config."""
     def __len__(self) -> int: ...
 
 ConfigLike = Union[PathLike, Config]
@@ -89,7 +89,10 @@ def read_config(path: PathLike) -> dict[str, Any]:
     Returns names (list of str), position (N, 2) m robot frame, yaw (N,) rad,
     cpi (N,), scale (N, 2), mirrored (N,) bool, max_speed (N,) m/s and noise
     (N,) m/s (NaN where the config gives none), latency (N,) s, camera_latency
-    and wheels_latency (s, None where the config gives none).
+    and wheels_latency (s, None where the config gives none), imu (the imu:
+    block, a dict with its YAML keys scale, bias, noise_density,
+    bias_random_walk, bias_sigma, scale_sigma, mount_yaw_sigma, max_rate,
+    latency; None where the config has no imu: block).
     """
 
 def read_log(config: ConfigLike, log_dir: PathLike) -> dict[str, Any]:
@@ -97,8 +100,9 @@ def read_log(config: ConfigLike, log_dir: PathLike) -> dict[str, Any]:
 
     "mice": t (s), sensor (index in the config), dx, dy (counts, sensor
     frame), squal (-1 where absent), flags; for the files present "wheels":
-    t, vx, vy, omega; "camera": t, x, y, theta, sx, sy (NaN where absent);
-    "truth": t, x, y, theta; and "names".
+    t, vx, vy, omega; "imu": t, gz (rad/s, as imu.csv holds it); "camera": t,
+    x, y, theta, sx, sy (NaN where absent); "truth": t, x, y, theta; and
+    "names".
     """
 
 def odometry(
@@ -247,7 +251,8 @@ def calibrate(
 
 def simulate(scenario: str, seed: int = 1, out: Optional[PathLike] = None) -> dict[str, Any]:
     """Runs the simulator; with out, also writes the log there. Returns arrays:
-    mice, wheels, camera, truth (dicts), config, true_config (Config), names."""
+    mice, wheels, imu (t, gz; empty without a gyro), camera, truth (dicts), config,
+    true_config (Config), names."""
 
 def scenarios() -> list[str]:
     """Names of the built-in scenarios."""

@@ -114,6 +114,23 @@ py::dict config_dict(const io::RobotConfig& c) {
   // s, None when the config does not say
   d["camera_latency"] = c.camera_latency ? py::cast(*c.camera_latency) : py::none();
   d["wheels_latency"] = c.wheels_latency ? py::cast(*c.wheels_latency) : py::none();
+  // The imu: block, its keys as the YAML names them; None when the config has none.
+  if (c.imu) {
+    const GyroOptions& g = *c.imu;
+    py::dict imu;
+    imu["scale"] = static_cast<double>(g.scale);
+    imu["bias"] = static_cast<double>(g.bias);
+    imu["noise_density"] = static_cast<double>(g.noise_density);
+    imu["bias_random_walk"] = static_cast<double>(g.bias_random_walk);
+    imu["bias_sigma"] = static_cast<double>(g.bias_sigma);
+    imu["scale_sigma"] = static_cast<double>(g.scale_sigma);
+    imu["mount_yaw_sigma"] = static_cast<double>(g.mount_yaw_sigma);
+    imu["max_rate"] = static_cast<double>(g.max_rate);
+    imu["latency"] = g.latency;  // s
+    d["imu"] = imu;
+  } else {
+    d["imu"] = py::none();
+  }
   return d;
 }
 
@@ -478,7 +495,9 @@ io::CalibrationSummary calibrate(const py::object& config_path, const py::object
   }
   if (const auto reference = o.get<std::string>("reference")) {
     const auto r = from_name<io::ExactReference>(*reference);
-    if (!r) throw io::Error(fmt::format("reference: unknown reference '{}' (wheels, camera)", *reference));
+    if (!r)
+      throw io::Error(
+          fmt::format("reference: unknown reference '{}' (wheels, camera)", *reference));
     options.reference = *r;
   }
   o.set("max_offset", options.max_offset);
@@ -540,6 +559,14 @@ py::dict read_log(const py::object& config_path, const fs::path& log) {
     }
     d["wheels"] = columns({"t", "vx", "vy", "omega"}, std::move(v));
   }
+  if (files.imu) {
+    std::vector<std::vector<double>> v(2);
+    for (const auto& r : io::read_all<io::ImuRow>(*files.imu)) {
+      v[0].push_back(r.t);
+      v[1].push_back(r.gz);
+    }
+    d["imu"] = columns({"t", "gz"}, std::move(v));
+  }
   if (files.camera) {
     std::vector<std::vector<double>> v(6);
     const double nan = std::nan("");
@@ -600,6 +627,14 @@ py::dict simulate(const std::string& scenario_name, std::uint64_t seed,
         v[i++].push_back(x);
     }
     d["wheels"] = columns({"t", "vx", "vy", "omega"}, std::move(v));
+  }
+  {
+    std::vector<std::vector<double>> v(2);
+    for (const auto& r : log.imu) {
+      v[0].push_back(r.t);
+      v[1].push_back(r.gz);
+    }
+    d["imu"] = columns({"t", "gz"}, std::move(v));
   }
   {
     std::vector<std::vector<double>> v(5);
@@ -713,7 +748,7 @@ Config(path) reads a YAML file; Config.from_yaml(text) parses text.)")
           "The config as YAML text (what `moa calibrate --out` writes).")
       .def(
           "to_dict", [](const Config& c) { return config_dict(c.config); },
-          "The sensors as arrays: see moa.read_config.")
+          "The sensors as arrays and the optional blocks: see moa.read_config.")
       .def("__len__", [](const Config& c) { return c.config.names.size(); })
       .def("__repr__", [](const Config& c) {
         return fmt::format("<moa.Config {} ({} sensors)>", c.path, c.config.names.size());
@@ -725,15 +760,19 @@ Config(path) reads a YAML file; Config.from_yaml(text) parses text.)")
 
 Returns a dict: names (list of str), position (N, 2) m robot frame, yaw (N,)
 rad, cpi (N,), scale (N, 2), mirrored (N,) bool, max_speed (N,) m/s and noise
-(N,) m/s (NaN where the config gives none).)");
+(N,) m/s (NaN where the config gives none), latency (N,) s, camera_latency and
+wheels_latency (s, None where the config gives none), imu (the imu: block as a
+dict: scale, bias, noise_density, bias_random_walk, bias_sigma, scale_sigma,
+mount_yaw_sigma, max_rate, latency; None where the config has none).)");
 
   m.def("read_log", &read_log, py::arg("config"), py::arg("log_dir"),
         R"(Reads a log directory (or its mice.csv) into arrays.
 
 Returns a dict with "mice": t (s), sensor (index in the config), dx, dy
 (counts, sensor frame), squal (-1 where absent), flags; and, for the files
-present, "wheels": t, vx, vy, omega; "camera": t, x, y, theta, sx, sy (NaN
-where absent); "truth": t, x, y, theta; and "names".)");
+present, "wheels": t, vx, vy, omega; "imu": t, gz (rad/s, as imu.csv holds
+it); "camera": t, x, y, theta, sx, sy (NaN where absent); "truth": t, x, y,
+theta; and "names".)");
 
   m.def("odometry", &odometry, py::arg("config"), py::arg("log_dir"),
         py::arg("estimator") = "consensus",
@@ -914,9 +953,10 @@ Returns a moa.Calibration; its config carries the latencies found.)");
 scenario: a built-in name (see moa.scenarios()) or a scenario YAML path.
 With out, also writes the log there (the same records). Returns a dict:
 mice (t, sensor, dx, dy, squal, flags, faults), wheels (t, vx, vy, omega),
-camera (t, t_arrival, x, y, sigma, outlier), truth (t, x, y, theta, vx, vy,
-omega: twist over the frame ending at t), config (nominal moa.Config),
-true_config, names.)");
+imu (t, gz: the gyro's rows, what imu.csv gets; empty without a gyro), camera
+(t, t_arrival, x, y, sigma, outlier), truth (t, x, y, theta, vx, vy, omega:
+twist over the frame ending at t), config (nominal moa.Config), true_config,
+names.)");
 
   m.def("scenarios", &sim::builtin_scenarios, "Names of the built-in scenarios.");
 

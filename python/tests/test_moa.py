@@ -412,6 +412,41 @@ def test_simulate_in_memory_equals_the_written_log(logs, tmp_path):
     assert (tmp_path / "sim" / "mice.csv").read_text() == \
         (logs["calibration"] / "mice.csv").read_text()
     assert "calibration" in moa.scenarios()
+    # No gyro in this scenario: no imu.csv, no imu rows.
+    assert not (logs["calibration"] / "imu.csv").exists()
+    assert "imu" not in files
+    assert len(sim["imu"]["t"]) == len(sim["imu"]["gz"]) == 0
+
+
+def read_rows(path, columns):
+    """A log CSV's columns as floats, parsed here (csv module), not by moa."""
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
+    return {c: np.array([float(r[c]) for r in rows]) for c in columns}
+
+
+def test_read_log_and_simulate_give_the_gyro_rows_of_imu_csv(tmp_path):
+    d = tmp_path / "gyro"
+    code, _, err = run("simulate", "--scenario", "gyro-compact", "--seed", 7, "--out", d,
+                       "--quiet")
+    assert code == 0, err
+    f = read_rows(d / "imu.csv", ["t", "gz"])
+    assert len(f["t"]) > 1000  # 100 rows/s over 33 s
+    log = moa.read_log(d / "robot.yaml", d)
+    assert set(log["imu"]) == {"t", "gz"}
+    for c in ["t", "gz"]:
+        assert log["imu"][c].dtype == np.float64
+        np.testing.assert_array_equal(log["imu"][c], f[c], err_msg=c)
+    assert (np.diff(log["imu"]["t"]) > 0).all()
+    # The gyro's rows: at rest for the first 2 s it reads its bias (0.01 rad/s,
+    # robot.yaml says 0), then the turns (up to 1.82 rad/s, scale 1.02).
+    rest = log["imu"]["gz"][log["imu"]["t"] < 1.9]
+    assert len(rest) > 150 and abs(rest.mean() - 0.01) < 2e-3
+    assert 1.8 < log["imu"]["gz"].max() < 1.9 and log["imu"]["gz"].min() < -0.9
+    # In memory, the same rows (imu.csv holds gz to 9 significant digits).
+    sim = moa.simulate("gyro-compact", 7)
+    np.testing.assert_array_equal(sim["imu"]["t"], f["t"])
+    np.testing.assert_allclose(sim["imu"]["gz"], f["gz"], rtol=1e-8, atol=1e-12)
 
 
 def test_read_config_gives_the_configs_arrays(logs):
@@ -422,6 +457,60 @@ def test_read_config_gives_the_configs_arrays(logs):
     again = moa.Config.from_yaml(cfg.to_yaml()).to_dict()
     for k in ["position", "yaw", "cpi", "scale", "mirrored"]:
         np.testing.assert_array_equal(again[k], c[k])
+
+
+IMU_KEYS = {"scale", "bias", "noise_density", "bias_random_walk", "bias_sigma", "scale_sigma",
+            "mount_yaw_sigma", "max_rate", "latency"}
+
+
+def yaml_block(path, key):
+    """A top-level block of a config, parsed here (PyYAML, else a flat parse of
+    its `  name: number` lines), not by moa; None when the file has none."""
+    text = pathlib.Path(path).read_text()
+    try:
+        import yaml
+    except ImportError:
+        block, inside = None, False
+        for line in text.splitlines():
+            line = line.split("#")[0].rstrip()
+            if line == f"{key}:":
+                block, inside = {}, True
+            elif inside and line.startswith("  ") and ":" in line:
+                name, value = line.strip().split(":", 1)
+                block[name.strip()] = float(value)
+            elif line and not line.startswith(" "):
+                inside = False
+        return block
+    return yaml.safe_load(text).get(key)
+
+
+def test_read_config_gives_the_imu_block(logs, tmp_path):
+    d = tmp_path / "gyro"
+    code, _, err = run("simulate", "--scenario", "gyro-compact", "--seed", 1, "--out", d,
+                       "--quiet")
+    assert code == 0, err
+    for config in ["robot.yaml", "robot.true.yaml"]:
+        expected = yaml_block(d / config, "imu")
+        assert set(expected) == IMU_KEYS, config
+        c = moa.read_config(d / config)
+        assert c["imu"] == {k: float(v) for k, v in expected.items()}, config
+        assert moa.Config(d / config).to_dict()["imu"] == c["imu"]
+        again = moa.Config.from_yaml(moa.Config(d / config).to_yaml()).to_dict()
+        assert again["imu"] == c["imu"]
+    # The nominal config and the simulated gyro differ (scale 1 and 1.02).
+    nominal, true = (moa.read_config(d / c)["imu"] for c in ["robot.yaml", "robot.true.yaml"])
+    assert nominal["scale"] == 1.0 and true["scale"] == 1.02
+    # A block that gives some keys: the others at their documented defaults.
+    text = (logs["calibration"] / "robot.yaml").read_text()
+    partial = moa.Config.from_yaml(text + "imu:\n  bias: 0.02\n  latency: -0.003\n").to_dict()
+    assert partial["imu"] == {"scale": 1.0, "bias": 0.02, "noise_density": 1.5e-4,
+                              "bias_random_walk": 1e-4, "bias_sigma": 0.05, "scale_sigma": 0.03,
+                              "mount_yaw_sigma": 0.0035, "max_rate": 8.7, "latency": -0.003}
+    # No imu: block: None, as camera_latency and wheels_latency without theirs.
+    assert yaml_block(logs["calibration"] / "robot.yaml", "imu") is None
+    for c in [moa.read_config(logs["calibration"] / "robot.yaml"),
+              moa.Config(logs["calibration"] / "robot.yaml").to_dict()]:
+        assert "imu" in c and c["imu"] is None
 
 
 def test_evaluate_equals_the_command(logs, tmp_path):
