@@ -552,5 +552,110 @@ TEST(Live, AStreamsFileThatCannotBeReadIsRefused) {
                        ": cannot read (No such file or directory)\n");
 }
 
+// The line of a run's summary that counts the epochs whose heading was the
+// gyro's ("gyro: bias ..., heading from the gyro in N of M epochs (P %)"),
+// from "heading" on; empty when there is none.
+std::string heading_line(const std::string& summary) {
+  const auto at = summary.find("heading from the gyro in ");
+  if (at == std::string::npos) return {};
+  return summary.substr(at, summary.find('\n', at) - at);
+}
+
+// A replayed log's gyro (imu.csv, scenario gyro-compact: four sensors 2.5 cm
+// from the centre, so the gyro's rotation wins most epochs) is fed as `moa
+// odometry` feeds it: the same rows in the same order into the same
+// pipeline (the zero rows LiveRunSource starts with are no-ops), so the same
+// odometry byte for byte, with as many epochs headed by the gyro, most of
+// them; a replay that ignored imu.csv would have none and its own poses.
+// Odometry runs with --no-wheels: a replay feeds no wheels.csv (docs/live.md).
+// --record keeps the gyro rows fed, and the recording replays alike. With
+// --no-imu both ignore it, again the same odometry, not the fused one.
+TEST(Live, AReplayedGyroIsFedAsMoaOdometryFeedsIt) {
+  const fs::path dir = scratch_dir("live-gyro");
+  const fs::path log = dir / "log";
+  ASSERT_EQ(run_moa("simulate --scenario gyro-compact --seed 1 --out " + log.string()).exit_code,
+            0);
+  const std::string config = (log / "robot.yaml").string();
+  for (const std::string flags : {"", " --no-imu"}) {
+    SCOPED_TRACE(flags);
+    const fs::path offline = dir / "odometry.csv", live = dir / "live.csv";
+    const fs::path record = dir / (flags.empty() ? "rec" : "rec-no-imu");
+    const auto o = run_moa("odometry --config " + config + " --log " + log.string() +
+                           " --no-wheels --out " + offline.string() + flags);
+    ASSERT_EQ(o.exit_code, 0) << o.err;
+    const auto r =
+        run_moa("live --config " + config + " --replay " + log.string() + " --speed 50 --record " +
+                record.string() + " --out " + live.string() + flags);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(read_text(live), read_text(offline));
+    EXPECT_EQ(heading_line(r.out), heading_line(o.out)) << r.out;
+    if (flags.empty()) {
+      // Most epochs: N of M with N > M / 2.
+      ASSERT_NE(heading_line(r.out), "") << r.out;
+      std::istringstream counts(heading_line(r.out).substr(25));
+      std::size_t n = 0, m = 0;
+      std::string of;
+      counts >> n >> of >> m;
+      EXPECT_GT(2 * n, m) << r.out;
+      EXPECT_GT(data_lines(record / "imu.csv"), 0u);
+      const auto replay =
+          run_moa("odometry --config " + (record / "robot.yaml").string() + " --log " +
+                  record.string() + " --no-wheels --quiet --out " + (dir / "replay.csv").string());
+      ASSERT_EQ(replay.exit_code, 0) << replay.err;
+      EXPECT_EQ(read_text(dir / "replay.csv"), read_text(live));
+    } else {
+      EXPECT_EQ(heading_line(r.out), "");
+      EXPECT_FALSE(fs::exists(record / "imu.csv"));
+    }
+  }
+  fs::remove_all(dir);
+}
+
+// One sensor and a gyro (scenario gyro-one): the replay takes the sensor's
+// rotation from imu.csv as `moa odometry` (--no-wheels, as above) does, to
+// the same odometry, and the run is usable (before, every epoch was held).
+// One sensor without the gyro, a one-row imu.csv and a bad one are refused
+// with odometry's words, before any output.
+TEST(Live, OneSensorReplaysWithItsRotationFromTheGyro) {
+  const fs::path dir = scratch_dir("live-gyro-one");
+  const fs::path log = dir / "log";
+  ASSERT_EQ(run_moa("simulate --scenario gyro-one --seed 1 --out " + log.string()).exit_code, 0);
+  const std::string config = (log / "robot.yaml").string();
+  const fs::path offline = dir / "odometry.csv", live = dir / "live.csv";
+  const auto o = run_moa("odometry --config " + config + " --log " + log.string() +
+                         " --no-wheels --out " + offline.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  const auto r = run_moa("live --config " + config + " --replay " + log.string() +
+                         " --speed 500 --out " + live.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(read_text(live), read_text(offline));
+  EXPECT_NE(r.out.find("\nusable: "), std::string::npos) << r.out;
+  EXPECT_NE(heading_line(r.out), "");
+  EXPECT_EQ(heading_line(r.out), heading_line(o.out));
+
+  // Refusals: the same error after "moa live: " as after "moa odometry: ".
+  const auto expect_refused_alike = [&](const std::string& flags, const std::string& what) {
+    SCOPED_TRACE(flags);
+    fs::remove(live);
+    const auto odometry = run_moa("odometry --config " + config + " --log " + log.string() +
+                                  " --out " + offline.string() + flags);
+    const auto replay = run_moa("live --config " + config + " --replay " + log.string() +
+                                " --speed 500 --out " + live.string() + flags);
+    EXPECT_EQ(odometry.exit_code, 1);
+    EXPECT_EQ(replay.exit_code, 1);
+    EXPECT_NE(replay.err.find(what), std::string::npos) << replay.err;
+    ASSERT_EQ(odometry.err.rfind("moa odometry: ", 0), 0u) << odometry.err;
+    ASSERT_EQ(replay.err.rfind("moa live: ", 0), 0u) << replay.err;
+    EXPECT_EQ(replay.err.substr(10), odometry.err.substr(14));
+    EXPECT_FALSE(fs::exists(live));
+  };
+  expect_refused_alike(" --no-imu", "one sensor needs a gyro for its rotation: --no-imu given");
+  std::ofstream(log / "imu.csv") << "t,gz\n0,0\n";
+  expect_refused_alike("", "imu.csv has 1 data row (the first only opens an interval)");
+  std::ofstream(log / "imu.csv") << "t,gz\n0,0\n0.01,0.1\n0.02,fast\n";
+  expect_refused_alike("", (log / "imu.csv").string() + ":4");
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace moa::test

@@ -134,6 +134,16 @@ int run_live(LiveArgs args) {
     args.odometry.options.max_gap = OdometryOptions{}.max_gap;
   }
   OdometryOptions odometry_options = resolve_odometry_flags(args.odometry, config, args.config);
+  const io::LiveSourceSpec spec = source_spec(args.source, config, args.config);
+  // A replayed log's gyro (imu.csv) as `moa odometry` reads it, one sensor
+  // without it refused alike, before any output (the streams may bring one).
+  std::unique_ptr<io::ImuReader> replay_gyro;
+  std::string replay_gyro_file;
+  if (!spec.replay.empty()) {
+    const io::LogFiles log = io::resolve_log(spec.replay);
+    replay_gyro = io::open_log_imu(config, log, odometry_options, !args.streams.empty());
+    if (replay_gyro) replay_gyro_file = log.imu->string();
+  }
   // As `moa odometry` on the recording: the gyro goes to the consensus only.
   if (odometry_options.estimator != EstimatorKind::kConsensus) odometry_options.use_imu = false;
   for (const auto& w : self_calibration_warnings(odometry_options)) {
@@ -167,7 +177,6 @@ int run_live(LiveArgs args) {
   };
 
   // No output names an input (nor another output).
-  const io::LiveSourceSpec spec = source_spec(args.source, config, args.config);
   std::vector<fs::path> inputs = io::live_source_files(spec);
   inputs.emplace_back(args.config);
   const bool streams_file =
@@ -182,7 +191,9 @@ int run_live(LiveArgs args) {
       io::refuse_output_onto_inputs(dir / "imu.csv", "--record", inputs);
       io::refuse_output_onto_inputs(dir / "camera.csv", "--record", inputs);
     }
-    if (!spec.serial.empty()) io::refuse_output_onto_inputs(dir / "imu.csv", "--record", inputs);
+    if (!spec.serial.empty() || replay_gyro) {
+      io::refuse_output_onto_inputs(dir / "imu.csv", "--record", inputs);
+    }
     // A recording is data that cannot be made again: replaced only when asked.
     for (const char* name : {"mice.csv", "mice.csv.part", "robot.yaml"}) {
       std::error_code ec;
@@ -261,9 +272,9 @@ int run_live(LiveArgs args) {
                                                  live.serial != nullptr || live.replay != nullptr,
                                                  io::MiceWriter::Durability::kJournal, comments);
   }
-  // The streams' rows, and a serial board's gyro (imu.csv).
+  // The streams' rows, and a serial board's or the replayed log's gyro (imu.csv).
   std::unique_ptr<io::StreamCsvWriter> stream_recording;
-  if (recording && (!args.streams.empty() || live.serial)) {
+  if (recording && (!args.streams.empty() || live.serial || replay_gyro)) {
     stream_recording = std::make_unique<io::StreamCsvWriter>(
         args.record,
         args.streams.empty()
@@ -354,6 +365,7 @@ int run_live(LiveArgs args) {
 
   if (streams) input.add_streams(*streams, spec.replay.empty() ? 1.0 : spec.replay_options.speed);
   if (live.serial) input.add_gyro(*live.serial);
+  if (replay_gyro) input.add_gyro(*replay_gyro, replay_gyro_file);
   // A live input's bad row (a saturated record, a time out of order) is
   // skipped and not recorded, so that the recording replays; each kind is
   // reported once, with the count at the end.
@@ -474,8 +486,9 @@ void add_live(CLI::App& app, Action& action) {
       ->check(CLI::ExistingFile);
   add_source_flags(cmd, args->source);
   cmd->add_option("--record", args->record,
-                  "Record the rows to DIR (log v1 mice.csv + robot.yaml; a serial board's gyro "
-                  "to imu.csv, t,gz in s, rad/s) for replay with `moa odometry`");
+                  "Record the rows to DIR (log v1 mice.csv + robot.yaml; a serial board's or a "
+                  "replayed log's gyro to imu.csv, t,gz in s, rad/s) for replay with `moa "
+                  "odometry`");
   cmd->add_option("--out", args->out, "Write odometry.csv to FILE (at the end), or '-' for stdout");
   // No limit on silences: live rows come at the pace of real time, so a
   // robot parked for hours is no runaway of still epochs (a replay: see

@@ -135,7 +135,11 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
       ->delimiter(',')
       ->check(kFinite);
   cmd->add_flag("--no-imu", f.no_imu,
-                "Ignore the gyro (imu.csv; by default the consensus fuses it, config key imu)");
+                live ? "Ignore the gyro (a --replay log's imu.csv, a --serial board's, --streams "
+                       "imu lines; by default the consensus fuses it, config key imu; one sensor "
+                       "is then refused for --replay)"
+                     : "Ignore the gyro (imu.csv; by default the consensus fuses it, config key "
+                       "imu; one sensor is then refused)");
   if (live) return;
   cmd->add_flag("--no-wheels", f.no_wheels,
                 "Ignore wheels.csv (by default it is the fallback and plausibility check)");

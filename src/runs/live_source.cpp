@@ -84,10 +84,17 @@ void LiveRunSource::add_streams(StreamLineReader& streams, double speed) {
 double LiveRunSource::start_time() { return t0_; }
 
 std::string LiveRunSource::where() const {
+  if (from_gyro_log_) return gyro_log_file_;
   return from_streams_ ? fmt::format("{} (streams)", where_) : where_;
 }
 
 void LiveRunSource::add_gyro(SerialReader& serial) { gyro_serial_ = &serial; }
+
+void LiveRunSource::add_gyro(ImuReader& imu, std::string file) {
+  gyro_log_ = &imu;
+  gyro_log_file_ = std::move(file);
+  gyro_log_next_ = imu.next();
+}
 
 void LiveRunSource::take_gyro() {
   if (gyro_serial_ == nullptr) return;
@@ -142,7 +149,7 @@ void LiveRunSource::take_streams() {
 }
 
 const InputRow* LiveRunSource::next() {
-  from_streams_ = false;
+  from_streams_ = from_gyro_log_ = false;
   if (started_ == 0) {
     t_last_ = t_ref_ = t0_;
     arrival_ref_ = std::chrono::steady_clock::now();
@@ -169,7 +176,7 @@ const InputRow* LiveRunSource::next() {
   }
   const double limit = ended_ ? t_last_ : pending_->t;
   // A row due from the first queue that has one, in this order: fixes, wheels, the
-  // serial device's gyro, the streamed gyro.
+  // serial device's gyro, the replayed log's gyro, the streamed gyro.
   const auto take = [&](auto& queue, bool streamed) {
     if (queue.empty() || queue.front().t > limit) return false;
     row_ = queue.front();
@@ -177,9 +184,15 @@ const InputRow* LiveRunSource::next() {
     if (streamed) from_streams_ = true;
     return true;
   };
-  if (take(fixes_, true) || take(wheels_, true) || take(serial_gyro_, false) || take(gyro_, true)) {
+  if (take(fixes_, true) || take(wheels_, true) || take(serial_gyro_, false)) return &row_;
+  // The replayed log's gyro, read as it falls due.
+  if (gyro_log_next_ && gyro_log_next_->t <= limit) {
+    row_ = *gyro_log_next_;
+    gyro_log_next_ = gyro_log_->next();
+    from_gyro_log_ = true;
     return &row_;
   }
+  if (take(gyro_, true)) return &row_;
   if (ended_) return nullptr;
   row_ = *pending_;
   t_last_ = pending_->t;

@@ -424,12 +424,8 @@ class LogRunSource final : public RunSource {
 
 }  // namespace
 
-OdometryRun run_odometry(const RobotConfig& config, const std::string& config_path,
-                         const LogFiles& log, const OdometryOptions& options,
-                         const StepCallback& on_step, const ProgressCallback& progress) {
-  MiceReader mice(log.mice, config);
-  std::unique_ptr<WheelsReader> wheels;
-  if (options.use_wheels && log.wheels) wheels = std::make_unique<WheelsReader>(*log.wheels);
+std::unique_ptr<ImuReader> open_log_imu(const RobotConfig& config, const LogFiles& log,
+                                        const OdometryOptions& options, bool other_gyro) {
   // The gyro goes to the consensus only (least squares and Sekimori & Miyazaki
   // stay as their papers define them).
   std::unique_ptr<ImuReader> imu;
@@ -437,23 +433,38 @@ OdometryRun run_odometry(const RobotConfig& config, const std::string& config_pa
     imu = std::make_unique<ImuReader>(*log.imu);
   }
   if (config.array.size() == 1 && options.estimator != EstimatorKind::kWheels) {
-    if (!imu) {
+    // Another gyro (a live run's streams) may stand in for a missing imu.csv,
+    // not for a pipeline that takes none.
+    const bool takes_gyro = options.use_imu && options.estimator == EstimatorKind::kConsensus;
+    if (!imu && (!takes_gyro || !other_gyro)) {
       throw Error(fmt::format("{}: one sensor needs a gyro for its rotation: {}", log.mice.string(),
                               !options.use_imu ? "--no-imu given"
                               : !log.imu       ? "no imu.csv in " + log.dir.string()
                                                : "the estimator is not consensus"));
     }
     // Two rows at least: the first only opens the gyro's first interval.
-    ImuReader peek(*log.imu);
-    int rows = 0;
-    while (rows < 2 && peek.next()) ++rows;
-    if (rows < 2) {
-      throw Error(
-          fmt::format("{}: one sensor needs a gyro for its rotation: {} has {} data row{} "
-                      "(the first only opens an interval)",
-                      log.mice.string(), log.imu->string(), rows, rows == 1 ? "" : "s"));
+    if (imu && !other_gyro) {
+      ImuReader peek(*log.imu);
+      int rows = 0;
+      while (rows < 2 && peek.next()) ++rows;
+      if (rows < 2) {
+        throw Error(
+            fmt::format("{}: one sensor needs a gyro for its rotation: {} has {} data row{} "
+                        "(the first only opens an interval)",
+                        log.mice.string(), log.imu->string(), rows, rows == 1 ? "" : "s"));
+      }
     }
   }
+  return imu;
+}
+
+OdometryRun run_odometry(const RobotConfig& config, const std::string& config_path,
+                         const LogFiles& log, const OdometryOptions& options,
+                         const StepCallback& on_step, const ProgressCallback& progress) {
+  MiceReader mice(log.mice, config);
+  std::unique_ptr<WheelsReader> wheels;
+  if (options.use_wheels && log.wheels) wheels = std::make_unique<WheelsReader>(*log.wheels);
+  const std::unique_ptr<ImuReader> imu = open_log_imu(config, log, options);
   std::unique_ptr<CameraReader> camera;
   if (options.fuse_camera) {
     if (!log.camera) {

@@ -91,6 +91,11 @@ class LiveRunSource final : public RunSource {
   /// sample that comes after the rows of its window (the first of a stream)
   /// is stamped just after them.
   void add_gyro(SerialReader& serial);
+  /// Merges a replayed log's gyro in (its imu.csv, opened by open_log_imu,
+  /// runs/odometry_run.hpp) as `moa odometry` does: each row before the
+  /// first mice row at or after its t, after that row's fixes and wheel
+  /// rows. `file` names it in messages, as odometry does.
+  void add_gyro(ImuReader& imu, std::string file);
   double start_time() override;
   const InputRow* next() override;
   std::string where() const override;
@@ -132,6 +137,10 @@ class LiveRunSource final : public RunSource {
   std::size_t dropped_ = 0;
   SerialReader* gyro_serial_ = nullptr;  ///< the serial device's gyro (add_gyro)
   std::deque<ImuRow> serial_gyro_;       ///< its samples, not yet handed out
+  ImuReader* gyro_log_ = nullptr;        ///< a replayed log's imu.csv (add_gyro) ...
+  std::string gyro_log_file_;            ///< ... its path ...
+  std::optional<ImuRow> gyro_log_next_;  ///< ... and its next row, not yet handed out
+  bool from_gyro_log_ = false;           ///< row_ came from it
 };
 
 }  // namespace moa::io

@@ -1,5 +1,5 @@
 // The odometry pipeline (moa/core/odometry.hpp) over the files of a log
-// directory: mice.csv, and when present and asked for wheels.csv,
+// directory: mice.csv, and when present and asked for wheels.csv, imu.csv,
 // camera.csv, faults.csv, merged in time order. `moa odometry`, the
 // experiments and the Python bindings all run this.
 #pragma once
@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -14,6 +15,7 @@
 
 #include "moa/core/odometry.hpp"
 #include "moa/formats/config.hpp"
+#include "moa/formats/log.hpp"
 #include "moa/runs/run_loop.hpp"
 
 namespace moa::io {
@@ -42,6 +44,17 @@ LogFiles resolve_log(const std::filesystem::path& log);
 OdometryOptions resolve_odometry_options(OdometryOptions options, std::string_view estimator,
                                          const std::vector<std::string>& sensors, bool no_wheels,
                                          const RobotConfig& config, const std::string& config_path);
+
+/// The log's gyro as the pipeline takes it, for `moa odometry` and `moa live
+/// --replay`: imu.csv opened when options.use_imu, the log has one and the
+/// estimator is the consensus (the gyro goes to the consensus only), else
+/// null. One sensor takes its rotation from the gyro: for a one-sensor config
+/// (estimator not wheels) throws io::Error "LOG/mice.csv: one sensor needs a
+/// gyro for its rotation: --no-imu given" (or the estimator is not the
+/// consensus), and, unless `other_gyro` (a live run's streams may bring
+/// one), when the log has no imu.csv or fewer than two data rows in it.
+std::unique_ptr<ImuReader> open_log_imu(const RobotConfig& config, const LogFiles& log,
+                                        const OdometryOptions& options, bool other_gyro = false);
 
 using StepCallback = std::function<void(const OdometryStep&)>;
 /// Called now and then with the mice rows read so far and their time (s).
