@@ -195,7 +195,8 @@ int run_live(LiveArgs args) {
       io::refuse_output_onto_inputs(dir / "imu.csv", "--record", inputs);
     }
     // A recording is data that cannot be made again: replaced only when asked.
-    for (const char* name : {"mice.csv", "mice.csv.part", "robot.yaml"}) {
+    for (const char* name :
+         {"mice.csv", "mice.csv.part", "robot.yaml", "wheels.csv", "imu.csv", "camera.csv"}) {
       std::error_code ec;
       if (!args.force && fs::exists(dir / name, ec)) {
         throw io::Error(
@@ -203,6 +204,14 @@ int run_live(LiveArgs args) {
                         "it",
                         args.record, name));
       }
+    }
+    // Replaced as a whole: the streams an earlier recording left beside its
+    // mice would otherwise be replayed with the new ones (unless one of them
+    // is an input: refused).
+    for (const char* name : {"wheels.csv", "imu.csv", "camera.csv"}) {
+      io::refuse_output_onto_inputs(dir / name, "--record", inputs);
+      std::error_code ec;
+      fs::remove(dir / name, ec);
     }
   }
   if (!args.out.empty() && !to_stdout) {
