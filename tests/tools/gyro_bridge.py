@@ -17,12 +17,24 @@ import csv
 import math
 import sys
 
-import yaml
-
 
 def rows(path):
     with open(path) as f:
         return list(csv.DictReader(line for line in f if not line.startswith("#")))
+
+
+def imu_block(path):
+    """The numbers of robot.yaml's top-level `imu:` block (as moa writes it)."""
+    block, inside = {}, False
+    for line in open(path):
+        if line.startswith("imu:"):
+            inside = True
+        elif inside and line.startswith("  ") and ":" in line:
+            key, value = line.split("#")[0].split(":", 1)
+            block[key.strip()] = float(value)
+        elif inside and line.strip():
+            break
+    return block
 
 
 def main():
@@ -30,8 +42,7 @@ def main():
     if len(args) != 2:
         sys.exit(__doc__)
     odometry, log = args
-    config = yaml.safe_load(open(f"{log}/robot{'.true' if '--true' in sys.argv else ''}.yaml"))
-    imu = config.get("imu", {})
+    imu = imu_block(f"{log}/robot{'.true' if '--true' in sys.argv else ''}.yaml")
     scale, bias, latency = imu.get("scale", 1.0), imu.get("bias", 0.0), imu.get("latency", 0.0)
     gyro = {round(float(r["t"]) - latency, 3): float(r["gz"]) for r in rows(f"{log}/imu.csv")}
     truth = {round(float(r["t"]), 2): r for r in rows(f"{log}/truth.csv")}
