@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "moa/core/chi2.hpp"
+#include "moa/core/consensus.hpp"
 #include "moa/core/health.hpp"
 #include "moa/core/odometry.hpp"
 #include "moa/core/self_calibration.hpp"
@@ -124,6 +126,68 @@ TEST(SelfCalibration, UntouchedArrayKeepsIdentityCorrection) {
   EXPECT_EQ(s.counts[0], Eigen::Vector2d(12.0, -7.0));
   EXPECT_EQ(cal.calibration(2).scale_x, 1.0);
   EXPECT_FALSE(cal.runaway(1));
+}
+
+// The self-calibration's states are the consensus's: a sensor whose
+// resolution is 27.5 % off (1020 cpi configured as 800; beyond the runaway
+// bound of 25 %) is left out as `calibration`, a hypothesis of its own, and
+// is still tested against each epoch's twist through its own calibration.
+// Noise-free real-valued counts on mixed motion: once its estimate is there
+// its corrected reading fits the twist (test ratio under 1: the estimate's
+// error is far below the noise model's 2 % relative term), while its raw
+// reading, 27.5 % off, would be rejected by a wide margin in every epoch
+// that moves it (computed here from the noise model's own covariance, taken wider than it is).
+TEST(SelfCalibration, ARunawayIsAHypothesisOfTheConsensusStillTestedThroughItsCalibration) {
+  const SensorArray array = regular_polygon(4, 0.1, 0.0);
+  SelfCalibrationOptions calibration;
+  calibration.enabled = true;
+  auto built = ConsensusEstimator::create(array, ConsensusOptions{}, calibration);
+  ASSERT_TRUE(std::holds_alternative<ConsensusEstimator>(built));
+  ConsensusEstimator& consensus = std::get<ConsensusEstimator>(built);
+  ASSERT_NE(consensus.self_calibration(), nullptr);
+  const real dt = 0.01, off = 1020.0 / 800.0;
+  int out_epochs = 0, fitting = 0, raw_rejected = 0;
+  for (int e = 1; e <= 2000; ++e) {
+    const double t = e * dt;
+    const Twist2 x = test::mixed_motion(t);
+    ArraySample s;
+    s.t = t;
+    s.dt = dt;
+    s.size = array.size();
+    for (int i = 0; i < array.size(); ++i) {
+      const auto u = static_cast<std::size_t>(i);
+      const Vec2 point = x.v + x.omega * Vec2(-array[i].position.y(), array[i].position.x());
+      s.counts[u] = array[i].robot_velocity_from_counts().inverse() * point * dt;
+      if (i == 1) s.counts[u] *= off;
+      s.squal[u] = 90;
+    }
+    const auto r = consensus.estimate(s);
+    ASSERT_TRUE(r.has_value());
+    for (int i : {0, 2, 3}) {
+      EXPECT_NE(r->excluded[static_cast<std::size_t>(i)], Exclusion::kCalibration) << t;
+    }
+    if (r->excluded[1] != Exclusion::kCalibration) continue;
+    ++out_epochs;
+    EXPECT_FALSE(contains(r->estimate.used, 1)) << t;
+    if (r->tests.sensor[1] <= 1.0) ++fitting;
+    // The raw reading against the epoch's twist: residual (off - 1) times
+    // the point velocity, its variance the noise model's relative term on
+    // the reading plus one count of quantisation per axis.
+    const Vec2 point = x.v + x.omega * Vec2(-array[1].position.y(), array[1].position.x());
+    const real rel = ConsensusOptions{}.noise.relative * off * point.norm();
+    const real q = 1.0 / (array[1].counts_per_metre() * dt);
+    const real ratio = ((off - 1.0) * point).squaredNorm() / (rel * rel + q * q) /
+                       chi2_quantile(1.0 - ConsensusOptions{}.alpha, 2);
+    if (ratio > 1.0) ++raw_rejected;
+  }
+  const auto* c = consensus.self_calibration();
+  EXPECT_TRUE(c->runaway(1));
+  EXPECT_NEAR(std::sqrt(c->calibration(1).scale_x * c->calibration(1).scale_y), off, 0.01);
+  // Out for most of the run (it runs away within a few seconds), fitting
+  // through its calibration in nearly every epoch, its raw reading not.
+  EXPECT_GT(out_epochs, 1000);
+  EXPECT_GE(fitting, out_epochs * 99 / 100);
+  EXPECT_GE(raw_rejected, out_epochs * 9 / 10);
 }
 
 // faults-drift: m2's resolution falls by 10 % over 6 s. Its final scale is

@@ -38,6 +38,7 @@ using ::testing::HasSubstr;
 void feed(SelfCalibration& cal, const SensorArray& array, real g, real d,
           const std::function<Twist2(double)>& x, int epochs, std::optional<real> wheel_scale) {
   const real dt = 0.01;
+  RepeatCounter repeats;  // the estimator's, which this test stands for
   for (int e = 1; e <= epochs; ++e) {
     const double t = e * dt;
     const Twist2 twist = x(t);
@@ -59,7 +60,8 @@ void feed(SelfCalibration& cal, const SensorArray& array, real g, real d,
     estimate.estimate.twist = twist;
     std::optional<Twist2> wheels;
     if (wheel_scale) wheels = Twist2{*wheel_scale * twist.v, *wheel_scale * twist.omega};
-    cal.observe(raw, estimate, wheels);
+    repeats.count(raw);
+    cal.observe(raw, estimate, wheels, repeats, 0);
   }
 }
 

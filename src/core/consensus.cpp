@@ -22,19 +22,20 @@ OptionCheck ConsensusOptions::validate() const {
 }
 
 std::variant<ConsensusEstimator, GeometryError> ConsensusEstimator::create(
-    const SensorArray& array, ConsensusOptions options) {
+    const SensorArray& array, ConsensusOptions options, const SelfCalibrationOptions& calibration) {
   // One sensor takes its rotation from the gyro (one_sensor()).
   if (array.size() == 1 && options.gyro_fed) {
     if (!valid_mount(array[0])) return GeometryError::kInvalidMount;
-    return ConsensusEstimator(array, options);
+    return ConsensusEstimator(array, options, calibration);
   }
   // The same acceptance rules as the plain estimator over all sensors.
   const auto check = LsEstimator::create(array, all_sensors(array.size()), 0.01);
   if (const auto* error = std::get_if<GeometryError>(&check)) return *error;
-  return ConsensusEstimator(array, options);
+  return ConsensusEstimator(array, options, calibration);
 }
 
-ConsensusEstimator::ConsensusEstimator(const SensorArray& array, ConsensusOptions options)
+ConsensusEstimator::ConsensusEstimator(const SensorArray& array, ConsensusOptions options,
+                                       const SelfCalibrationOptions& calibration)
     : n_(array.size()),
       options_(options),
       solver_(array),
@@ -48,6 +49,7 @@ ConsensusEstimator::ConsensusEstimator(const SensorArray& array, ConsensusOption
   }
   wheel_threshold_ = static_cast<real>(chi2_quantile(1.0 - options_.alpha, 3));
   gyro_threshold_ = static_cast<real>(chi2_quantile(1.0 - options_.alpha, 1));
+  if (calibration.enabled) calibration_.emplace(array, calibration, options_.noise);
 }
 
 namespace {
@@ -301,6 +303,24 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
                                                            const std::optional<Twist2>& wheels,
                                                            const std::optional<real>& gyro) {
   if (!(std::isfinite(sample.dt) && sample.dt > 0.0) || sample.size != n_) return std::nullopt;
+  repeats_.count(sample);
+  if (!calibration_) return estimate_counts(sample, 0, wheels, gyro);
+  // The counts as the sensors would read with their estimated calibration;
+  // a runaway or a correction held out as drift is left out of the search.
+  corrected_ = sample;
+  calibration_->correct(corrected_);
+  SensorMask held = 0;
+  for (int i = 0; i < n_; ++i) {
+    if (calibration_->runaway(i) || calibration_->held_as_drift(i)) held |= SensorMask{1} << i;
+  }
+  RobustEstimate out = estimate_counts(corrected_, held, wheels, gyro);
+  calibration_->observe(sample, out, wheels, repeats_, health_.drifting());
+  return out;
+}
+
+RobustEstimate ConsensusEstimator::estimate_counts(const ArraySample& sample, SensorMask held,
+                                                   const std::optional<Twist2>& wheels,
+                                                   const std::optional<real>& gyro) {
   RobustEstimate out;
   std::optional<GyroRate> rate;
   if (gyro) {
@@ -315,7 +335,10 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
 
   SensorMask candidates = 0;
   for (int i = 0; i < n_; ++i) {
-    if (sample.flags[static_cast<std::size_t>(i)] & kFlagLift) {
+    if (contains(held, i)) {
+      out.excluded[static_cast<std::size_t>(i)] =
+          calibration_->runaway(i) ? Exclusion::kCalibration : Exclusion::kDrift;
+    } else if (sample.flags[static_cast<std::size_t>(i)] & kFlagLift) {
       out.excluded[static_cast<std::size_t>(i)] = Exclusion::kLift;
     } else {
       candidates |= SensorMask{1} << i;
@@ -335,7 +358,7 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
     add(prior_.twist(), prior_.covariance(sample.t, sample.dt));
   }
   if (n_ == 1) return one_sensor(0, candidates, sample, refs, wheels, gyro, rate, out);
-  const SensorMask screened = health_.screen(sample, candidates, out.excluded);
+  const SensorMask screened = health_.screen(sample, candidates, repeats_, out.excluded);
   // The health monitor left one sensor: with the gyro it is an array of one.
   if (options_.gyro_fed && rate && count_sensors(screened) == 1) {
     int i = 0;

@@ -47,6 +47,7 @@ real HealthMonitor::drift(const SensorState& s) const {
 }
 
 SensorMask HealthMonitor::screen(const ArraySample& sample, SensorMask candidates,
+                                 const RepeatCounter& repeats,
                                  std::array<Exclusion, kMaxSensors>& excluded) {
   SensorMask allowed = candidates;
   if (!options_.enabled) return allowed;
@@ -78,16 +79,14 @@ SensorMask HealthMonitor::screen(const ArraySample& sample, SensorMask candidate
     const auto k = static_cast<std::size_t>(i);
     SensorState& s = state_[k];
     const Vec2 c = sample.counts[k];
-    // Exact repeats to 1e-6 counts: the synchroniser's rounding.
-    s.repeats = !c.isZero() && same_counts(c, s.last_counts) ? s.repeats + 1 : 0;
+    const int repeated = repeats.repeats(i);
     if (!all_zero) s.zeros = c.isZero() ? s.zeros + 1 : 0;
-    s.last_counts = c;
     if (!contains(candidates, i)) continue;  // lifted: nothing to judge
     const bool out = s.health == Health::kExcluded;
     // A frozen or zero hypothesis stands while its pattern holds; the first
     // fresh reading refutes it, and the release test starts on fresh samples.
     if (out && s.held &&
-        !(s.reason == Exclusion::kFrozen ? s.repeats > 0 : s.zeros > 0 || all_zero)) {
+        !(s.reason == Exclusion::kFrozen ? repeated > 0 : s.zeros > 0 || all_zero)) {
       s.held = false;
       s.mean.setZero();
       s.weight = s.time = 0.0;
@@ -101,7 +100,7 @@ SensorMask HealthMonitor::screen(const ArraySample& sample, SensorMask candidate
       bad = s.reason;
     } else if (!out && h_ > 0.0 && d > h_ && d >= largest_drift && newly_drifting < 0) {
       // A new alarm, named by the readings that raised it.
-      bad = s.repeats >= kPattern ? Exclusion::kFrozen
+      bad = repeated >= kPattern  ? Exclusion::kFrozen
             : s.zeros >= kPattern ? Exclusion::kZero
                                   : Exclusion::kDrift;
       newly_drifting = i;
@@ -150,6 +149,14 @@ SensorMask HealthMonitor::screen(const ArraySample& sample, SensorMask candidate
     }
   }
   return allowed;
+}
+
+SensorMask HealthMonitor::drifting() const {
+  SensorMask m = 0;
+  for (int i = 0; i < n_; ++i) {
+    if (reason(i) == Exclusion::kDrift) m |= SensorMask{1} << i;
+  }
+  return m;
 }
 
 void HealthMonitor::observe(const SubsetSolver& solver, const ArraySample& sample,

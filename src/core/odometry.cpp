@@ -60,10 +60,12 @@ OptionCheck OdometryOptions::validate() const {
                "needs fuse_camera (the scales are estimated from camera fixes)")
       .nested("self_calibration", self_calibration.validate())
       .require(!self_calibration.enabled ||
-                   (estimator != EstimatorKind::kLs && estimator != EstimatorKind::kSekimori),
+                   (estimator != EstimatorKind::kLs && estimator != EstimatorKind::kSekimori &&
+                    estimator != EstimatorKind::kOracle),
                "self_calibration",
                "needs the consensus estimator (ls and sekimori use every sensor, so one whose "
-               "calibration runs away could not be left out)");
+               "calibration runs away could not be left out; oracle selects by the simulator's "
+               "fault labels, not by tested hypotheses)");
   return c.result();
 }
 
@@ -114,9 +116,6 @@ Odometry::Odometry(const SensorArray& array, double t0, const OdometryOptions& o
   sub_array_ =
       SensorArray(std::span<const SensorMount>(mounts.data(), static_cast<std::size_t>(m_)));
   noise_ = NoiseModel(sub_array_, options_.consensus.noise);
-  if (options_.self_calibration.enabled) {
-    self_calibration_.emplace(sub_array_, options_.self_calibration, options_.consensus.noise);
-  }
   const double period = 1.0 / options_.rate;
   const auto take = [&](auto built) {
     using T = std::decay_t<decltype(std::get<0>(built))>;
@@ -134,7 +133,7 @@ Odometry::Odometry(const SensorArray& array, double t0, const OdometryOptions& o
       take(SekimoriEstimator::create(sub_array_, options_.sekimori));
       break;
     case EstimatorKind::kConsensus:
-      take(ConsensusEstimator::create(sub_array_, options_.consensus));
+      take(ConsensusEstimator::create(sub_array_, options_.consensus, options_.self_calibration));
       break;
     case EstimatorKind::kWheels:
       break;
@@ -304,7 +303,7 @@ bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& 
   // All sensors selected and no self-calibration (the usual case): the
   // epoch and the estimate are the estimator's own, with no copy into the
   // selection's indices and back.
-  const bool all = m_ == n_ && !self_calibration_;
+  const bool all = m_ == n_;
   if (!all) {
     // The selected sensors' part of the epoch.
     compact_.t = sample.t;
@@ -319,18 +318,6 @@ bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& 
       compact_.faults[u] = sample.faults[i];
     }
     selected_estimate_ = RobustEstimate{};
-    if (self_calibration_) {
-      // The counts as the sensors would read with their estimated calibration;
-      // a sensor whose estimate ran away, or that is held out as drift while
-      // its correction is applied, is left out as if lifted.
-      raw_ = compact_;
-      self_calibration_->correct(compact_);
-      for (int k = 0; k < m_; ++k) {
-        if (self_calibration_->runaway(k) || self_calibration_->held_as_drift(k)) {
-          compact_.flags[static_cast<std::size_t>(k)] |= kFlagLift;
-        }
-      }
-    }
   }
   const ArraySample& in = all ? sample : compact_;
   RobustEstimate& e = all ? out : selected_estimate_;  // out comes default-constructed
@@ -381,20 +368,12 @@ bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& 
     for (int k = 0; k < m_; ++k) e.excluded[static_cast<std::size_t>(k)] = Exclusion::kUnselected;
   }
   if (!ok) return false;
-  if (self_calibration_) {
-    for (int k = 0; k < m_; ++k) {
-      if (contains(e.estimate.used, k)) continue;
-      if (self_calibration_->runaway(k)) {
-        e.excluded[static_cast<std::size_t>(k)] = Exclusion::kCalibration;
-      } else if (self_calibration_->held_as_drift(k)) {
-        e.excluded[static_cast<std::size_t>(k)] = Exclusion::kDrift;
-      }
-    }
-    self_calibration_->observe(raw_, e, wheels);
+  const auto* consensus = std::get_if<ConsensusEstimator>(&estimator_);
+  if (const SelfCalibration* c = consensus ? consensus->self_calibration() : nullptr) {
     for (int k = 0; k < m_; ++k) {
       const auto i = static_cast<std::size_t>(selected_[static_cast<std::size_t>(k)]);
-      calibration_[i] = self_calibration_->applied(k);
-      calibration_filter_[i] = self_calibration_->calibration(k);
+      calibration_[i] = c->applied(k);
+      calibration_filter_[i] = c->calibration(k);
     }
   }
   if (all) {
@@ -452,7 +431,7 @@ void Odometry::process(const ArraySample& raw, StepSink sink) {
   }
   OdometryStep step;
   step.sample = &sample;
-  if (self_calibration_) {
+  if (options_.self_calibration.enabled) {
     step.calibration = &calibration_;
     step.calibration_filter = &calibration_filter_;
   }

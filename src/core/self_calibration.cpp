@@ -129,7 +129,8 @@ void SelfCalibration::renew(int i) {
 }
 
 void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& estimate,
-                              const std::optional<Twist2>& wheels) {
+                              const std::optional<Twist2>& wheels, const RepeatCounter& repeats,
+                              SensorMask drifting) {
   if (estimate.source != Source::kMice || !(std::isfinite(raw.dt) && raw.dt > 0.0)) return;
   const real dt = raw.dt;
   // Corrected point velocities of every sensor, weighed by their
@@ -143,20 +144,19 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
     points_.info[u] = Mat2::Identity() / (q * q / 6.0 + rel * rel + 1e-12);
   }
   // Counts alike (not zero) for the last three epochs are what a frozen
-  // register reads before the estimator can tell (health.hpp names an alarm
-  // frozen by the same pattern): such a sensor does not predict the others
+  // register reads before the estimator can tell (the estimator's repeat
+  // counter, by which health.hpp names an alarm frozen): such a sensor does
+  // not predict the others
   // this epoch, nor (after repeat_run) teach its own block. A good sensor's
   // chance run costs one predictor for an epoch. (faults-stuck seed 201:
   // the stuck register predicting the others for its first 0.1 s, before
   // the alarm, taught m1 a 1.5 % change, held out for 1.5 s: 45.9 mm, now
   // 13.4; the plain consensus 13.7.)
-  SensorMask repeating = 0;
+  SensorMask repeating = 0, held = 0;
   for (int k = 0; k < n_; ++k) {
-    const auto u = static_cast<std::size_t>(k);
-    SensorState& d = state_[u];
-    d.repeats = same_counts(raw.counts[u], d.last_raw) ? d.repeats + 1 : 0;
-    d.last_raw = raw.counts[u];
-    if (d.repeats >= 2 && !raw.counts[u].isZero()) repeating |= SensorMask{1} << k;
+    if (repeats.repeats(k) >= 2) repeating |= SensorMask{1} << k;
+    // This filter's own hold of the epoch (what the estimator left out).
+    if (held_as_drift(k) && !runaway(k)) held |= SensorMask{1} << k;
   }
   const SensorMask used = estimate.estimate.used;
   // The others' corrections carry the applied common part (Gc, Dc), theta
@@ -172,7 +172,8 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
   for (int i = 0; i < n_; ++i) {
     const auto u = static_cast<std::size_t>(i);
     SensorState& d = state_[u];
-    if (estimate.excluded[u] == Exclusion::kDrift) {
+    // Held out as drift, by the drift test or by this filter (held_as_drift).
+    if (contains(drifting | held, i)) {
       d.drifted = true;
     } else if (!d.corrected) {
       d.drifted = false;
@@ -199,7 +200,7 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
     // grows while they repeat), and a block in which a run reaches
     // repeat_run is dropped; shorter runs are chance and kept (leaving out
     // epochs by their counts would break the block's telescoping sum).
-    if (d.repeats + 1 >= options_.repeat_run) {
+    if (repeats.repeats(i) + 1 >= options_.repeat_run) {
       d.clear_block();
       continue;
     }
@@ -223,7 +224,7 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
     // Near its rating the sensor weighs as the noise model says (header).
     s.factor = std::max(s.factor, noise_.speed_factor(p.norm(), array_[i].max_speed.value_or(0.0)));
     s.time += dt;
-    if (s.time >= options_.block - 1e-9 && d.repeats == 0) {
+    if (s.time >= options_.block - 1e-9 && repeats.repeats(i) == 0) {
       update(i, raw.t);
       s.clear_block();
     }

@@ -50,6 +50,15 @@
 // not renew it (its covariance keeps growing). With motion_prior off the
 // estimator is the one before the prior: no prior, and the wheel test of a
 // minority uses Cov + W.
+// Self-calibration (self_calibration.hpp, when enabled): its states (each
+// sensor's scale on both axes and yaw offset, the wheels' gauge) belong to
+// this estimator. The counts are corrected by them before step 1; a sensor
+// whose calibration ran away, or whose correction is held out as drift, is
+// a hypothesis of its own: left out of the search (`calibration`, `drift`)
+// but still tested against the epoch's twist (tests.sensor); after the
+// epoch the states learn from the uncorrected counts, the repeat counter the
+// health monitor names `frozen` by, and its drift alarms (no lift flag, no
+// label carries them).
 // Subsets of each size are enumerated in increasing bit order as they are
 // needed (N <= 10, so at most 1013 fits and no table to store); for larger
 // arrays the worst sensor is dropped greedily. Per-sample cost does not
@@ -65,6 +74,7 @@
 #include "moa/core/motion_prior.hpp"
 #include "moa/core/noise_model.hpp"
 #include "moa/core/options_check.hpp"
+#include "moa/core/self_calibration.hpp"
 
 namespace moa {
 
@@ -97,8 +107,10 @@ class ConsensusEstimator {
   static constexpr int kMaxExhaustive = 10;
 
   /// Refuses arrays that no two sensors can observe (see LsEstimator::create).
-  static std::variant<ConsensusEstimator, GeometryError> create(const SensorArray& array,
-                                                                ConsensusOptions options = {});
+  /// `calibration`: the online self-calibration, built when enabled.
+  static std::variant<ConsensusEstimator, GeometryError> create(
+      const SensorArray& array, ConsensusOptions options = {},
+      const SelfCalibrationOptions& calibration = {});
 
   /// One sample; `wheels` is the wheel twist over the same interval, if any,
   /// `gyro` the gyro's reading averaged over it (rad/s, before calibration).
@@ -107,9 +119,20 @@ class ConsensusEstimator {
                                          const std::optional<Twist2>& wheels = std::nullopt,
                                          const std::optional<real>& gyro = std::nullopt);
   const GyroModel& gyro() const { return gyro_; }
+  /// The self-calibration's states, null unless it was enabled.
+  const SelfCalibration* self_calibration() const {
+    return calibration_ ? &*calibration_ : nullptr;
+  }
 
  private:
-  ConsensusEstimator(const SensorArray& array, ConsensusOptions options);
+  ConsensusEstimator(const SensorArray& array, ConsensusOptions options,
+                     const SelfCalibrationOptions& calibration);
+  /// The estimate from counts the self-calibration corrected (or raw, without
+  /// one); `held` the sensors its hypotheses leave out.
+  /// The interval is checked by estimate().
+  RobustEstimate estimate_counts(const ArraySample& sample, SensorMask held,
+                                 const std::optional<Twist2>& wheels,
+                                 const std::optional<real>& gyro);
   struct Candidate {
     SubsetFit fit;
     SensorMask mask = 0;
@@ -181,6 +204,9 @@ class ConsensusEstimator {
   real gyro_q_ = 0;
   /// s, the last epoch whose twist came from the mice (none yet: nullopt)
   std::optional<double> last_mice_t_;
+  RepeatCounter repeats_;  ///< of the counts as read (health: frozen; self-calibration's guard)
+  std::optional<SelfCalibration> calibration_;
+  ArraySample corrected_;  ///< the epoch's counts through calibration_'s correction
 };
 
 }  // namespace moa

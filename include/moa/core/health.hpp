@@ -94,6 +94,29 @@ inline bool same_counts(const Vec2& a, const Vec2& b) {
   return (a - b).cwiseAbs().maxCoeff() <= 1e-6 * std::max<real>(1.0, a.cwiseAbs().maxCoeff());
 }
 
+/// Epochs in a row whose counts repeat the epoch before's exactly (to 1e-6
+/// counts: the synchroniser's rounding), not zero: the pattern a frozen
+/// register reads. One counter per estimator: the health monitor names a
+/// frozen alarm by it, the self-calibration guards its learning by it.
+class RepeatCounter {
+ public:
+  /// Every sensor of `sample`, once per epoch.
+  void count(const ArraySample& sample) {
+    for (int i = 0; i < std::min(sample.size, kMaxSensors); ++i) {
+      const auto k = static_cast<std::size_t>(i);
+      const Vec2 c = sample.counts[k];
+      repeats_[k] = !c.isZero() && same_counts(c, last_[k]) ? repeats_[k] + 1 : 0;
+      last_[k] = c;
+    }
+  }
+  /// Epochs sensor i's counts have repeated (0: they differ from the last).
+  int repeats(int i) const { return repeats_[static_cast<std::size_t>(i)]; }
+
+ private:
+  std::array<Vec2, kMaxSensors> last_ = zeros<Vec2>();
+  std::array<int, kMaxSensors> repeats_{};
+};
+
 enum class Health : std::uint8_t { kTrusted, kSuspect, kExcluded, kProbation };
 template <>
 struct EnumNames<Health> {
@@ -113,7 +136,9 @@ class HealthMonitor {
   /// and the state machine.
   /// Returns the sensors that may be used; sets `excluded` for the others
   /// among `candidates` (kFrozen, kZero, kDrift or kProbation).
-  SensorMask screen(const ArraySample& sample, SensorMask candidates,
+  /// `repeats`: the estimator's count of repeated readings, this epoch's
+  /// counted (of the counts as read, before any correction).
+  SensorMask screen(const ArraySample& sample, SensorMask candidates, const RepeatCounter& repeats,
                     std::array<Exclusion, kMaxSensors>& excluded);
   /// The drift test's update after an estimate from the sensors `used`.
   /// `reference`: the epoch's estimate when it was not the sensors' (the
@@ -127,14 +152,19 @@ class HealthMonitor {
                const TwistEstimate* reference = nullptr);
 
   Health health(int i) const { return state_[static_cast<std::size_t>(i)].health; }
+  /// Why sensor i is excluded (kNone unless health(i) is kExcluded).
+  Exclusion reason(int i) const {
+    const SensorState& s = state_[static_cast<std::size_t>(i)];
+    return s.health == Health::kExcluded ? s.reason : Exclusion::kNone;
+  }
+  /// The sensors whose drift alarm (named drift) holds them out now.
+  SensorMask drifting() const;
 
  private:
   struct SensorState {
     Health health = Health::kTrusted;
     Exclusion reason = Exclusion::kNone;
-    double since = 0.0;  ///< s, when probation began
-    Vec2 last_counts{0.0, 0.0};
-    int repeats = 0;                ///< epochs in a row whose counts repeat the previous (not zero)
+    double since = 0.0;             ///< s, when probation began
     int zeros = 0;                  ///< epochs in a row read zero while another sensor did not
     bool held = false;              ///< excluded as frozen or zero and the pattern still holds
     std::array<real, 4> g{};        ///< CUSUMs of +z_par, -z_par, +z_perp, -z_perp

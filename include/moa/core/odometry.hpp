@@ -106,8 +106,8 @@ struct OdometryOptions {
   ConsensusOptions consensus;
   EkfOptions ekf;
   /// Online self-calibration of the selected sensors (self_calibration.hpp):
-  /// off unless self_calibration.enabled; corrects the counts before the
-  /// estimator, for every estimator.
+  /// off unless self_calibration.enabled; states of the consensus estimator
+  /// (refused with ls, sekimori and oracle; with wheels nothing is learnt).
   SelfCalibrationOptions self_calibration;
 
   /// nullopt when the options can be used, else the first field out of its
@@ -287,8 +287,6 @@ class Odometry {
   std::array<SpeedScale, kMaxSensors> speed_scales_{};
   bool speed_scaled_ = false;  ///< some sensor has a speed scale
   ArraySample scaled_;         ///< the current epoch, its speed scales undone
-  std::optional<SelfCalibration> self_calibration_;
-  ArraySample raw_;  ///< the selected sensors' counts before the self-calibration's correction
   std::array<SelfCalibrationEstimate, kMaxSensors>
       calibration_{};  ///< applied, by configured index
   std::array<SelfCalibrationEstimate, kMaxSensors> calibration_filter_{};  ///< the filter's

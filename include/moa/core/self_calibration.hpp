@@ -214,9 +214,13 @@ class SelfCalibration {
 
   /// Updates from one epoch: `raw` the uncorrected counts, `estimate` the
   /// estimator's output on the corrected counts, `wheels` the wheels' twist
-  /// averaged over the epoch when there is one (used by the kWheels gauge).
+  /// averaged over the epoch when there is one (used by the kWheels gauge),
+  /// `repeats` the estimator's count of repeated readings (this epoch
+  /// counted), `drifting` the sensors its drift test holds out now (named
+  /// drift: HealthMonitor::drifting()).
   void observe(const ArraySample& raw, const RobustEstimate& estimate,
-               const std::optional<Twist2>& wheels = std::nullopt);
+               const std::optional<Twist2>& wheels, const RepeatCounter& repeats,
+               SensorMask drifting);
 
   /// The filter's estimate (theta) of sensor i.
   const SelfCalibrationEstimate& calibration(int i) const {
@@ -268,8 +272,6 @@ class SelfCalibration {
     Vec2 sum_meas{0.0, 0.0}, sum_pred{0.0, 0.0};  ///< m, configured sensor frame
     real sum_var = 0.0;                           ///< m^2, prediction variance
     real factor = 1.0;                            ///< the block's largest speed factor
-    Vec2 last_raw{0.0, 0.0};                      ///< counts of the last epoch observed
-    int repeats = 0;                              ///< epochs last_raw has repeated
     void clear_block() {
       sum_pred.setZero();
       sum_meas.setZero();
