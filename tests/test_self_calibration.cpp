@@ -150,17 +150,8 @@ TEST(SelfCalibration, ARunawayIsAHypothesisOfTheConsensusStillTestedThroughItsCa
   for (int e = 1; e <= 2000; ++e) {
     const double t = e * dt;
     const Twist2 x = test::mixed_motion(t);
-    ArraySample s;
-    s.t = t;
-    s.dt = dt;
-    s.size = array.size();
-    for (int i = 0; i < array.size(); ++i) {
-      const auto u = static_cast<std::size_t>(i);
-      const Vec2 point = x.v + x.omega * Vec2(-array[i].position.y(), array[i].position.x());
-      s.counts[u] = array[i].robot_velocity_from_counts().inverse() * point * dt;
-      if (i == 1) s.counts[u] *= off;
-      s.squal[u] = 90;
-    }
+    const ArraySample s = test::exact_sample(
+        array, x, t, dt, [&](int i) -> Mat2 { return (i == 1 ? off : 1.0) * Mat2::Identity(); });
     const auto r = consensus.estimate(s);
     ASSERT_TRUE(r.has_value());
     for (int i : {0, 2, 3}) {

@@ -42,18 +42,8 @@ void feed(SelfCalibration& cal, const SensorArray& array, real g, real d,
   for (int e = 1; e <= epochs; ++e) {
     const double t = e * dt;
     const Twist2 twist = x(t);
-    ArraySample raw;
-    raw.t = t;
-    raw.dt = dt;
-    raw.size = array.size();
-    for (int i = 0; i < array.size(); ++i) {
-      const auto u = static_cast<std::size_t>(i);
-      const Vec2 point =
-          twist.v + twist.omega * Vec2(-array[i].position.y(), array[i].position.x());
-      const Vec2 read = g * (rotation(-d) * point);
-      raw.counts[u] = array[i].robot_velocity_from_counts().inverse() * read * dt;
-      raw.squal[u] = 90;
-    }
+    const ArraySample raw =
+        test::exact_sample(array, twist, t, dt, [&](int) -> Mat2 { return g * rotation(-d); });
     RobustEstimate estimate;
     estimate.source = Source::kMice;
     estimate.estimate.used = all_sensors(array.size());

@@ -9,6 +9,21 @@
 
 namespace moa::test {
 
+ArraySample exact_sample(const SensorArray& array, const Twist2& twist, double t, double dt,
+                         const std::function<Mat2(int)>& gain) {
+  ArraySample s;
+  s.t = t;
+  s.dt = dt;
+  s.size = array.size();
+  for (int i = 0; i < array.size(); ++i) {
+    const auto u = static_cast<std::size_t>(i);
+    const Vec2 point = twist.v + twist.omega * Vec2(-array[i].position.y(), array[i].position.x());
+    s.counts[u] = array[i].robot_velocity_from_counts().inverse() * (gain(i) * point) * dt;
+    s.squal[u] = 90;
+  }
+  return s;
+}
+
 SynthLog synthesise(const SensorArray& array, const TwistScript& script, double duration,
                     double row_period, bool quantise, double substep) {
   const int n = array.size();

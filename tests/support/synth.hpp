@@ -38,6 +38,12 @@ struct SynthLog {
 SynthLog synthesise(const SensorArray& array, const TwistScript& script, double duration,
                     double row_period, bool quantise = true, double substep = 1e-4);
 
+/// One epoch (t - dt, t] of noise-free real-valued counts: sensor i reads
+/// `gain(i)` times its true point velocity under `twist` (robot frame: a
+/// matrix such as g R(-d), or a scalar times the identity), SQUAL 90.
+ArraySample exact_sample(const SensorArray& array, const Twist2& twist, double t, double dt,
+                         const std::function<Mat2(int)>& gain);
+
 /// A 20 s mixed motion for an omnidirectional robot: forward, lateral and
 /// turning at once, all three changing sign (speeds up to ~0.35 m/s, 1 rad/s).
 Twist2 mixed_motion(double t);
