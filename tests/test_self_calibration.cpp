@@ -39,8 +39,10 @@ struct PairedRun {
   double plain = 0.0, calibrated = 0.0, oracle = 0.0;
   /// sensor -> the last row's scale_x, scale_y, yaw_offset: applied, and the filter's
   std::map<std::string, std::vector<double>> last, last_filter;
-  /// Epochs (t) of the self-calibrated run whose `excluded` names m3 frozen.
-  std::vector<double> m3_frozen;
+  /// Epochs (t) of the self-calibrated run whose `excluded` names m3 frozen,
+  /// and those that name m2 for any reason.
+  std::vector<double> m3_frozen, m2_out;
+  long epochs = 0;  ///< rows of the self-calibrated run
 };
 
 // The `excluded` column of odometry.csv: the epochs where it holds `what`.
@@ -73,7 +75,11 @@ PairedRun run_scenario(const std::string& scenario, int seed, bool oracle = fals
         test::run_moa("evaluate --json --truth " + log + "/truth.csv --odometry " + out);
     EXPECT_EQ(ev.exit_code, 0) << ev.err;
     (cal ? r.calibrated : r.plain) = max_error(ev.out);
-    if (cal) r.m3_frozen = epochs_excluding(out, "m3:frozen");
+    if (cal) {
+      r.m3_frozen = epochs_excluding(out, "m3:frozen");
+      r.m2_out = epochs_excluding(out, "m2:");
+      r.epochs = static_cast<long>(epochs_excluding(out, "").size());
+    }
   }
   if (oracle) {
     const std::string out = (dir / "oracle.csv").string();
@@ -267,6 +273,32 @@ TEST(SelfCalibration, FrozenRegisterInACruiseIsNamedFrozenWhileItLasts) {
     const double release = HealthOptions{}.drift_release_time;
     EXPECT_GE(r.m3_frozen.back(), 74.0 + release - 0.015) << seed;
     EXPECT_LE(r.m3_frozen.back(), 74.0 + 2.0 * release) << seed;
+  }
+}
+
+// Not latched (issue #27): at selfcal-step's change of floor (m2's scale to
+// 0.9 at 20 s) m2 is held out while its estimate moves, then comes back
+// corrected and is judged like every sensor: from 10 s after the step to the
+// end it is left out no more often than a sound sensor's false alarms allow
+// (the consensus's alpha per epoch, its Poisson count bounded at about
+// 4 sd), where a hold that latched kept it out to the end.
+TEST(SelfCalibration, ASensorHeldAtAStepComesBackCorrected) {
+  const real alpha = ConsensusOptions{}.alpha;
+  for (int seed = 101; seed <= 103; ++seed) {
+    const PairedRun r = run_scenario("selfcal-step", seed);
+    // Excluded at the step (the health monitor's short window, then the hold).
+    ASSERT_FALSE(r.m2_out.empty()) << seed;
+    EXPECT_GE(r.m2_out.front(), 20.0) << seed;
+    EXPECT_LE(r.m2_out.front(), 21.0) << seed;
+    long late = 0;
+    for (const double t : r.m2_out) late += t >= 30.0 ? 1 : 0;
+    const long rows = r.epochs - 3000;  // 10 ms epochs from 30 s on
+    ASSERT_GT(rows, 1000) << seed;
+    const double mean = alpha * static_cast<double>(rows);
+    EXPECT_LE(static_cast<double>(late), mean + 4.0 * std::sqrt(mean) + 3.0) << seed;
+    // Corrected to the step's scale (2 %, as the experiment's test).
+    ASSERT_TRUE(r.last.contains("m2")) << seed;
+    EXPECT_NEAR(r.last.at("m2")[0], 0.9, 0.02 * 0.9) << seed;
   }
 }
 

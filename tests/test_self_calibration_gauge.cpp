@@ -51,7 +51,7 @@ void feed(SelfCalibration& cal, const SensorArray& array, real g, real d,
     std::optional<Twist2> wheels;
     if (wheel_scale) wheels = Twist2{*wheel_scale * twist.v, *wheel_scale * twist.omega};
     repeats.count(raw);
-    cal.observe(raw, estimate, wheels, repeats, 0);
+    cal.observe(raw, estimate, wheels, repeats);
   }
 }
 

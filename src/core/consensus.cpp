@@ -314,7 +314,7 @@ std::optional<RobustEstimate> ConsensusEstimator::estimate(const ArraySample& sa
     if (calibration_->runaway(i) || calibration_->held_as_drift(i)) held |= SensorMask{1} << i;
   }
   RobustEstimate out = estimate_counts(corrected_, held, wheels, gyro);
-  calibration_->observe(sample, out, wheels, repeats_, health_.drifting());
+  calibration_->observe(sample, out, wheels, repeats_);
   return out;
 }
 

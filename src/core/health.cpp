@@ -151,14 +151,6 @@ SensorMask HealthMonitor::screen(const ArraySample& sample, SensorMask candidate
   return allowed;
 }
 
-SensorMask HealthMonitor::drifting() const {
-  SensorMask m = 0;
-  for (int i = 0; i < n_; ++i) {
-    if (reason(i) == Exclusion::kDrift) m |= SensorMask{1} << i;
-  }
-  return m;
-}
-
 void HealthMonitor::observe(const SubsetSolver& solver, const ArraySample& sample,
                             const PointMeasurements& m, SensorMask used, SensorMask candidates,
                             const std::array<std::uint8_t, kMaxSensors>& noise_flags,

@@ -69,7 +69,7 @@ Vec3 SelfCalibration::sd(int i) const {
 
 bool SelfCalibration::held_as_drift(int i) const {
   const SensorState& s = state_[static_cast<std::size_t>(i)];
-  return s.corrected && (s.settling || s.drifted);
+  return s.corrected && s.settling;
 }
 
 SensorMask SelfCalibration::runaways() const {
@@ -129,8 +129,7 @@ void SelfCalibration::renew(int i) {
 }
 
 void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& estimate,
-                              const std::optional<Twist2>& wheels, const RepeatCounter& repeats,
-                              SensorMask drifting) {
+                              const std::optional<Twist2>& wheels, const RepeatCounter& repeats) {
   if (estimate.source != Source::kMice || !(std::isfinite(raw.dt) && raw.dt > 0.0)) return;
   const real dt = raw.dt;
   // Corrected point velocities of every sensor, weighed by their
@@ -152,11 +151,9 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
   // the stuck register predicting the others for its first 0.1 s, before
   // the alarm, taught m1 a 1.5 % change, held out for 1.5 s: 45.9 mm, now
   // 13.4; the plain consensus 13.7.)
-  SensorMask repeating = 0, held = 0;
+  SensorMask repeating = 0;
   for (int k = 0; k < n_; ++k) {
     if (repeats.repeats(k) >= 2) repeating |= SensorMask{1} << k;
-    // This filter's own hold of the epoch (what the estimator left out).
-    if (held_as_drift(k) && !runaway(k)) held |= SensorMask{1} << k;
   }
   const SensorMask used = estimate.estimate.used;
   // The others' corrections carry the applied common part (Gc, Dc), theta
@@ -171,13 +168,6 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
   }
   for (int i = 0; i < n_; ++i) {
     const auto u = static_cast<std::size_t>(i);
-    SensorState& d = state_[u];
-    // Held out as drift, by the drift test or by this filter (held_as_drift).
-    if (contains(drifting | held, i)) {
-      d.drifted = true;
-    } else if (!d.corrected) {
-      d.drifted = false;
-    }
     switch (estimate.excluded[u]) {
       case Exclusion::kNone:
       case Exclusion::kInconsistent:
@@ -201,7 +191,7 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
     // repeat_run is dropped; shorter runs are chance and kept (leaving out
     // epochs by their counts would break the block's telescoping sum).
     if (repeats.repeats(i) + 1 >= options_.repeat_run) {
-      d.clear_block();
+      state_[u].clear_block();
       continue;
     }
     const SensorMask others = used & ~repeating & ~(SensorMask{1} << i);

@@ -53,12 +53,13 @@
 // Self-calibration (self_calibration.hpp, when enabled): its states (each
 // sensor's scale on both axes and yaw offset, the wheels' gauge) belong to
 // this estimator. The counts are corrected by them before step 1; a sensor
-// whose calibration ran away, or whose correction is held out as drift, is
-// a hypothesis of its own: left out of the search (`calibration`, `drift`)
-// but still tested against the epoch's twist (tests.sensor); after the
-// epoch the states learn from the uncorrected counts, the repeat counter the
-// health monitor names `frozen` by, and its drift alarms (no lift flag, no
-// label carries them).
+// whose calibration ran away, or whose correction is held out as drift
+// while it moves, is a hypothesis of its own: left out of the search
+// (`calibration`, `drift`) but still tested against the epoch's twist
+// (tests.sensor), back once its estimate settles (no latch); after the
+// epoch the states learn from the uncorrected counts and the repeat
+// counter the health monitor names `frozen` by (no lift flag, no label
+// carries them).
 // Subsets of each size are enumerated in increasing bit order as they are
 // needed (N <= 10, so at most 1013 fits and no table to store); for larger
 // arrays the worst sensor is dropped greedily. Per-sample cost does not

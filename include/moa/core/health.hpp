@@ -157,8 +157,6 @@ class HealthMonitor {
     const SensorState& s = state_[static_cast<std::size_t>(i)];
     return s.health == Health::kExcluded ? s.reason : Exclusion::kNone;
   }
-  /// The sensors whose drift alarm (named drift) holds them out now.
-  SensorMask drifting() const;
 
  private:
   struct SensorState {

@@ -169,9 +169,8 @@ struct SelfCalibrationOptions {
   real reacquire_spread = 0.05;  ///< sd of their log scale and rotation (rad) that agrees
   /// A corrected sensor whose estimate moves (more than settle_threshold,
   /// in scale or rad, from its own average over settle_time s) is held out
-  /// of the estimate (as drift: then it stays out while corrected, see
-  /// held_as_drift): a partial correction would let a sensor still off
-  /// pass as consistent.
+  /// of the estimate as drift while it moves (held_as_drift): a partial
+  /// correction would let a sensor still off pass as consistent.
   real settle_time = 1.0;
   real settle_threshold = 0.015;
   real apply_step = 5e-4;  ///< change of an estimate that renews the applied correction
@@ -216,11 +215,9 @@ class SelfCalibration {
   /// estimator's output on the corrected counts, `wheels` the wheels' twist
   /// averaged over the epoch when there is one (used by the kWheels gauge),
   /// `repeats` the estimator's count of repeated readings (this epoch
-  /// counted), `drifting` the sensors its drift test holds out now (named
-  /// drift: HealthMonitor::drifting()).
+  /// counted).
   void observe(const ArraySample& raw, const RobustEstimate& estimate,
-               const std::optional<Twist2>& wheels, const RepeatCounter& repeats,
-               SensorMask drifting);
+               const std::optional<Twist2>& wheels, const RepeatCounter& repeats);
 
   /// The filter's estimate (theta) of sensor i.
   const SelfCalibrationEstimate& calibration(int i) const {
@@ -241,13 +238,12 @@ class SelfCalibration {
   bool runaway(int i) const { return state_[static_cast<std::size_t>(i)].runaway; }
   SensorMask runaways() const;
   /// Sensor i is held out (Exclusion::kDrift) while its own correction
-  /// (beyond the gauge's common part) is applied and either its estimate
-  /// moves (settle_time, settle_threshold) or it has been excluded as drift
-  /// (by the health monitor, or held out so) since the correction was last
-  /// inside the bands (an estimate moving inside them is noise or the
-  /// start: not held). A sensor
-  /// that changed enough to be excluded is not trusted back on a correction
-  /// whose own error (the filter's scatter) would bias the rotation.
+  /// (beyond the gauge's common part) is applied and its estimate moves
+  /// (settle_time, settle_threshold; an estimate moving inside the bands is
+  /// noise or the start: not held). Not latched: once the estimate settles
+  /// the sensor is a candidate again, judged by the estimator's tests on
+  /// its corrected counts like every other (a drift alarm of the health
+  /// monitor holds it until its release test passes).
   bool held_as_drift(int i) const;
   int size() const { return n_; }
   /// The common part (G, G, D) the gauge sets the median over the sensors
@@ -287,7 +283,6 @@ class SelfCalibration {
     SelfCalibrationEstimate lagged;      ///< theta / (G, D) averaged over settle_time
     bool settling = false;               ///< theta is moving away from lagged
     bool corrected = false;              ///< its own correction (beyond the gauge's) is applied
-    bool drifted = false;                ///< excluded as drift since it was last not corrected
     GrossRun gross;                      ///< the blocks over the gate in a row
     Mat2 correction = Mat2::Identity();  ///< counts -> corrected counts
   };
