@@ -197,6 +197,8 @@ TEST(OdometryOptions, EveryFieldIsCheckedNamingPathBoundAndValue) {
        "must be in (0, 1), is 1.5"},
       {"self_calibration.runaway_yaw", [](auto& o) { o.self_calibration.runaway_yaw = 0; },
        "must be > 0, is 0"},
+      {"self_calibration.runaway_alpha", [](auto& o) { o.self_calibration.runaway_alpha = 0.5; },
+       "must be in (0, 0.5), is 0.5"},
       {"self_calibration.reacquire_blocks",
        [](auto& o) { o.self_calibration.reacquire_blocks = 1; }, "must be >= 2, is 1"},
       {"self_calibration.reacquire_spread",

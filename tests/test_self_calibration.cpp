@@ -134,6 +134,37 @@ TEST(SelfCalibration, UntouchedArrayKeepsIdentityCorrection) {
   EXPECT_FALSE(cal.runaway(1));
 }
 
+// The runaway test's other side: a sensor 20 % off, inside the tolerance of
+// a sound sensor (runaway_scale, 25 %) by far more than z sd of its
+// estimate, is never a runaway: it is corrected (its estimate within 1 % of
+// the truth at the end) and used again once its estimate settles.
+TEST(SelfCalibration, ASensorWithinItsToleranceIsCorrectedNotARunaway) {
+  const SensorArray array = regular_polygon(4, 0.1, 0.0);
+  SelfCalibrationOptions calibration;
+  calibration.enabled = true;
+  auto built = ConsensusEstimator::create(array, ConsensusOptions{}, calibration);
+  ASSERT_TRUE(std::holds_alternative<ConsensusEstimator>(built));
+  ConsensusEstimator& consensus = std::get<ConsensusEstimator>(built);
+  const real dt = 0.01, off = 1.2;
+  int used_late = 0;
+  for (int e = 1; e <= 2000; ++e) {
+    const double t = e * dt;
+    const ArraySample s =
+        test::exact_sample(array, test::mixed_motion(t), t, dt,
+                           [&](int i) -> Mat2 { return (i == 1 ? off : 1.0) * Mat2::Identity(); });
+    const auto r = consensus.estimate(s);
+    ASSERT_TRUE(r.has_value());
+    EXPECT_NE(r->excluded[1], Exclusion::kCalibration) << t;
+    if (t >= 15.0 && contains(r->estimate.used, 1)) ++used_late;
+  }
+  const auto* c = consensus.self_calibration();
+  EXPECT_FALSE(c->runaway(1));
+  EXPECT_NEAR(c->calibration(1).scale_x, off, 0.01 * off);
+  EXPECT_NEAR(c->calibration(1).scale_y, off, 0.01 * off);
+  // From 15 s to the end (501 epochs) it is used in nearly every epoch.
+  EXPECT_GE(used_late, 490);
+}
+
 // The self-calibration's states are the consensus's: a sensor whose
 // resolution is 27.5 % off (1020 cpi configured as 800; beyond the runaway
 // bound of 25 %) is left out as `calibration`, a hypothesis of its own, and

@@ -26,6 +26,7 @@ OptionCheck SelfCalibrationOptions::validate() const {
       .open("predictor_alpha", predictor_alpha, 0.0, 1.0)
       .open("runaway_scale", runaway_scale, 0.0, 1.0)
       .positive("runaway_yaw", runaway_yaw)
+      .open("runaway_alpha", runaway_alpha, 0.0, 0.5)
       .at_least("reacquire_blocks", reacquire_blocks, 2)
       .positive("reacquire_spread", reacquire_spread)
       .positive("settle_time", settle_time)
@@ -57,6 +58,9 @@ SelfCalibration::SelfCalibration(const SensorArray& array, SelfCalibrationOption
     chi2_gate_[d] =
         static_cast<real>(chi2_quantile(1.0 - options_.predictor_alpha, static_cast<int>(d)));
   }
+  // One-sided normal quantile from the chi-square of 1 dof: P(Z > z) = alpha
+  // is P(Z^2 > z^2) = 2 alpha.
+  runaway_z_ = static_cast<real>(std::sqrt(chi2_quantile(1.0 - 2.0 * options_.runaway_alpha, 1)));
   real r2 = 0.0;
   for (int i = 0; i < n_; ++i) r2 += array[i].position.squaredNorm();
   radius_ = n_ > 0 ? std::sqrt(r2 / static_cast<real>(n_)) : 0.0;
@@ -374,15 +378,14 @@ void SelfCalibration::update(int i, double t) {
   fix_gauge();
   for (int j = 0; j < n_; ++j) {
     SensorState& o = state_[static_cast<std::size_t>(j)];
-    const real ex = std::abs(o.theta.scale_x - 1.0), ey = std::abs(o.theta.scale_y - 1.0);
-    const real ed = std::abs(o.theta.yaw_offset);
-    if (!o.runaway) {
-      o.runaway =
-          ex > options_.runaway_scale || ey > options_.runaway_scale || ed > options_.runaway_yaw;
-    } else {
-      o.runaway = !(ex < 0.8 * options_.runaway_scale && ey < 0.8 * options_.runaway_scale &&
-                    ed < 0.8 * options_.runaway_yaw);
-    }
+    // The runaway test (header): each component's distance beyond its
+    // tolerance in standard deviations of its estimate; out beyond +z,
+    // back below -z.
+    const Vec3 beyond(std::abs(o.theta.scale_x - 1.0) - options_.runaway_scale,
+                      std::abs(o.theta.scale_y - 1.0) - options_.runaway_scale,
+                      std::abs(o.theta.yaw_offset) - options_.runaway_yaw);
+    const Vec3 z = beyond.cwiseQuotient(o.p.diagonal().cwiseMax(1e-18).cwiseSqrt());
+    o.runaway = o.runaway ? z.maxCoeff() > -runaway_z_ : z.maxCoeff() > runaway_z_;
     renew(j);
   }
 }

@@ -45,7 +45,8 @@ std::vector<std::string> odometry_flags(const OdometryOptions& o, const io::Robo
       o.self_calibration.scale_walk != d.self_calibration.scale_walk ||
       o.self_calibration.deadband != d.self_calibration.deadband ||
       o.self_calibration.runaway_scale != d.self_calibration.runaway_scale ||
-      o.self_calibration.runaway_yaw != d.self_calibration.runaway_yaw) {
+      o.self_calibration.runaway_yaw != d.self_calibration.runaway_yaw ||
+      o.self_calibration.runaway_alpha != d.self_calibration.runaway_alpha) {
     throw std::invalid_argument("odometry_flags: an option the experiments do not vary");
   }
   return flags;

@@ -37,9 +37,11 @@ OdometryRun run_loop(const RobotConfig& config, const std::string& config_path,
         const auto& c = (*step.calibration_filter)[static_cast<std::size_t>(i)];
         warn(fmt::format(
             "sensor '{}': its self-calibration ran away (scale {:.3f}, {:.3f}, yaw offset {:.3f} "
-            "rad at t = {} s; bounds {} and {} rad): excluded as 'calibration' while beyond",
+            "rad at t = {} s; beyond a sound sensor's tolerance {} and {} rad at false-alarm "
+            "rate {}): excluded as 'calibration' while beyond",
             config.names[static_cast<std::size_t>(i)], c.scale_x, c.scale_y, c.yaw_offset, step.t(),
-            options.self_calibration.runaway_scale, options.self_calibration.runaway_yaw));
+            options.self_calibration.runaway_scale, options.self_calibration.runaway_yaw,
+            options.self_calibration.runaway_alpha));
       }
     }
     run.summary.add(step, config.array.size());

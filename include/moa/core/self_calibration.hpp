@@ -78,10 +78,16 @@
 //   gauge's: their systematic slip becomes the array's scale, hence not the
 //   default (docs/self-calibration.md).
 //
-// A sensor whose estimate runs away (|s - 1| > runaway_scale on an axis or
-// |delta| > runaway_yaw) is reported by runaway() and left out of the
-// estimate (Exclusion::kCalibration) until it is back within 0.8 times the
-// bounds; it is still calibrated meanwhile. A calibration so far off that
+// Runaway, a hypothesis tested on the filter's own estimate: a sound sensor
+// is within its tolerance of the configuration, |s - 1| <= runaway_scale on
+// each axis and |delta| <= runaway_yaw (the bounds a user states for a
+// sensor that is still the one configured). It is rejected when one
+// component is beyond its bound by z standard deviations of its estimate,
+// z = Phi^-1(1 - runaway_alpha) (a one-sided test at false-alarm rate
+// runaway_alpha per component and update), and the sensor is reported by
+// runaway() and left out of the estimate (Exclusion::kCalibration); it comes
+// back when every component is inside its bound by z sd (the same test the
+// other way: no hysteresis factor). It is still calibrated meanwhile. A calibration so far off that
 // every block is over the gate (a resolution 50 % off, a sensor turned by
 // 30 degrees) is reacquired: reacquire_blocks such blocks in a row that
 // agree on one scale rho and rotation phi (m ~ rho R(phi) C w; the sd of
@@ -160,8 +166,10 @@ struct SelfCalibrationOptions {
   /// An epoch is not used for sensor i when the other sensors' fit fails
   /// the chi-square test at this level (they disagree among themselves).
   real predictor_alpha = 0.001;
-  real runaway_scale = 0.25;  ///< |s - 1| beyond which a sensor is excluded
-  real runaway_yaw = 0.2;     ///< rad, |delta| beyond which a sensor is excluded
+  real runaway_scale = 0.25;  ///< tolerance of |s - 1| of a sound sensor (runaway test)
+  real runaway_yaw = 0.2;     ///< rad, tolerance of |delta| of a sound sensor
+  /// False-alarm rate per component and update of the runaway test (z sd).
+  real runaway_alpha = 0.001;
   /// Blocks over `gate` in a row, read as one scale and rotation against the
   /// prediction, that restart a sensor's estimate there when they agree
   /// (a calibration far off: docs/self-calibration.md "Runaway").
@@ -317,6 +325,7 @@ class SelfCalibration {
   std::array<Mat2, kMaxSensors> velocity_from_counts_ = zeros<Mat2>();
   std::array<real, kMaxSensors> metres_per_count_{};
   std::array<real, 2 * kMaxSensors> chi2_gate_{};  ///< by degrees of freedom
+  real runaway_z_ = 0.0;                           ///< Phi^-1(1 - runaway_alpha), sd
   std::array<SensorState, kMaxSensors> state_{};
   PointMeasurements points_;
   WheelGauge wheel_;
