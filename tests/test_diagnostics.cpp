@@ -60,7 +60,48 @@ TEST(DiagnosticsCsv, EverySelectedSourceRoundTrips) {
   EXPECT_EQ(rows[3].source, "prior");
   EXPECT_TRUE(std::isnan(rows[3].test_ratio));
   EXPECT_FALSE(rows[3].fused);
-  for (const auto& r : rows) EXPECT_DOUBLE_EQ(r.t, 0.25);
+  for (const auto& r : rows) {
+    EXPECT_DOUBLE_EQ(r.t, 0.25);
+    EXPECT_FALSE(r.bias.has_value()) << r.source << ": only imu rows carry the gyro's";
+  }
+}
+
+// A file written before the gyro's columns (bias, scale) still reads; when
+// present they come together, finite, the scale positive.
+TEST(DiagnosticsCsv, GyroCalibrationColumnsAreOptionalAndChecked) {
+  const fs::path dir = test::scratch_dir("diagnostics-gyro");
+  const fs::path file = dir / "d.csv";
+  std::ofstream(file) << "t,source,test_ratio,fused,reason\n0.1,imu,0.5,1,\n";
+  auto rows = read_diagnostics_csv(file);
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_FALSE(rows[0].bias.has_value());
+  std::ofstream(file) << "t,source,test_ratio,fused,reason,bias,scale\n"
+                         "0.1,prior,,0,,,\n0.1,imu,0.5,1,,-0.0125,1.0203\n";
+  rows = read_diagnostics_csv(file);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_FALSE(rows[0].bias.has_value());
+  ASSERT_TRUE(rows[1].bias.has_value());
+  EXPECT_DOUBLE_EQ(*rows[1].bias, -0.0125);
+  EXPECT_DOUBLE_EQ(*rows[1].scale, 1.0203);
+  const struct {
+    const char* row;
+    const char* error;
+  } bad[] = {
+      {"0.1,imu,0.5,1,,0.01,\n", "bias and scale come together"},
+      {"0.1,imu,0.5,1,,,1.02\n", "bias and scale come together"},
+      {"0.1,imu,0.5,1,,nan,1.02\n", "d.csv:2"},
+      {"0.1,imu,0.5,1,,0.01,0\n", "must be > 0"},
+  };
+  for (const auto& c : bad) {
+    std::ofstream(file) << "t,source,test_ratio,fused,reason,bias,scale\n" << c.row;
+    try {
+      read_diagnostics_csv(file);
+      ADD_FAILURE() << "no error for " << c.row;
+    } catch (const Error& e) {
+      EXPECT_THAT(e.what(), HasSubstr(c.error)) << c.row;
+    }
+  }
+  fs::remove_all(dir);
 }
 
 TEST(DiagnosticsCsv, BadRowsAreRefusedWithFileAndLine) {

@@ -45,20 +45,21 @@ const fs::path& gyro_log() {
   return log.dir;
 }
 
-/// diagnostics.csv counted by hand (t,source,test_ratio,fused,reason).
+/// diagnostics.csv counted by hand (t,source,test_ratio,fused,reason,bias,scale).
 struct DiagnosticsCounts {
   std::size_t epochs = 0;  ///< `prior` rows: one per epoch
   std::size_t imu = 0;     ///< `imu` rows
   std::size_t fused = 0;   ///< `imu` rows with fused = 1
   std::size_t over = 0;    ///< `imu` rows with a test ratio above 1
   bool last_fused = false;
+  std::string last_bias, last_scale;  ///< the last imu row's, as written
 };
 
 DiagnosticsCounts count_diagnostics(const fs::path& file) {
   std::ifstream in(file);
   std::string line;
   std::getline(in, line);  // header
-  EXPECT_EQ(line, "t,source,test_ratio,fused,reason");
+  EXPECT_EQ(line, "t,source,test_ratio,fused,reason,bias,scale");
   DiagnosticsCounts c;
   std::string last_t;
   while (std::getline(in, line)) {
@@ -76,6 +77,7 @@ DiagnosticsCounts count_diagnostics(const fs::path& file) {
       if (f[3] == "1") ++c.fused;
       if (!f[2].empty() && std::stod(f[2]) > 1.0) ++c.over;
       c.last_fused = f[3] == "1";
+      if (f.size() == 7) c.last_bias = f[5], c.last_scale = f[6];
     }
   }
   return c;
@@ -121,6 +123,11 @@ TEST(GyroSummary, MoaOdometryPrintsTheHeadingFromTheGyroAsDiagnosticsCsvCountsIt
   EXPECT_LT(scale_sd, 0.03);
   EXPECT_NEAR(bias, 0.01, 4 * bias_sd + 1e-3);
   EXPECT_NEAR(scale, 1.02, 4 * scale_sd + 5e-3);
+  // diagnostics.csv's last imu row carries the same calibration (the line
+  // above rounds it to 5 and 4 decimals).
+  ASSERT_FALSE(d.last_bias.empty());
+  EXPECT_NEAR(std::stod(d.last_bias), bias, 5e-6);
+  EXPECT_NEAR(std::stod(d.last_scale), scale, 5e-5);
 
   // --no-imu: no gyro, no gyro line.
   const auto no_imu =
@@ -188,6 +195,10 @@ TEST(GyroSummary, TheReportShowsTheHeadingFromTheGyroOfDiagnosticsCsv) {
                                           d.fused, d.epochs)));
   EXPECT_THAT(page, HasSubstr(fmt::format("<tr><th>gyro readings</th><td>{} epochs", d.imu)));
   EXPECT_THAT(page, HasSubstr(fmt::format("in {} epochs (", d.over)));
+  // The gyro's calibration after the last epoch, from the last imu row.
+  EXPECT_THAT(page, HasSubstr(fmt::format(
+                        "<tr><th>calibration at the end</th><td>bias {:.6f} rad/s, scale {:.5f}",
+                        std::stod(d.last_bias), std::stod(d.last_scale))));
   // Without diagnostics.csv: the section says how to get it.
   ASSERT_EQ(test::run_moa(report + (dir / "bare.html").string()).exit_code, 0);
   const std::string bare = test::read_text(dir / "bare.html");

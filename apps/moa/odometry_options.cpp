@@ -99,10 +99,9 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
   cmd->add_option(
          "--diagnostics", f.diagnostics_out,
          "Write every source's status per epoch to this CSV (t,source,test_ratio,fused,"
-         "reason: each sensor's, the wheels', the motion prior's and the gyro's (imu) test "
-         "statistic over "
-         "its gate, whether the epoch's twist used it, and why not; "
-         "docs/formats/log.md)")
+         "reason,bias,scale: each sensor's, the wheels', the motion prior's and the gyro's (imu) "
+         "test statistic over its gate, whether the epoch's twist used it, and why not; the "
+         "gyro's bias (rad/s) and scale after the epoch; docs/formats/log.md)")
       ->type_name("FILE")
       ->check(output_file_name());
   cmd->add_option("--self-calibration-gauge", f.self_calibration_gauge,

@@ -157,6 +157,9 @@ def test_odometry_gyro_summary_and_heading_are_those_of_diagnostics_csv(tmp_path
     assert abs(g["bias"] - 0.01) < 4 * g["bias_sd"] + 1e-3
     assert abs(g["scale"] - 1.02) < 4 * g["scale_sd"] + 5e-3
     assert f"gyro: bias {g['bias']:.5f} rad/s" in out
+    # diagnostics.csv's last imu row: the same calibration, to the digit.
+    assert abs(float(imu[-1]["bias"]) - g["bias"]) <= 1e-12
+    assert abs(float(imu[-1]["scale"]) - g["scale"]) <= 1e-12
     assert f"heading from the gyro in {fused} of {s.epochs} epochs" in out
     # no_imu: the rotation is the array's.
     bare = moa.odometry(log / "robot.yaml", log, no_imu=True)

@@ -13,14 +13,15 @@ namespace moa::io {
 struct DiagnosticsCsvWriter::Impl {
   Impl(const std::filesystem::path& path, std::vector<std::string> sensor_names, SensorMask mask)
       : file(path), names(std::move(sensor_names)), selected(mask) {
-    file.stream() << "t,source,test_ratio,fused,reason\n";
+    file.stream() << "t,source,test_ratio,fused,reason,bias,scale\n";
   }
-  void row(double t, std::string_view source, real ratio, bool fused, std::string_view reason) {
-    if (std::isnan(ratio)) {
-      file.stream() << fmt::format("{},{},,{},{}\n", t, source, fused ? 1 : 0, reason);
-    } else {
-      file.stream() << fmt::format("{},{},{},{},{}\n", t, source, ratio, fused ? 1 : 0, reason);
-    }
+  /// `gyro`: the gyro's calibration after the epoch (imu rows), else empty.
+  void row(double t, std::string_view source, real ratio, bool fused, std::string_view reason,
+           const GyroModel* gyro = nullptr) {
+    const std::string r = std::isnan(ratio) ? std::string() : fmt::format("{}", ratio);
+    const std::string g =
+        gyro != nullptr ? fmt::format("{},{}", gyro->bias(), gyro->scale()) : std::string(",");
+    file.stream() << fmt::format("{},{},{},{},{},{}\n", t, source, r, fused ? 1 : 0, reason, g);
   }
   AtomicFile file;
   std::vector<std::string> names;
@@ -47,7 +48,8 @@ void DiagnosticsCsvWriter::write(const OdometryStep& step) {
   // The gyro, in epochs that had one.
   if (!std::isnan(e.tests.gyro) || e.tests.gyro_fused || e.tests.gyro_saturated) {
     impl_->row(t, "imu", e.tests.gyro, e.tests.gyro_fused,
-               e.tests.gyro_saturated ? "saturated" : (e.tests.gyro_fused ? "" : "inconsistent"));
+               e.tests.gyro_saturated ? "saturated" : (e.tests.gyro_fused ? "" : "inconsistent"),
+               step.gyro);
   }
 }
 
@@ -60,6 +62,8 @@ std::vector<DiagnosticsRow> read_diagnostics_csv(const std::filesystem::path& fi
   const std::size_t ratio = in.required_column("test_ratio");
   const std::size_t fused = in.required_column("fused");
   const std::size_t reason = in.required_column("reason");
+  // Added later (docs/formats/log.md): absent in older files.
+  const std::optional<std::size_t> bias = in.column("bias"), scale = in.column("scale");
   std::vector<DiagnosticsRow> rows;
   while (in.next()) {
     DiagnosticsRow r;
@@ -76,6 +80,17 @@ std::vector<DiagnosticsRow> read_diagnostics_csv(const std::filesystem::path& fi
     if (f != "0" && f != "1") in.fail_field(fused, "must be 0 or 1");
     r.fused = f == "1";
     r.reason = std::string(in.field(reason));
+    // The gyro's calibration: both or neither, finite, the scale positive.
+    const bool has_bias = bias && !in.field(*bias).empty();
+    const bool has_scale = scale && !in.field(*scale).empty();
+    if (has_bias != has_scale) {
+      in.fail_field(has_bias ? *bias : *scale, "bias and scale come together");
+    }
+    if (has_bias) {
+      r.bias = in.number(*bias);
+      r.scale = in.number(*scale);
+      if (!(*r.scale > 0.0)) in.fail_field(*scale, "must be > 0");
+    }
     rows.push_back(std::move(r));
   }
   return rows;

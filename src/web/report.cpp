@@ -266,6 +266,7 @@ ReportModel build_report(const ReportInputs& inputs, const ReportOptions& option
       if (row.reason == "inconsistent") ++g.inconsistent;
       if (row.test_ratio > 1.0) ++g.over_gate;
       if (!std::isnan(row.test_ratio)) g.max_test = std::max(g.max_test, row.test_ratio);
+      if (row.bias) g.bias = row.bias, g.scale = row.scale;
     }
     m.gyro = g;
   }

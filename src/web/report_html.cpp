@@ -252,10 +252,16 @@ std::string gyro_section(const ReportModel& m) {
   row("test ratio", fmt::format("over 1 (the gate: the array's rotation disagreed) in {} epochs "
                                 "({}), largest {:.3g}",
                                 g.over_gate, percent(g.over_gate, g.readings), g.max_test));
+  if (g.bias && g.scale) {
+    row("calibration at the end",
+        fmt::format("bias {:.6f} rad/s, scale {:.5f}", *g.bias, *g.scale));
+  }
   s += "</table>\n";
   s += "<p>From the <code>imu</code> rows of diagnostics.csv: an epoch whose heading was not the "
-       "gyro's took it from its twist's source (mice, wheels, hold). The gyro's calibration at "
-       "the end (bias, scale) is printed by <code>moa odometry</code>.</p>\n</section>\n";
+       "gyro's took it from its twist's source (mice, wheels, hold). The calibration at the end "
+       "is the gyro's bias and scale after the last epoch (its <code>bias</code> and "
+       "<code>scale</code> columns; <code>moa odometry</code> prints them too, with their "
+       "sd).</p>\n</section>\n";
   return s;
 }
 

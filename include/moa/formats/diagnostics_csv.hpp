@@ -1,6 +1,6 @@
 // diagnostics.csv (docs/formats/log.md): why each source was fused or left
 // out, epoch by epoch, in the manner of PX4 EKF2's aid-source status. One
-// row per epoch and source: `t,source,test_ratio,fused,reason`.
+// row per epoch and source: `t,source,test_ratio,fused,reason,bias,scale`.
 //   source      a sensor's name, `wheels` or `prior` (the motion prior)
 //   test_ratio  the source's test statistic over its gate (1 = the gate;
 //               above it the source contradicts the epoch's twist):
@@ -11,10 +11,13 @@
 //   fused       1 when the epoch's twist came from the source: a sensor
 //               used, the wheels as source `wheels`, the prior as `hold`
 //   reason      a sensor's exclusion (odometry.csv's reasons), else empty
+//   bias, scale the gyro's calibration after the epoch (`imu` rows of the
+//               consensus: GyroModel::bias() rad/s, scale()), else empty
 #pragma once
 
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -29,6 +32,8 @@ struct DiagnosticsRow {
   double test_ratio = 0.0;  ///< NaN where empty
   bool fused = false;
   std::string reason;
+  std::optional<double> bias;   ///< rad/s, the gyro's after the epoch (imu rows)
+  std::optional<double> scale;  ///< the gyro's, with bias
 };
 
 /// Reads a diagnostics.csv (columns by name); throws io::Error "FILE:LINE:

@@ -103,6 +103,9 @@ struct GyroCounts {
   std::size_t inconsistent = 0;  ///< tested beyond the gate against the array: not used
   std::size_t over_gate = 0;     ///< test ratio above 1: the array's rotation disagreed
   double max_test = 0.0;         ///< largest test ratio (1: the gate); 0 when none tested
+  /// The gyro's calibration after the last `imu` row that has it (rad/s, -);
+  /// empty for files written before those columns.
+  std::optional<double> bias, scale;
 };
 
 /// Everything the page shows, computed from the inputs.
