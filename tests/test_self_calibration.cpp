@@ -12,6 +12,7 @@
 #include <regex>
 #include <sstream>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "moa/core/chi2.hpp"
@@ -134,15 +135,21 @@ TEST(SelfCalibration, UntouchedArrayKeepsIdentityCorrection) {
   EXPECT_FALSE(cal.runaway(1));
 }
 
+// The consensus with its self-calibration states, default options.
+std::variant<ConsensusEstimator, GeometryError> self_calibrating_consensus(
+    const SensorArray& array) {
+  SelfCalibrationOptions calibration;
+  calibration.enabled = true;
+  return ConsensusEstimator::create(array, ConsensusOptions{}, calibration);
+}
+
 // The runaway test's other side: a sensor 20 % off, inside the tolerance of
 // a sound sensor (runaway_scale, 25 %) by far more than z sd of its
 // estimate, is never a runaway: it is corrected (its estimate within 1 % of
 // the truth at the end) and used again once its estimate settles.
 TEST(SelfCalibration, ASensorWithinItsToleranceIsCorrectedNotARunaway) {
   const SensorArray array = regular_polygon(4, 0.1, 0.0);
-  SelfCalibrationOptions calibration;
-  calibration.enabled = true;
-  auto built = ConsensusEstimator::create(array, ConsensusOptions{}, calibration);
+  auto built = self_calibrating_consensus(array);
   ASSERT_TRUE(std::holds_alternative<ConsensusEstimator>(built));
   ConsensusEstimator& consensus = std::get<ConsensusEstimator>(built);
   const real dt = 0.01, off = 1.2;
@@ -176,9 +183,7 @@ TEST(SelfCalibration, ASensorWithinItsToleranceIsCorrectedNotARunaway) {
 // that moves it (computed here from the noise model's own covariance, taken wider than it is).
 TEST(SelfCalibration, ARunawayIsAHypothesisOfTheConsensusStillTestedThroughItsCalibration) {
   const SensorArray array = regular_polygon(4, 0.1, 0.0);
-  SelfCalibrationOptions calibration;
-  calibration.enabled = true;
-  auto built = ConsensusEstimator::create(array, ConsensusOptions{}, calibration);
+  auto built = self_calibrating_consensus(array);
   ASSERT_TRUE(std::holds_alternative<ConsensusEstimator>(built));
   ConsensusEstimator& consensus = std::get<ConsensusEstimator>(built);
   ASSERT_NE(consensus.self_calibration(), nullptr);
