@@ -39,6 +39,7 @@
 #include "moa/formats/config.hpp"
 #include "moa/formats/error.hpp"
 #include "moa/runs/odometry_run.hpp"
+#include "moa/runs/calibration_run.hpp"
 #include "moa/runs/output_path.hpp"
 #include "moa/runs/run_loop.hpp"
 
@@ -46,6 +47,10 @@ namespace moa::cli {
 namespace {
 
 volatile std::sig_atomic_t g_quit = 0;
+
+// The spin's rows are kept in memory for the gyro's calibration: at most
+// this many of each kind (mice, gyro), about 9 min of four sensors at 1 kHz.
+constexpr std::size_t kMaxSpinRows = std::size_t{1} << 21;
 extern "C" void on_quit_signal(int) { g_quit = 1; }
 
 // Non-canonical, no echo, for single keys; restored (and the signal
@@ -148,6 +153,13 @@ void refuse_live_flags(const WizardArgs& args) {
 
 int run_wizard(const WizardArgs& args) {
   if (!args.guided) throw io::Error("--live needs --guided (the live guided calibration)");
+  if (args.imu && args.imu_reference != "array") {
+    throw io::Error(fmt::format(
+        "--imu-reference {}: the live guided calibration calibrates the gyro against the array "
+        "only (record the spin with `moa live --record DIR` and run --method guided on it, or "
+        "give --no-imu)",
+        args.imu_reference));
+  }
   const io::RobotConfig config = io::read_config(args.config);
   MotionLimits limits;
   limits.distance = args.distance.value_or(1.0);
@@ -177,14 +189,42 @@ int run_wizard(const WizardArgs& args) {
   io::LiveSource live = io::open_live_source(spec, config, args.config, hooks);
   live.source->start_time();  // waits for the source to start (a serial board's HELLO)
 
-  say("moa calibrate --guided --live: {} sensors of {}, from {}\n", config.names.size(),
-      args.config, live.origin);
+  // The gyro beside the array: a serial board's, or a replayed log's imu.csv.
+  std::unique_ptr<io::ImuReader> replay_gyro;
+  std::string replay_gyro_file;
+  if (args.imu && !spec.replay.empty()) {
+    const io::LogFiles log = io::resolve_log(spec.replay);
+    if (log.imu) {
+      replay_gyro = std::make_unique<io::ImuReader>(*log.imu);
+      replay_gyro_file = log.imu->string();
+    }
+  }
+  const bool gyro_possible = args.imu && (live.serial != nullptr || replay_gyro);
+  say("moa calibrate --guided --live: {} sensors of {}, from {}{}\n", config.names.size(),
+      args.config, live.origin,
+      gyro_possible ? "; the spin calibrates the gyro too (--no-imu: the mice alone)" : "");
   say("Keys: Enter keeps a motion, r redoes it, k keeps one that failed a check, q quits.\n");
 
   GuidedSession session(config.array, limits, !args.no_push_y);
   bool quit = false;
+  // The spin's rows, from the moment it is asked for (the robot still)
+  // until it is watched, for the gyro's calibration (as --method guided
+  // reads them from the spin's mice.csv and imu.csv).
+  io::SpinRecording spin;
+  spin.mice_where = fmt::format("the spin's rows from {}", live.where);
+  spin.imu_where = fmt::format("the spin's gyro rows from {}",
+                               replay_gyro ? replay_gyro_file : live.where);
+  bool recording = false, spin_overflow = false;
+  double last_row_t = 0.0;
   const auto announce_step = [&] {
     const GuidedStep step = session.steps()[session.current()];
+    recording = gyro_possible && step == GuidedStep::kSpin;
+    if (recording) {
+      spin.start = last_row_t;
+      spin.mice.clear();
+      spin.imu.clear();
+      spin_overflow = false;
+    }
     say("\nStep {} of {}: {}\n  {}\n  Hold the robot still...\n", session.current() + 1,
         session.steps().size(), describe(step), instructions(step, limits));
   };
@@ -204,6 +244,7 @@ int run_wizard(const WizardArgs& args) {
       announce_step();
     } else if ((keep || force) && session.keep(force)) {
       say("  Kept.\n");
+      recording = false;
       if (!session.complete()) announce_step();
     }
   };
@@ -241,13 +282,34 @@ int run_wizard(const WizardArgs& args) {
     }
     say("  r or Enter: redo, k: keep it anyway\n");
   };
-  callbacks.on_row = [&](const io::InputRow&) { poll_keys(); };
+  const auto record = [&](auto& rows, const auto& row) {
+    if (rows.size() < kMaxSpinRows) {
+      rows.push_back(row);
+    } else if (!spin_overflow) {
+      spin_overflow = true;
+      say("warning: the spin has gone on for over {} rows: the gyro will not be calibrated from "
+          "it (r redoes it)\n",
+          kMaxSpinRows);
+    }
+  };
+  callbacks.on_row = [&](const io::InputRow& row) {
+    const bool watching = recording && session.pending() == nullptr;
+    if (const auto* r = std::get_if<SensorRow>(&row)) {
+      if (watching && r->t > spin.start) record(spin.mice, *r);
+      last_row_t = std::max(last_row_t, r->t);
+    } else if (const auto* g = std::get_if<io::ImuRow>(&row)) {
+      if (watching) record(spin.imu, *g);
+    }
+    poll_keys();
+  };
   callbacks.warn = hooks.warn;
 
   session.begin_step();
   announce_step();
   io::LiveRunSource input(*live.source, config.array.size(), live.where,
                           [&] { return quit || session.complete() || g_quit != 0; });
+  if (live.serial != nullptr && args.imu) input.add_gyro(*live.serial);
+  if (replay_gyro) input.add_gyro(*replay_gyro, replay_gyro_file);
   io::run_loop(config, args.config, guided_session_odometry_options(), input, live.where,
                callbacks);
   // The data ended with a motion watched (its end is seen in the last
@@ -272,6 +334,17 @@ int run_wizard(const WizardArgs& args) {
   const auto& cal = std::get<GuidedCalibration>(result);
   io::RobotConfig out = config;
   out.array = cal.calibrated;
+  // The gyro against the array at the mounts just calibrated, as --method
+  // guided does with the spin's imu.csv; refused (nothing written) as there.
+  std::optional<io::CalibrationSummary> gyro;
+  if (gyro_possible && !spin_overflow && !spin.imu.empty()) {
+    io::CalibrationSummary r;
+    r.method = io::CalibrationMethod::kGuided;
+    r.calibrated = out;
+    io::calibrate_spin_gyro(r, config, spin);
+    out.imu = r.calibrated.imu;
+    gyro = std::move(r);
+  }
   io::write_config(out, args.out);
 
   say("\nCalibrated from the kept motions ({} m pushes, {} turns); positions relative to the "
@@ -280,6 +353,15 @@ int run_wizard(const WizardArgs& args) {
   print_mounts(config, cal);
   for (const auto& w : guided_result_warnings(cal, limits.distance, config.names)) {
     say("warning: {}\n", w);
+  }
+  if (gyro) {
+    say("\n{}", gyro->gyro->table());
+    for (const auto& f : gyro->facts) say("{}\n", f);
+    for (const auto& w : gyro->warnings) say("warning: {}\n", w);
+  } else if (gyro_possible) {
+    say("\nwarning: the gyro was not calibrated ({}): the config keeps the imu: block of {}\n",
+        spin_overflow ? "the spin was too long to keep" : "no gyro rows came during the spin",
+        args.config);
   }
   say("calibrated config written to {}\n", args.out);
   return 0;

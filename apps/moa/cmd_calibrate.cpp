@@ -152,14 +152,15 @@ void add_calibrate(CLI::App& app, Action& action) {
                 "above the counts' noise, information not positive definite) with a warning "
                 "instead of refusing it");
   cmd->add_flag("--no-imu", args->no_imu,
-                "Leave the gyro alone (by default, when the log, or guided's spin, has imu.csv, "
-                "its scale, bias and latency are calibrated into the config's imu: block)");
+                "Leave the gyro alone (by default, when the log or guided's spin has imu.csv, "
+                "or --guided --live's spin has gyro rows, its scale, bias and latency are "
+                "calibrated into the config's imu: block)");
   cmd->add_option(
          "--imu-reference", args->imu_reference,
          "The gyro's reference rotation: array (the mice at the "
          "calibrated mounts; default), array-nominal (at the mounts of --config) or "
          "wheels (wheels.csv's omega: slip biases the scale) or camera (camera.csv's theta, "
-         "differenced)")
+         "differenced); --guided --live: array only")
       ->check(CLI::IsMember({"array", "array-nominal", "wheels", "camera"}))
       ->capture_default_str();
   cmd->add_option("--reference", args->reference,
@@ -194,6 +195,8 @@ void add_calibrate(CLI::App& app, Action& action) {
       wizard->distance = args->options.distance;
       wizard->turns = args->options.turns;
       wizard->tolerances = args->options.tolerances;
+      wizard->imu = !args->no_imu;
+      wizard->imu_reference = args->imu_reference;
       action = [wizard] { return run_wizard(*wizard); };
       return;
     }

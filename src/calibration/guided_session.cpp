@@ -56,6 +56,7 @@ OdometryOptions guided_session_odometry_options() {
   options.use_wheels = false;
   options.max_gap = std::numeric_limits<double>::infinity();
   options.consensus.health.enabled = false;
+  options.use_imu = false;  // the gyro is calibrated from the spin, not fused
   return options;
 }
 

@@ -653,7 +653,7 @@ void run_guided(CalibrationSummary& r, const RobotConfig& config, const std::str
 // each at the calibrated mounts. An interval the array does not cover, or
 // with a lift or overflow flag, reads 0 rad/s (counted; the fit drops the
 // rows it spoils as outliers).
-RateSeries array_rates(const RobotConfig& config, const LogFiles& files,
+RateSeries array_rates(const RobotConfig& config, FrameSource& mice, const std::string& where,
                        const std::vector<double>& t, const CalibrationOptions& options,
                        std::size_t& gaps) {
   RateSeries ref;
@@ -669,11 +669,10 @@ RateSeries array_rates(const RobotConfig& config, const LogFiles& files,
     throw Error(fmt::format("gyro against the array: {}", describe(*e)));
   }
   const LsEstimator& ls = std::get<LsEstimator>(created);
-  MiceReader reader(files.mice, config);
-  IntervalAccumulator intervals(n, reader.start_time(), t, options.max_row_interval);
-  while (const auto row = reader.next()) {
+  IntervalAccumulator intervals(n, mice.start_time(), t, options.max_row_interval);
+  while (const auto row = mice.next()) {
     if (const auto error = intervals.add(*row)) {
-      throw Error(fmt::format("{}: t = {} s: {}", reader.file(), row->t, describe(*error)));
+      throw Error(fmt::format("{}: t = {} s: {}", where, row->t, describe(*error)));
     }
   }
   ref.t = t;
@@ -691,6 +690,56 @@ RateSeries array_rates(const RobotConfig& config, const LogFiles& files,
   }
   gaps = static_cast<std::size_t>(std::count(set.begin(), set.end(), false));
   return ref;
+}
+
+// The gyro's rows (t, g) fitted to `reference` (calibrate_gyro): the fit's
+// facts and warnings into `r`, the calibrated imu: block into r.calibrated.
+void finish_gyro(CalibrationSummary& r, GyroCalibrationReport report, const std::vector<double>& t,
+                 const std::vector<double>& g, const RateSeries& reference,
+                 const std::string& source, const CalibrationOptions& options) {
+  const std::string imu = report.imu.string();
+  const auto result = calibrate_gyro(t, g, reference);
+  if (const auto* e = std::get_if<GyroCalibrationError>(&result)) {
+    throw OptionError(fmt::format(
+        "{}: gyro calibration against {} refused: {}. Nothing written ({{no_imu}} calibrates the "
+        "mice alone)",
+        OptionError::literal(imu), to_name(options.imu_reference), describe(*e)));
+  }
+  report.result = std::get<GyroCalibration>(result);
+  const GyroCalibration& c = report.result;
+  r.facts.push_back(fmt::format(
+      "gyro: {} ({} rows) against {}: correlation {:.4f} at {:.2f} ms (coarse), residual RMS "
+      "{:.4g} rad/s, {} of {} rows dropped as outliers, reference rate sd {:.3g} rad/s; 1-sigma "
+      "{}",
+      imu, t.size(), source, c.correlation, c.coarse_latency * 1e3,
+      c.residual_rms, c.rows_rejected, c.rows, c.reference_sd,
+      c.blocks > 0 ? fmt::format("from the residual over {} blocks of 1 s (not white)", c.blocks)
+                   : std::string("from the residual variance (white)")));
+  // The gyro's first and last rows usually lie just outside mice.csv: more
+  // than 1 % of the intervals without the array is worth a warning.
+  if (report.reference_gaps * 100 > reference.rate.size()) {
+    r.warnings.push_back(fmt::format(
+        "gyro: {} of {} intervals without a usable array twist (not covered, lift or overflow): "
+        "read as 0 rad/s",
+        report.reference_gaps, reference.rate.size()));
+  } else if (report.reference_gaps > 0) {
+    r.facts.push_back(fmt::format(
+        "gyro: {} of {} intervals without a usable array twist (outside mice.csv, lift or "
+        "overflow), read as 0 rad/s",
+        report.reference_gaps, reference.rate.size()));
+  }
+  if (c.rows_rejected * 10 > c.rows) {
+    r.warnings.push_back(fmt::format(
+        "gyro: {} of {} rows disagree with the reference beyond 5 sigma (slip, the array reading "
+        "nothing, a saturated gyro)",
+        c.rows_rejected, c.rows));
+  }
+  GyroOptions calibrated = report.nominal;
+  calibrated.scale = static_cast<real>(c.scale);
+  calibrated.bias = static_cast<real>(c.bias);
+  calibrated.latency = c.latency;
+  r.calibrated.imu = calibrated;
+  r.gyro = report;
 }
 
 void run_gyro(CalibrationSummary& r, const RobotConfig& config, const LogFiles& files,
@@ -747,8 +796,9 @@ void run_gyro(CalibrationSummary& r, const RobotConfig& config, const LogFiles& 
           "alone)",
           OptionError::literal(files.imu->string()), to_name(r.termination)));
     }
-    reference =
-        array_rates(nominal ? config : r.calibrated, files, t, options, report.reference_gaps);
+    const RobotConfig& mounts = nominal ? config : r.calibrated;
+    MiceReader mice(files.mice, mounts);
+    reference = array_rates(mounts, mice, mice.file(), t, options, report.reference_gaps);
     source = fmt::format("the array's rotation ({} at the {} mounts, least squares)",
                          files.mice.string(), nominal ? "nominal" : "calibrated");
   } else {
@@ -767,49 +817,25 @@ void run_gyro(CalibrationSummary& r, const RobotConfig& config, const LogFiles& 
     }
     source = fmt::format("the wheels' omega ({})", files.wheels->string());
   }
-  const auto result = calibrate_gyro(t, g, reference);
-  if (const auto* e = std::get_if<GyroCalibrationError>(&result)) {
-    throw OptionError(fmt::format(
-        "{}: gyro calibration against {} refused: {}. Nothing written ({{no_imu}} calibrates the "
-        "mice alone)",
-        OptionError::literal(files.imu->string()), to_name(options.imu_reference), describe(*e)));
-  }
-  report.result = std::get<GyroCalibration>(result);
-  const GyroCalibration& c = report.result;
-  r.facts.push_back(fmt::format(
-      "gyro: {} ({} rows) against {}: correlation {:.4f} at {:.2f} ms (coarse), residual RMS "
-      "{:.4g} rad/s, {} of {} rows dropped as outliers, reference rate sd {:.3g} rad/s; 1-sigma "
-      "{}",
-      files.imu->string(), rows.size(), source, c.correlation, c.coarse_latency * 1e3,
-      c.residual_rms, c.rows_rejected, c.rows, c.reference_sd,
-      c.blocks > 0 ? fmt::format("from the residual over {} blocks of 1 s (not white)", c.blocks)
-                   : std::string("from the residual variance (white)")));
-  // The gyro's first and last rows usually lie just outside mice.csv: more
-  // than 1 % of the intervals without the array is worth a warning.
-  if (report.reference_gaps * 100 > reference.rate.size()) {
-    r.warnings.push_back(fmt::format(
-        "gyro: {} of {} intervals without a usable array twist (not covered, lift or overflow): "
-        "read as 0 rad/s",
-        report.reference_gaps, reference.rate.size()));
-  } else if (report.reference_gaps > 0) {
-    r.facts.push_back(fmt::format(
-        "gyro: {} of {} intervals without a usable array twist (outside mice.csv, lift or "
-        "overflow), read as 0 rad/s",
-        report.reference_gaps, reference.rate.size()));
-  }
-  if (c.rows_rejected * 10 > c.rows) {
-    r.warnings.push_back(fmt::format(
-        "gyro: {} of {} rows disagree with the reference beyond 5 sigma (slip, the array reading "
-        "nothing, a saturated gyro)",
-        c.rows_rejected, c.rows));
-  }
-  GyroOptions calibrated = report.nominal;
-  calibrated.scale = static_cast<real>(c.scale);
-  calibrated.bias = static_cast<real>(c.bias);
-  calibrated.latency = c.latency;
-  r.calibrated.imu = calibrated;
-  r.gyro = report;
+  finish_gyro(r, std::move(report), t, g, reference, source, options);
 }
+
+// A recording held in memory, handed out as a log's mice.csv would be.
+class RecordedRows : public FrameSource {
+ public:
+  RecordedRows(double start, const std::vector<SensorRow>& rows) : start_(start), rows_(rows) {}
+  double start_time() override { return start_; }
+  std::optional<SensorRow> next() override {
+    if (next_ >= rows_.size()) return std::nullopt;
+    return rows_[next_++];
+  }
+
+ private:
+  double start_;
+  const std::vector<SensorRow>& rows_;
+  std::size_t next_ = 0;
+};
+
 
 // ------------------------------------------------------------ JSON
 
@@ -915,6 +941,33 @@ void check_calibration_options(CalibrationMethod method, const fs::path& log,
     }
   }
   if (const auto e = o.validate()) throw Error(fmt::format("invalid option: {}", e->message()));
+}
+
+void calibrate_spin_gyro(CalibrationSummary& r, const RobotConfig& config,
+                         const SpinRecording& spin, const CalibrationOptions& options) {
+  GyroCalibrationReport report;
+  report.reference = GyroReference::kArray;
+  report.imu = spin.imu_where;
+  report.nominal = config.imu.value_or(GyroOptions{});
+  if (r.termination != CalibrationTermination::kConverged) {
+    throw OptionError(fmt::format(
+        "{}: gyro calibration against array refused: the mounts calibrated here are not usable "
+        "({}), so neither is their rotation",
+        OptionError::literal(spin.imu_where), to_name(r.termination)));
+  }
+  std::vector<double> t, g;
+  for (const auto& row : spin.imu) {
+    t.push_back(row.t);
+    g.push_back(row.gz);
+  }
+  RecordedRows mice(spin.start, spin.mice);
+  const RateSeries reference =
+      array_rates(r.calibrated, mice, spin.mice_where, t, options, report.reference_gaps);
+  const std::string source = fmt::format(
+      "the array's rotation ({} at the calibrated mounts, least squares)", spin.mice_where);
+  CalibrationOptions array_options = options;
+  array_options.imu_reference = GyroReference::kArray;
+  finish_gyro(r, std::move(report), t, g, reference, source, array_options);
 }
 
 CalibrationSummary calibrate_log(const RobotConfig& config, const std::string& config_path,
@@ -1033,18 +1086,7 @@ std::string CalibrationSummary::full_report() const {
       }
     }
   }
-  if (gyro) {
-    const GyroCalibration& c = gyro->result;
-    fmt::format_to(out, "\ngyro against the {}\n", to_name(gyro->reference));
-    fmt::format_to(out, "  {:<14} {:>12} {:>12} {:>12}\n", "parameter", "nominal", "calibrated",
-                   "1-sigma");
-    fmt::format_to(out, "  {:<14} {:>12.5f} {:>12.5f} {:>12.5f}\n", "scale", gyro->nominal.scale,
-                   c.scale, c.scale_sigma());
-    fmt::format_to(out, "  {:<14} {:>12.6f} {:>12.6f} {:>12.6f}\n", "bias rad/s",
-                   gyro->nominal.bias, c.bias, c.bias_sigma());
-    fmt::format_to(out, "  {:<14} {:>12.3f} {:>12.3f} {:>12.3f}\n", "latency ms",
-                   gyro->nominal.latency * 1e3, c.latency * 1e3, c.latency_sigma() * 1e3);
-  }
+  if (gyro) fmt::format_to(out, "\n{}", gyro->table());
   fmt::format_to(out, "\n");
   if (warnings.empty()) {
     fmt::format_to(out, "warnings: none\n");
@@ -1052,6 +1094,22 @@ std::string CalibrationSummary::full_report() const {
     fmt::format_to(out, "warnings:\n");
     for (const auto& w : warnings) fmt::format_to(out, "  {}\n", w);
   }
+  return text;
+}
+
+std::string GyroCalibrationReport::table() const {
+  const GyroCalibration& c = result;
+  std::string text;
+  auto out = std::back_inserter(text);
+  fmt::format_to(out, "gyro against the {}\n", to_name(reference));
+  fmt::format_to(out, "  {:<14} {:>12} {:>12} {:>12}\n", "parameter", "nominal", "calibrated",
+                 "1-sigma");
+  fmt::format_to(out, "  {:<14} {:>12.5f} {:>12.5f} {:>12.5f}\n", "scale", nominal.scale, c.scale,
+                 c.scale_sigma());
+  fmt::format_to(out, "  {:<14} {:>12.6f} {:>12.6f} {:>12.6f}\n", "bias rad/s", nominal.bias,
+                 c.bias, c.bias_sigma());
+  fmt::format_to(out, "  {:<14} {:>12.3f} {:>12.3f} {:>12.3f}\n", "latency ms",
+                 nominal.latency * 1e3, c.latency * 1e3, c.latency_sigma() * 1e3);
   return text;
 }
 

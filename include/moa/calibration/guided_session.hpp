@@ -39,7 +39,8 @@ std::vector<std::string> guided_result_warnings(const GuidedCalibration& calibra
 
 /// The odometry options the session's epochs are to come from: consensus
 /// (a sensor the nominal config has badly wrong, mirrored say, is left out
-/// of the estimate the checks judge), no wheels, no limit on silences, and no
+/// of the estimate the checks judge), no wheels, no gyro (its rows calibrate
+/// it; they are not fused), no limit on silences, and no
 /// health monitor (the nominal config's mount errors, a few mm at 0.1 m, are
 /// a few per cent in a spin: what its drift test would exclude sensors for).
 OdometryOptions guided_session_odometry_options();

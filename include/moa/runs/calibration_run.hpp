@@ -41,6 +41,7 @@
 #include "moa/calibration/speed_scale.hpp"
 #include "moa/core/names.hpp"
 #include "moa/formats/config.hpp"
+#include "moa/formats/log.hpp"
 
 namespace moa::io {
 
@@ -195,6 +196,10 @@ struct GyroCalibrationReport {
   GyroOptions nominal;        ///< the config's imu: block (defaults when it had none)
   GyroCalibration result;
   std::size_t reference_gaps = 0;  ///< array: gyro intervals without a usable array twist
+
+  /// "gyro against the R" and a row per parameter: nominal, calibrated,
+  /// 1-sigma (lines end in '\n').
+  std::string table() const;
 };
 
 /// A calibration's result and report, as Ceres' Solver::Summary.
@@ -229,6 +234,25 @@ struct CalibrationSummary {
   /// One JSON object (SI units, no newline); `out`, when given, as its "out" member.
   std::string to_json(std::string_view out = {}) const;
 };
+
+/// A spin held in memory (`moa calibrate --guided --live`): what `moa
+/// calibrate --method guided` reads from the spin's mice.csv and imu.csv.
+struct SpinRecording {
+  double start = 0.0;            ///< s: each sensor's first row accumulates from here
+  std::vector<SensorRow> mice;   ///< in time order
+  std::vector<ImuRow> imu;       ///< in time order
+  std::string mice_where = "the spin's mice rows";  ///< named in messages
+  std::string imu_where = "the spin's gyro rows";   ///< named in messages
+};
+
+/// The gyro of `spin` calibrated against the array's rotation at the mounts
+/// of r.calibrated (the guided calibration's, which must have converged),
+/// as `moa calibrate --method guided` does with the spin's imu.csv: the fit
+/// into r.gyro and r.calibrated.imu, its facts and warnings into `r`.
+/// `config`: the nominal config (its imu: block, if any, is the nominal).
+/// Throws io::Error when the fit is refused.
+void calibrate_spin_gyro(CalibrationSummary& r, const RobotConfig& config,
+                         const SpinRecording& spin, const CalibrationOptions& options = {});
 
 /// Calibrates `config` (read from `config_path`) with `method` from the log
 /// `log` (kimlee, exact: a directory with mice.csv and wheels.csv; guided:
