@@ -567,23 +567,24 @@ std::string heading_line(const std::string& summary) {
 // pipeline (the zero rows LiveRunSource starts with are no-ops), so the same
 // odometry byte for byte, with as many epochs headed by the gyro, most of
 // them; a replay that ignored imu.csv would have none and its own poses.
-// Odometry runs with --no-wheels: a replay feeds no wheels.csv (docs/live.md).
-// --record keeps the gyro rows fed, and the recording replays alike. With
-// --no-imu both ignore it, again the same odometry, not the fused one.
+// The replay feeds the log's wheels.csv too, as odometry does. --record
+// keeps the gyro and wheel rows fed, and the recording replays alike. With
+// --no-imu both ignore the gyro, again the same odometry, not the fused one;
+// with --no-wheels too, both ignore the wheels, and nothing but mice is recorded.
 TEST(Live, AReplayedGyroIsFedAsMoaOdometryFeedsIt) {
   const fs::path dir = scratch_dir("live-gyro");
   const fs::path log = dir / "log";
   ASSERT_EQ(run_moa("simulate --scenario gyro-compact --seed 1 --out " + log.string()).exit_code,
             0);
   const std::string config = (log / "robot.yaml").string();
-  for (const std::string flags : {"", " --no-imu"}) {
+  for (const std::string flags : {"", " --no-imu --no-wheels"}) {
     SCOPED_TRACE(flags);
     const fs::path offline = dir / "odometry.csv", live = dir / "live.csv";
     // One folder: the second recording replaces the first (--force), and
     // the gyro rows the first left there go with it.
     const fs::path record = dir / "rec";
     const auto o = run_moa("odometry --config " + config + " --log " + log.string() +
-                           " --no-wheels --out " + offline.string() + flags);
+                           " --out " + offline.string() + flags);
     ASSERT_EQ(o.exit_code, 0) << o.err;
     const auto r =
         run_moa("live --config " + config + " --replay " + log.string() + " --speed 50 --record " +
@@ -600,21 +601,23 @@ TEST(Live, AReplayedGyroIsFedAsMoaOdometryFeedsIt) {
       counts >> n >> of >> m;
       EXPECT_GT(2 * n, m) << r.out;
       EXPECT_GT(data_lines(record / "imu.csv"), 0u);
+      EXPECT_EQ(data_lines(record / "wheels.csv"), data_lines(log / "wheels.csv"));
       const auto replay =
           run_moa("odometry --config " + (record / "robot.yaml").string() + " --log " +
-                  record.string() + " --no-wheels --quiet --out " + (dir / "replay.csv").string());
+                  record.string() + " --quiet --out " + (dir / "replay.csv").string());
       ASSERT_EQ(replay.exit_code, 0) << replay.err;
       EXPECT_EQ(read_text(dir / "replay.csv"), read_text(live));
     } else {
       EXPECT_EQ(heading_line(r.out), "");
       EXPECT_FALSE(fs::exists(record / "imu.csv"));
+      EXPECT_FALSE(fs::exists(record / "wheels.csv"));
     }
   }
   fs::remove_all(dir);
 }
 
 // One sensor and a gyro (scenario gyro-one): the replay takes the sensor's
-// rotation from imu.csv as `moa odometry` (--no-wheels, as above) does, to
+// rotation from imu.csv as `moa odometry` does (wheels.csv too), to
 // the same odometry, and the run is usable (before, every epoch was held).
 // One sensor without the gyro, a one-row imu.csv and a bad one are refused
 // with odometry's words, before any output.
@@ -625,7 +628,7 @@ TEST(Live, OneSensorReplaysWithItsRotationFromTheGyro) {
   const std::string config = (log / "robot.yaml").string();
   const fs::path offline = dir / "odometry.csv", live = dir / "live.csv";
   const auto o = run_moa("odometry --config " + config + " --log " + log.string() +
-                         " --no-wheels --out " + offline.string());
+                         " --out " + offline.string());
   ASSERT_EQ(o.exit_code, 0) << o.err;
   const auto r = run_moa("live --config " + config + " --replay " + log.string() +
                          " --speed 500 --out " + live.string());

@@ -190,16 +190,13 @@ int run_wizard(const WizardArgs& args) {
   live.source->start_time();  // waits for the source to start (a serial board's HELLO)
 
   // The gyro beside the array: a serial board's, or a replayed log's imu.csv.
-  std::unique_ptr<io::ImuReader> replay_gyro;
-  std::string replay_gyro_file;
+  io::LogFiles replay_files;
+  io::LogStreams replay_log;
   if (args.imu && !spec.replay.empty()) {
-    const io::LogFiles log = io::resolve_log(spec.replay);
-    if (log.imu) {
-      replay_gyro = std::make_unique<io::ImuReader>(*log.imu);
-      replay_gyro_file = log.imu->string();
-    }
+    replay_files = io::resolve_log(spec.replay);
+    if (replay_files.imu) replay_log.imu = std::make_unique<io::ImuReader>(*replay_files.imu);
   }
-  const bool gyro_possible = args.imu && (live.serial != nullptr || replay_gyro);
+  const bool gyro_possible = args.imu && (live.serial != nullptr || replay_log.imu);
   say("moa calibrate --guided --live: {} sensors of {}, from {}{}\n", config.names.size(),
       args.config, live.origin,
       gyro_possible ? "; the spin calibrates the gyro too (--no-imu: the mice alone)" : "");
@@ -213,7 +210,7 @@ int run_wizard(const WizardArgs& args) {
   io::SpinRecording spin;
   spin.mice_where = fmt::format("the spin's rows from {}", live.where);
   spin.imu_where = fmt::format("the spin's gyro rows from {}",
-                               replay_gyro ? replay_gyro_file : live.where);
+                               replay_log.imu ? replay_files.imu->string() : live.where);
   bool recording = false, spin_overflow = false;
   double last_row_t = 0.0;
   const auto announce_step = [&] {
@@ -309,7 +306,7 @@ int run_wizard(const WizardArgs& args) {
   io::LiveRunSource input(*live.source, config.array.size(), live.where,
                           [&] { return quit || session.complete() || g_quit != 0; });
   if (live.serial != nullptr && args.imu) input.add_gyro(*live.serial);
-  if (replay_gyro) input.add_gyro(*replay_gyro, replay_gyro_file);
+  if (replay_log.imu) input.add_log(replay_log, replay_files);
   io::run_loop(config, args.config, guided_session_odometry_options(), input, live.where,
                callbacks);
   // The data ended with a motion watched (its end is seen in the last

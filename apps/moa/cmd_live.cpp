@@ -137,12 +137,12 @@ int run_live(LiveArgs args) {
   const io::LiveSourceSpec spec = source_spec(args.source, config, args.config);
   // A replayed log's gyro (imu.csv) as `moa odometry` reads it, one sensor
   // without it refused alike, before any output (the streams may bring one).
-  std::unique_ptr<io::ImuReader> replay_gyro;
-  std::string replay_gyro_file;
+  io::LogFiles replay_files;
+  io::LogStreams replay_log;
   if (!spec.replay.empty()) {
-    const io::LogFiles log = io::resolve_log(spec.replay);
-    replay_gyro = io::open_log_imu(config, log, odometry_options, !args.streams.empty());
-    if (replay_gyro) replay_gyro_file = log.imu->string();
+    replay_files = io::resolve_log(spec.replay);
+    replay_log =
+        io::open_log_streams(config, replay_files, odometry_options, !args.streams.empty());
   }
   // As `moa odometry` on the recording: the gyro goes to the consensus only.
   if (odometry_options.estimator != EstimatorKind::kConsensus) odometry_options.use_imu = false;
@@ -191,8 +191,10 @@ int run_live(LiveArgs args) {
       io::refuse_output_onto_inputs(dir / "imu.csv", "--record", inputs);
       io::refuse_output_onto_inputs(dir / "camera.csv", "--record", inputs);
     }
-    if (!spec.serial.empty() || replay_gyro) {
+    if (!spec.serial.empty() || replay_log.any()) {
+      io::refuse_output_onto_inputs(dir / "wheels.csv", "--record", inputs);
       io::refuse_output_onto_inputs(dir / "imu.csv", "--record", inputs);
+      io::refuse_output_onto_inputs(dir / "camera.csv", "--record", inputs);
     }
     // A recording is data that cannot be made again: replaced only when asked.
     for (const char* name :
@@ -281,16 +283,18 @@ int run_live(LiveArgs args) {
                                                  live.serial != nullptr || live.replay != nullptr,
                                                  io::MiceWriter::Durability::kJournal, comments);
   }
-  // The streams' rows, and a serial board's or the replayed log's gyro (imu.csv).
+  // The streams' rows, a serial board's gyro, the replayed log's wheels.csv,
+  // camera.csv and imu.csv.
   std::unique_ptr<io::StreamCsvWriter> stream_recording;
-  if (recording && (!args.streams.empty() || live.serial || replay_gyro)) {
+  if (recording && (!args.streams.empty() || live.serial || replay_log.any())) {
     stream_recording = std::make_unique<io::StreamCsvWriter>(
         args.record,
-        args.streams.empty()
-            ? fmt::format("recorded by moa live from the gyro of {} (t: s; gz: rad/s, "
-                          "counter-clockwise about z)",
-                          live.where)
-            : fmt::format("recorded by moa live from the streams of {}", args.streams));
+        !args.streams.empty()
+            ? fmt::format("recorded by moa live from the streams of {}", args.streams)
+        : live.serial ? fmt::format("recorded by moa live from the gyro of {} (t: s; gz: rad/s, "
+                                    "counter-clockwise about z)",
+                                    live.where)
+                      : fmt::format("recorded by moa live from a replay of {}", live.where));
   }
   std::unique_ptr<io::OdometryCsvWriter> odometry_out;
   if (to_stdout) {
@@ -374,7 +378,7 @@ int run_live(LiveArgs args) {
 
   if (streams) input.add_streams(*streams, spec.replay.empty() ? 1.0 : spec.replay_options.speed);
   if (live.serial) input.add_gyro(*live.serial);
-  if (replay_gyro) input.add_gyro(*replay_gyro, replay_gyro_file);
+  if (replay_log.any()) input.add_log(replay_log, replay_files);
   // A live input's bad row (a saturated record, a time out of order) is
   // skipped and not recorded, so that the recording replays; each kind is
   // reported once, with the count at the end.

@@ -107,7 +107,8 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
   cmd->add_option("--self-calibration-gauge", f.self_calibration_gauge,
                   live ? "With --self-calibrate (implied): what fixes the common scale and yaw "
                          "of all sensors, which the redundancy cannot see: sensors (their "
-                         "median keeps the configured values; moa live reads no wheels)"
+                         "median keeps the configured values; the wheels gauge is moa "
+                         "odometry's)"
                        : "With --self-calibrate (implied): what fixes the common scale and yaw "
                          "of all sensors, which the redundancy cannot see: sensors (default: "
                          "their median keeps the configured values) or wheels (the log's "
@@ -139,9 +140,11 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
                        "is then refused for --replay)"
                      : "Ignore the gyro (imu.csv; by default the consensus fuses it, config key "
                        "imu; one sensor is then refused)");
-  if (live) return;
   cmd->add_flag("--no-wheels", f.no_wheels,
-                "Ignore wheels.csv (by default it is the fallback and plausibility check)");
+                live ? "Ignore the wheels (a --replay log's wheels.csv, --streams wheels lines; "
+                       "by default they are the fallback and plausibility check)"
+                     : "Ignore wheels.csv (by default it is the fallback and plausibility check)");
+  if (live) return;
   CLI::Option* fuse =
       cmd->add_flag("--fuse-camera", o.fuse_camera,
                     "Fuse camera.csv position fixes with an EKF (adds pose covariance columns)");

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 
 #include "moa/formats/error.hpp"
 #include "moa/runs/odometry_run.hpp"
@@ -84,16 +85,18 @@ void LiveRunSource::add_streams(StreamLineReader& streams, double speed) {
 double LiveRunSource::start_time() { return t0_; }
 
 std::string LiveRunSource::where() const {
-  if (from_gyro_log_) return gyro_log_file_;
+  if (from_log_ != nullptr && *from_log_) return (*from_log_)->string();
   return from_streams_ ? fmt::format("{} (streams)", where_) : where_;
 }
 
 void LiveRunSource::add_gyro(SerialReader& serial) { gyro_serial_ = &serial; }
 
-void LiveRunSource::add_gyro(ImuReader& imu, std::string file) {
-  gyro_log_ = &imu;
-  gyro_log_file_ = std::move(file);
-  gyro_log_next_ = imu.next();
+void LiveRunSource::add_log(LogStreams& log, const LogFiles& files) {
+  log_ = &log;
+  log_files_ = &files;
+  if (log.camera) log_fix_ = log.camera->next();
+  if (log.wheels) log_wheel_ = log.wheels->next();
+  if (log.imu) log_gyro_ = log.imu->next();
 }
 
 void LiveRunSource::take_gyro() {
@@ -149,7 +152,8 @@ void LiveRunSource::take_streams() {
 }
 
 const InputRow* LiveRunSource::next() {
-  from_streams_ = from_gyro_log_ = false;
+  from_streams_ = false;
+  from_log_ = nullptr;
   if (started_ == 0) {
     t_last_ = t_ref_ = t0_;
     arrival_ref_ = std::chrono::steady_clock::now();
@@ -175,8 +179,9 @@ const InputRow* LiveRunSource::next() {
     take_gyro();
   }
   const double limit = ended_ ? t_last_ : pending_->t;
-  // A row due from the first queue that has one, in this order: fixes, wheels, the
-  // serial device's gyro, the replayed log's gyro, the streamed gyro.
+  // A row due from the first source that has one, in this order: fixes
+  // (streamed, then the replayed log's), wheels (the same), the serial
+  // device's gyro, the replayed log's gyro, the streamed gyro.
   const auto take = [&](auto& queue, bool streamed) {
     if (queue.empty() || queue.front().t > limit) return false;
     row_ = queue.front();
@@ -184,14 +189,24 @@ const InputRow* LiveRunSource::next() {
     if (streamed) from_streams_ = true;
     return true;
   };
-  if (take(fixes_, true) || take(wheels_, true) || take(serial_gyro_, false)) return &row_;
-  // The replayed log's gyro, read as it falls due.
-  if (gyro_log_next_ && gyro_log_next_->t <= limit) {
-    row_ = *gyro_log_next_;
-    gyro_log_next_ = gyro_log_->next();
-    from_gyro_log_ = true;
-    return &row_;
-  }
+  // The replayed log's rows, read as they fall due.
+  const auto take_log = [&](auto& next, auto& reader, const auto& file) {
+    if (!next || next->t > limit) return false;
+    if constexpr (std::is_same_v<std::decay_t<decltype(*next)>, CameraRow>) {
+      row_ = CameraFix{next->t, next->position, next->theta, next->sigma};
+    } else {
+      row_ = *next;
+    }
+    next = reader->next();
+    from_log_ = &file;
+    return true;
+  };
+  if (take(fixes_, true)) return &row_;
+  if (log_ != nullptr && take_log(log_fix_, log_->camera, log_files_->camera)) return &row_;
+  if (take(wheels_, true)) return &row_;
+  if (log_ != nullptr && take_log(log_wheel_, log_->wheels, log_files_->wheels)) return &row_;
+  if (take(serial_gyro_, false)) return &row_;
+  if (log_ != nullptr && take_log(log_gyro_, log_->imu, log_files_->imu)) return &row_;
   if (take(gyro_, true)) return &row_;
   if (ended_) return nullptr;
   row_ = *pending_;

@@ -458,21 +458,27 @@ std::unique_ptr<ImuReader> open_log_imu(const RobotConfig& config, const LogFile
   return imu;
 }
 
+LogStreams open_log_streams(const RobotConfig& config, const LogFiles& log,
+                            const OdometryOptions& options, bool other_streams) {
+  LogStreams s;
+  if (options.use_wheels && log.wheels) s.wheels = std::make_unique<WheelsReader>(*log.wheels);
+  s.imu = open_log_imu(config, log, options, other_streams);
+  if (options.fuse_camera) {
+    if (log.camera) {
+      s.camera = std::make_unique<CameraReader>(*log.camera);
+    } else if (!other_streams) {
+      throw Error(fmt::format("{}: camera fusion needs camera.csv in the log",
+                              (log.dir / "camera.csv").string()));
+    }
+  }
+  return s;
+}
+
 OdometryRun run_odometry(const RobotConfig& config, const std::string& config_path,
                          const LogFiles& log, const OdometryOptions& options,
                          const StepCallback& on_step, const ProgressCallback& progress) {
   MiceReader mice(log.mice, config);
-  std::unique_ptr<WheelsReader> wheels;
-  if (options.use_wheels && log.wheels) wheels = std::make_unique<WheelsReader>(*log.wheels);
-  const std::unique_ptr<ImuReader> imu = open_log_imu(config, log, options);
-  std::unique_ptr<CameraReader> camera;
-  if (options.fuse_camera) {
-    if (!log.camera) {
-      throw Error(fmt::format("{}: camera fusion needs camera.csv in the log",
-                              (log.dir / "camera.csv").string()));
-    }
-    camera = std::make_unique<CameraReader>(*log.camera);
-  }
+  const LogStreams streams = open_log_streams(config, log, options);
   std::unique_ptr<FaultsReader> faults;
   if (options.estimator == EstimatorKind::kOracle) {
     if (!log.faults) {
@@ -481,7 +487,8 @@ OdometryRun run_odometry(const RobotConfig& config, const std::string& config_pa
     }
     faults = std::make_unique<FaultsReader>(*log.faults, config);
   }
-  LogRunSource source(mice, faults.get(), wheels.get(), imu.get(), camera.get(), log);
+  LogRunSource source(mice, faults.get(), streams.wheels.get(), streams.imu.get(),
+                      streams.camera.get(), log);
   RunCallbacks callbacks;
   callbacks.on_step = on_step;
   callbacks.progress = progress;

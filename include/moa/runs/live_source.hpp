@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "moa/formats/config.hpp"
+#include "moa/runs/odometry_run.hpp"
 #include "moa/runs/run_loop.hpp"
 #include "moa/sources/evdev.hpp"
 #include "moa/sources/live.hpp"
@@ -91,11 +92,12 @@ class LiveRunSource final : public RunSource {
   /// sample that comes after the rows of its window (the first of a stream)
   /// is stamped just after them.
   void add_gyro(SerialReader& serial);
-  /// Merges a replayed log's gyro in (its imu.csv, opened by open_log_imu,
-  /// runs/odometry_run.hpp) as `moa odometry` does: each row before the
-  /// first mice row at or after its t, after that row's fixes and wheel
-  /// rows. `file` names it in messages, as odometry does.
-  void add_gyro(ImuReader& imu, std::string file);
+  /// Merges a replayed log's streams in (its camera.csv, wheels.csv and
+  /// imu.csv, opened by open_log_streams, runs/odometry_run.hpp) as `moa
+  /// odometry` does: each row before the first mice row at or after its t,
+  /// fixes first, then wheels, then gyro. `files` names them in messages.
+  /// Both must outlive this.
+  void add_log(LogStreams& log, const LogFiles& files);
   double start_time() override;
   const InputRow* next() override;
   std::string where() const override;
@@ -137,10 +139,14 @@ class LiveRunSource final : public RunSource {
   std::size_t dropped_ = 0;
   SerialReader* gyro_serial_ = nullptr;  ///< the serial device's gyro (add_gyro)
   std::deque<ImuRow> serial_gyro_;       ///< its samples, not yet handed out
-  ImuReader* gyro_log_ = nullptr;        ///< a replayed log's imu.csv (add_gyro) ...
-  std::string gyro_log_file_;            ///< ... its path ...
-  std::optional<ImuRow> gyro_log_next_;  ///< ... and its next row, not yet handed out
-  bool from_gyro_log_ = false;           ///< row_ came from it
+  // A replayed log's streams (add_log), and each one's next row, not yet handed out.
+  LogStreams* log_ = nullptr;
+  const LogFiles* log_files_ = nullptr;
+  std::optional<CameraRow> log_fix_;
+  std::optional<WheelRow> log_wheel_;
+  std::optional<ImuRow> log_gyro_;
+  /// The file row_ came from, when one of the log's streams.
+  const std::optional<std::filesystem::path>* from_log_ = nullptr;
 };
 
 }  // namespace moa::io

@@ -56,6 +56,22 @@ OdometryOptions resolve_odometry_options(OdometryOptions options, std::string_vi
 std::unique_ptr<ImuReader> open_log_imu(const RobotConfig& config, const LogFiles& log,
                                         const OdometryOptions& options, bool other_gyro = false);
 
+/// The streams of a log beside its mice.csv, as the pipeline takes them.
+struct LogStreams {
+  std::unique_ptr<WheelsReader> wheels;  ///< wheels.csv, when options.use_wheels
+  std::unique_ptr<ImuReader> imu;        ///< imu.csv (open_log_imu)
+  std::unique_ptr<CameraReader> camera;  ///< camera.csv, when options.fuse_camera
+  bool any() const { return wheels || imu || camera; }
+};
+/// Opens the log's streams as `moa odometry` reads them, for it and `moa
+/// live --replay`: wheels.csv when options.use_wheels and it exists, the
+/// gyro as open_log_imu says, camera.csv when options.fuse_camera (throws
+/// io::Error "LOG/camera.csv: camera fusion needs camera.csv in the log"
+/// without one, unless `other_streams`: a live run's streams may bring the
+/// fixes and the gyro).
+LogStreams open_log_streams(const RobotConfig& config, const LogFiles& log,
+                            const OdometryOptions& options, bool other_streams = false);
+
 using StepCallback = std::function<void(const OdometryStep&)>;
 /// Called now and then with the mice rows read so far and their time (s).
 using ProgressCallback = std::function<void(std::size_t rows, double t)>;
