@@ -126,8 +126,8 @@ TEST(CarelessCalls, CalibrateAndReportRefuseAnOutputOntoAnInput) {
       "calibrate --guided --live --config " + config + " --replay " + dir.string() + " --out ";
   expect_refused(live_guided + config, "--out", config);
   // The live session has the array alone to calibrate the gyro against.
-  const auto wheels = test::run_moa(live_guided + (dir / "cal.yaml").string() +
-                                    " --imu-reference wheels");
+  const auto wheels =
+      test::run_moa(live_guided + (dir / "cal.yaml").string() + " --imu-reference wheels");
   EXPECT_EQ(wheels.exit_code, cli::kExitBadInput) << wheels.err;
   EXPECT_THAT(wheels.err, HasSubstr("--imu-reference wheels: the live guided calibration "
                                     "calibrates the gyro against the array only"));

@@ -583,8 +583,8 @@ TEST(Live, AReplayedGyroIsFedAsMoaOdometryFeedsIt) {
     // One folder: the second recording replaces the first (--force), and
     // the gyro rows the first left there go with it.
     const fs::path record = dir / "rec";
-    const auto o = run_moa("odometry --config " + config + " --log " + log.string() +
-                           " --out " + offline.string() + flags);
+    const auto o = run_moa("odometry --config " + config + " --log " + log.string() + " --out " +
+                           offline.string() + flags);
     ASSERT_EQ(o.exit_code, 0) << o.err;
     const auto r =
         run_moa("live --config " + config + " --replay " + log.string() + " --speed 50 --record " +
@@ -627,8 +627,8 @@ TEST(Live, OneSensorReplaysWithItsRotationFromTheGyro) {
   ASSERT_EQ(run_moa("simulate --scenario gyro-one --seed 1 --out " + log.string()).exit_code, 0);
   const std::string config = (log / "robot.yaml").string();
   const fs::path offline = dir / "odometry.csv", live = dir / "live.csv";
-  const auto o = run_moa("odometry --config " + config + " --log " + log.string() +
-                         " --out " + offline.string());
+  const auto o = run_moa("odometry --config " + config + " --log " + log.string() + " --out " +
+                         offline.string());
   ASSERT_EQ(o.exit_code, 0) << o.err;
   const auto r = run_moa("live --config " + config + " --replay " + log.string() +
                          " --speed 500 --out " + live.string());

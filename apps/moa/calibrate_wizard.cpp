@@ -38,8 +38,8 @@
 #include "moa/calibration/guided_steps.hpp"
 #include "moa/formats/config.hpp"
 #include "moa/formats/error.hpp"
-#include "moa/runs/odometry_run.hpp"
 #include "moa/runs/calibration_run.hpp"
+#include "moa/runs/odometry_run.hpp"
 #include "moa/runs/output_path.hpp"
 #include "moa/runs/run_loop.hpp"
 

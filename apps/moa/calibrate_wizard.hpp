@@ -18,7 +18,7 @@ struct WizardArgs {
   SourceFlags source;
   bool no_push_y = false;
   // From cmd_calibrate's own flags:
-  bool imu = true;  ///< not --no-imu: the spin's gyro rows calibrate the gyro
+  bool imu = true;                      ///< not --no-imu: the spin's gyro rows calibrate the gyro
   std::string imu_reference = "array";  ///< --imu-reference: array only, live
   std::string config, out;
   std::optional<double> distance, turns;

@@ -288,13 +288,13 @@ int run_live(LiveArgs args) {
   std::unique_ptr<io::StreamCsvWriter> stream_recording;
   if (recording && (!args.streams.empty() || live.serial || replay_log.any())) {
     stream_recording = std::make_unique<io::StreamCsvWriter>(
-        args.record,
-        !args.streams.empty()
-            ? fmt::format("recorded by moa live from the streams of {}", args.streams)
-        : live.serial ? fmt::format("recorded by moa live from the gyro of {} (t: s; gz: rad/s, "
-                                    "counter-clockwise about z)",
-                                    live.where)
-                      : fmt::format("recorded by moa live from a replay of {}", live.where));
+        args.record, !args.streams.empty()
+                         ? fmt::format("recorded by moa live from the streams of {}", args.streams)
+                     : live.serial
+                         ? fmt::format("recorded by moa live from the gyro of {} (t: s; gz: rad/s, "
+                                       "counter-clockwise about z)",
+                                       live.where)
+                         : fmt::format("recorded by moa live from a replay of {}", live.where));
   }
   std::unique_ptr<io::OdometryCsvWriter> odometry_out;
   if (to_stdout) {

@@ -711,8 +711,8 @@ void finish_gyro(CalibrationSummary& r, GyroCalibrationReport report, const std:
       "gyro: {} ({} rows) against {}: correlation {:.4f} at {:.2f} ms (coarse), residual RMS "
       "{:.4g} rad/s, {} of {} rows dropped as outliers, reference rate sd {:.3g} rad/s; 1-sigma "
       "{}",
-      imu, t.size(), source, c.correlation, c.coarse_latency * 1e3,
-      c.residual_rms, c.rows_rejected, c.rows, c.reference_sd,
+      imu, t.size(), source, c.correlation, c.coarse_latency * 1e3, c.residual_rms, c.rows_rejected,
+      c.rows, c.reference_sd,
       c.blocks > 0 ? fmt::format("from the residual over {} blocks of 1 s (not white)", c.blocks)
                    : std::string("from the residual variance (white)")));
   // The gyro's first and last rows usually lie just outside mice.csv: more
@@ -835,7 +835,6 @@ class RecordedRows : public FrameSource {
   const std::vector<SensorRow>& rows_;
   std::size_t next_ = 0;
 };
-
 
 // ------------------------------------------------------------ JSON
 

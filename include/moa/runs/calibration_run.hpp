@@ -238,9 +238,9 @@ struct CalibrationSummary {
 /// A spin held in memory (`moa calibrate --guided --live`): what `moa
 /// calibrate --method guided` reads from the spin's mice.csv and imu.csv.
 struct SpinRecording {
-  double start = 0.0;            ///< s: each sensor's first row accumulates from here
-  std::vector<SensorRow> mice;   ///< in time order
-  std::vector<ImuRow> imu;       ///< in time order
+  double start = 0.0;           ///< s: each sensor's first row accumulates from here
+  std::vector<SensorRow> mice;  ///< in time order
+  std::vector<ImuRow> imu;      ///< in time order
   std::string mice_where = "the spin's mice rows";  ///< named in messages
   std::string imu_where = "the spin's gyro rows";   ///< named in messages
 };
