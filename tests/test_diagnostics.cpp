@@ -25,6 +25,17 @@ OdometryStep step_at(const ArraySample& sample) {
   return step;
 }
 
+// `text` written to `file` is refused by the reader, with `error` in the message.
+void expect_refused(const fs::path& file, const std::string& text, const std::string& error) {
+  std::ofstream(file) << text;
+  try {
+    read_diagnostics_csv(file);
+    ADD_FAILURE() << "no error for " << text;
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr(error)) << text;
+  }
+}
+
 TEST(DiagnosticsCsv, EverySelectedSourceRoundTrips) {
   const fs::path file = test::scratch_dir("diagnostics") / "d.csv";
   ArraySample sample;
@@ -93,13 +104,8 @@ TEST(DiagnosticsCsv, GyroCalibrationColumnsAreOptionalAndChecked) {
       {"0.1,imu,0.5,1,,0.01,0\n", "must be > 0"},
   };
   for (const auto& c : bad) {
-    std::ofstream(file) << "t,source,test_ratio,fused,reason,bias,scale\n" << c.row;
-    try {
-      read_diagnostics_csv(file);
-      ADD_FAILURE() << "no error for " << c.row;
-    } catch (const Error& e) {
-      EXPECT_THAT(e.what(), HasSubstr(c.error)) << c.row;
-    }
+    expect_refused(file, std::string("t,source,test_ratio,fused,reason,bias,scale\n") + c.row,
+                   c.error);
   }
   fs::remove_all(dir);
 }
@@ -117,16 +123,7 @@ TEST(DiagnosticsCsv, BadRowsAreRefusedWithFileAndLine) {
       {"t,source,test_ratio,fused,reason\n0.2,m1,1,1,\n0.1,m1,1,1,\n", "d.csv:3"},
       {"t,source,test_ratio,fused,reason\n0.1,,1,1,\n", "empty source"},
   };
-  for (const auto& c : cases) {
-    const fs::path file = dir / "d.csv";
-    std::ofstream(file) << c.text;
-    try {
-      read_diagnostics_csv(file);
-      ADD_FAILURE() << "no error for " << c.text;
-    } catch (const Error& e) {
-      EXPECT_THAT(e.what(), HasSubstr(c.error)) << c.text;
-    }
-  }
+  for (const auto& c : cases) expect_refused(dir / "d.csv", c.text, c.error);
 }
 
 // moa odometry --diagnostics on common-mode dropouts (faults-bump): the file
