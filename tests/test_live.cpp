@@ -616,6 +616,50 @@ TEST(Live, AReplayedGyroIsFedAsMoaOdometryFeedsIt) {
   fs::remove_all(dir);
 }
 
+// One source per kind: a replayed log with wheels.csv and imu.csv feeds the
+// wheels and the gyro; the --streams lines of those kinds are not fed (they
+// would interleave out of time order and end the run), with one warning,
+// counted at the end, and not recorded: the odometry is the log's.
+TEST(Live, TheReplayedLogFeedsItsKindsNotTheStreams) {
+  const fs::path dir = scratch_dir("live-one-source");
+  const fs::path log = dir / "log";
+  ASSERT_EQ(run_moa("simulate --scenario gyro-compact --seed 2 --out " + log.string()).exit_code,
+            0);
+  const fs::path streams = dir / "streams.csv";
+  {
+    std::ofstream out(streams);
+    for (int k = 1; k <= 20; ++k) {
+      out << "wheels," << k * 0.1 + 0.0001 << ",0.1,0,0\n";
+      out << "imu," << k * 0.1 + 0.0001 << ",0.2\n";
+    }
+  }
+  const std::string config = (log / "robot.yaml").string();
+  const fs::path offline = dir / "odometry.csv", live = dir / "live.csv", record = dir / "rec";
+  const auto o = run_moa("odometry --config " + config + " --log " + log.string() + " --out " +
+                         offline.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  const auto r =
+      run_moa("live --config " + config + " --replay " + log.string() + " --speed 50 --streams " +
+              streams.string() + " --record " + record.string() + " --out " + live.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("--streams: its wheels and imu lines are not fed: the replayed log's "
+                       "wheels.csv and imu.csv feed them"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.out.find("read, 0, 0 and 0 fed; 0 bad lines, 0 out of time order, 40 not fed (the "
+                       "replayed log feeds their kind)"),
+            std::string::npos)
+      << r.out;
+  EXPECT_EQ(read_text(live), read_text(offline));
+  // The recording holds the log's rows, not the streams': it replays alike.
+  const fs::path replay = dir / "replay.csv";
+  const auto rr = run_moa("odometry --config " + (record / "robot.yaml").string() + " --log " +
+                          record.string() + " --quiet --out " + replay.string());
+  ASSERT_EQ(rr.exit_code, 0) << rr.err;
+  EXPECT_EQ(read_text(replay), read_text(live));
+  if (!HasFailure()) fs::remove_all(dir);
+}
+
 // One sensor and a gyro (scenario gyro-one): the replay takes the sensor's
 // rotation from imu.csv as `moa odometry` does (wheels.csv too), to
 // the same odometry, and the run is usable (before, every epoch was held).

@@ -377,6 +377,19 @@ int run_live(LiveArgs args) {
   };
 
   if (streams) input.add_streams(*streams, spec.replay.empty() ? 1.0 : spec.replay_options.speed);
+  if (streams && (replay_log.wheels || replay_log.imu)) {
+    const bool both = replay_log.wheels && replay_log.imu;
+    hooks.warn(fmt::format(
+        "--streams: its {} lines are not fed: the replayed log's {} {} them (one source per "
+        "kind)",
+        both                ? "wheels and imu"
+        : replay_log.wheels ? "wheels"
+                            : "imu",
+        both                ? "wheels.csv and imu.csv"
+        : replay_log.wheels ? "wheels.csv"
+                            : "imu.csv",
+        both ? "feed" : "feeds"));
+  }
   if (live.serial) input.add_gyro(*live.serial);
   if (replay_log.any()) input.add_log(replay_log, replay_files);
   // A live input's bad row (a saturated record, a time out of order) is
@@ -401,6 +414,9 @@ int run_live(LiveArgs args) {
     if (recording) recording->commit();
     if (stream_recording) stream_recording->commit();
     if (status_shown) fmt::print(stderr, "\n");
+    if (recording) {
+      fmt::print(stderr, "moa live: the recording up to the error is kept in {}\n", args.record);
+    }
     throw;
   }
   if (streams) {
@@ -451,9 +467,13 @@ int run_live(LiveArgs args) {
       const auto st = streams->stats();
       fmt::print(report,
                  "moa live: streams: {} wheel rows, {} gyro rows and {} camera fixes read, {}, {} "
-                 "and {} fed; {} bad lines, {} out of time order\n",
-                 st.wheels, st.imu, st.fixes, run.wheel_rows, run.imu_rows, run.fix_rows,
-                 st.bad_total(), input.dropped());
+                 "and {} fed; {} bad lines, {} out of time order{}\n",
+                 st.wheels, st.imu, st.fixes, input.streamed().wheels, input.streamed().imu,
+                 input.streamed().fixes, st.bad_total(), input.dropped(),
+                 input.ignored() > 0 ? fmt::format(", {} not fed (the replayed log feeds their "
+                                                   "kind)",
+                                                   input.ignored())
+                                     : std::string());
     }
     if (recording) {
       fmt::print(report, "moa live: recorded to {} (replay: moa odometry --config {} --log {})\n",
@@ -499,9 +519,10 @@ void add_live(CLI::App& app, Action& action) {
       ->check(CLI::ExistingFile);
   add_source_flags(cmd, args->source);
   cmd->add_option("--record", args->record,
-                  "Record the rows to DIR (log v1 mice.csv + robot.yaml; a serial board's or a "
-                  "replayed log's gyro to imu.csv, t,gz in s, rad/s) for replay with `moa "
-                  "odometry`");
+                  "Record the rows fed to DIR (log v1 mice.csv + robot.yaml; a serial board's or "
+                  "a replayed log's gyro to imu.csv, t,gz in s, rad/s; a replayed log's and the "
+                  "streams' wheels to wheels.csv, the streams' fixes to camera.csv) for replay "
+                  "with `moa odometry`");
   cmd->add_option("--out", args->out, "Write odometry.csv to FILE (at the end), or '-' for stdout");
   // No limit on silences: live rows come at the pace of real time, so a
   // robot parked for hours is no runaway of still epochs (a replay: see

@@ -16,9 +16,11 @@ void add_source_flags(CLI::App* cmd, SourceFlags& f) {
                                  "Serial port of the acquisition microcontroller "
                                  "(docs/serial-protocol.md)");
   auto* replay = cmd->add_option("--replay", f.replay,
-                                 "Play a log directory (mice.csv; for moa live its imu.csv "
-                                 "too, unless --no-imu) at the pace it was recorded, as if it "
-                                 "came from the sensors (demos, tests)")
+                                 "Play a log directory (mice.csv; for moa live its wheels.csv "
+                                 "and imu.csv too, unless --no-wheels, --no-imu; for the live "
+                                 "guided calibration its imu.csv, the gyro calibrated from the "
+                                 "spin) at the pace it was recorded, as if it came from the "
+                                 "sensors (demos, tests)")
                      ->check(CLI::ExistingPath);
   mouse->excludes(serial)->excludes(replay);
   serial->excludes(replay);

@@ -123,6 +123,10 @@ void LiveRunSource::take_streams() {
     // Each stream in time order: a line with t before its stream's last
     // row is dropped (the pipeline would refuse it and end the run).
     if (auto* w = std::get_if<WheelRow>(&s.row)) {
+      if (log_ != nullptr && log_->wheels) {  // one source per kind: the log's
+        ++ignored_;
+        continue;
+      }
       if (!s.stamped) w->t = std::max({estimate, after, last_wheel_t_});
       if (w->t < last_wheel_t_) {
         ++dropped_;
@@ -131,6 +135,10 @@ void LiveRunSource::take_streams() {
       last_wheel_t_ = w->t;
       wheels_.push_back(*w);
     } else if (auto* g = std::get_if<ImuRow>(&s.row)) {
+      if (log_ != nullptr && log_->imu) {
+        ++ignored_;
+        continue;
+      }
       if (!s.stamped) g->t = std::max({estimate, after, last_gyro_t_});
       if (g->t < last_gyro_t_) {
         ++dropped_;
@@ -182,11 +190,14 @@ const InputRow* LiveRunSource::next() {
   // A row due from the first source that has one, in this order: fixes
   // (streamed, then the replayed log's), wheels (the same), the serial
   // device's gyro, the replayed log's gyro, the streamed gyro.
-  const auto take = [&](auto& queue, bool streamed) {
+  const auto take = [&](auto& queue, std::size_t* streamed) {
     if (queue.empty() || queue.front().t > limit) return false;
     row_ = queue.front();
     queue.pop_front();
-    if (streamed) from_streams_ = true;
+    if (streamed != nullptr) {
+      from_streams_ = true;
+      ++*streamed;
+    }
     return true;
   };
   // The replayed log's rows, read as they fall due.
@@ -201,13 +212,13 @@ const InputRow* LiveRunSource::next() {
     from_log_ = &file;
     return true;
   };
-  if (take(fixes_, true)) return &row_;
+  if (take(fixes_, &streamed_.fixes)) return &row_;
   if (log_ != nullptr && take_log(log_fix_, log_->camera, log_files_->camera)) return &row_;
-  if (take(wheels_, true)) return &row_;
+  if (take(wheels_, &streamed_.wheels)) return &row_;
   if (log_ != nullptr && take_log(log_wheel_, log_->wheels, log_files_->wheels)) return &row_;
-  if (take(serial_gyro_, false)) return &row_;
+  if (take(serial_gyro_, nullptr)) return &row_;
   if (log_ != nullptr && take_log(log_gyro_, log_->imu, log_files_->imu)) return &row_;
-  if (take(gyro_, true)) return &row_;
+  if (take(gyro_, &streamed_.imu)) return &row_;
   if (ended_) return nullptr;
   row_ = *pending_;
   t_last_ = pending_->t;
