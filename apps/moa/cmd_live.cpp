@@ -143,6 +143,21 @@ int run_live(LiveArgs args) {
     replay_files = io::resolve_log(spec.replay);
     replay_log =
         io::open_log_streams(config, replay_files, odometry_options, !args.streams.empty());
+    // One source per kind: the streams stand for the robot's own program,
+    // so its wheels and gyro come from them, not from the log (the rows of
+    // two sources of one kind would interleave out of time order).
+    if (!args.streams.empty() && (replay_log.wheels || replay_log.imu)) {
+      const bool both = replay_log.wheels && replay_log.imu;
+      fmt::print(stderr,
+                 "moa live: warning: {} of {} not replayed: with --streams the wheels and the "
+                 "gyro come from the streams\n",
+                 both                ? "wheels.csv and imu.csv"
+                 : replay_log.wheels ? "wheels.csv"
+                                     : "imu.csv",
+                 args.source.replay);
+      replay_log.wheels.reset();
+      replay_log.imu.reset();
+    }
   }
   // As `moa odometry` on the recording: the gyro goes to the consensus only.
   if (odometry_options.estimator != EstimatorKind::kConsensus) odometry_options.use_imu = false;
@@ -377,19 +392,6 @@ int run_live(LiveArgs args) {
   };
 
   if (streams) input.add_streams(*streams, spec.replay.empty() ? 1.0 : spec.replay_options.speed);
-  if (streams && (replay_log.wheels || replay_log.imu)) {
-    const bool both = replay_log.wheels && replay_log.imu;
-    hooks.warn(fmt::format(
-        "--streams: its {} lines are not fed: the replayed log's {} {} them (one source per "
-        "kind)",
-        both                ? "wheels and imu"
-        : replay_log.wheels ? "wheels"
-                            : "imu",
-        both                ? "wheels.csv and imu.csv"
-        : replay_log.wheels ? "wheels.csv"
-                            : "imu.csv",
-        both ? "feed" : "feeds"));
-  }
   if (live.serial) input.add_gyro(*live.serial);
   if (replay_log.any()) input.add_log(replay_log, replay_files);
   // A live input's bad row (a saturated record, a time out of order) is
@@ -467,13 +469,9 @@ int run_live(LiveArgs args) {
       const auto st = streams->stats();
       fmt::print(report,
                  "moa live: streams: {} wheel rows, {} gyro rows and {} camera fixes read, {}, {} "
-                 "and {} fed; {} bad lines, {} out of time order{}\n",
+                 "and {} fed; {} bad lines, {} out of time order\n",
                  st.wheels, st.imu, st.fixes, input.streamed().wheels, input.streamed().imu,
-                 input.streamed().fixes, st.bad_total(), input.dropped(),
-                 input.ignored() > 0 ? fmt::format(", {} not fed (the replayed log feeds their "
-                                                   "kind)",
-                                                   input.ignored())
-                                     : std::string());
+                 input.streamed().fixes, st.bad_total(), input.dropped());
     }
     if (recording) {
       fmt::print(report, "moa live: recorded to {} (replay: moa odometry --config {} --log {})\n",

@@ -123,10 +123,6 @@ void LiveRunSource::take_streams() {
     // Each stream in time order: a line with t before its stream's last
     // row is dropped (the pipeline would refuse it and end the run).
     if (auto* w = std::get_if<WheelRow>(&s.row)) {
-      if (log_ != nullptr && log_->wheels) {  // one source per kind: the log's
-        ++ignored_;
-        continue;
-      }
       if (!s.stamped) w->t = std::max({estimate, after, last_wheel_t_});
       if (w->t < last_wheel_t_) {
         ++dropped_;
@@ -135,10 +131,6 @@ void LiveRunSource::take_streams() {
       last_wheel_t_ = w->t;
       wheels_.push_back(*w);
     } else if (auto* g = std::get_if<ImuRow>(&s.row)) {
-      if (log_ != nullptr && log_->imu) {
-        ++ignored_;
-        continue;
-      }
       if (!s.stamped) g->t = std::max({estimate, after, last_gyro_t_});
       if (g->t < last_gyro_t_) {
         ++dropped_;

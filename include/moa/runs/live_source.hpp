@@ -67,8 +67,7 @@ LiveSource open_live_source(const LiveSourceSpec& spec, const RobotConfig& confi
 /// recording replays to the same steps.
 ///
 /// With the robot's streams (sources/stream_lines.hpp), their wheel rows,
-/// gyro rows and fixes are merged in as a log's are (runs/odometry_run.hpp),
-/// but for a kind a replayed log feeds (add_log: not fed, counted):
+/// gyro rows and fixes are merged in as a log's are (runs/odometry_run.hpp):
 /// each is held until the first mice row at or after its t and handed out
 /// before it, fixes first, then wheels, then gyro, so that the recording
 /// replays in the same order. A line
@@ -105,9 +104,6 @@ class LiveRunSource final : public RunSource {
   /// Stream rows dropped: a t before its stream's previous row's (a line
   /// without t stamped after a line whose t was later).
   std::size_t dropped() const { return dropped_; }
-  /// Stream rows not fed: wheel (gyro) lines while the replayed log
-  /// (add_log) feeds wheels (the gyro): one source per kind.
-  std::size_t ignored() const { return ignored_; }
   /// The streams' rows handed out, per kind.
   struct Streamed {
     std::size_t wheels = 0, imu = 0, fixes = 0;
@@ -146,7 +142,6 @@ class LiveRunSource final : public RunSource {
   double last_gyro_t_ = -std::numeric_limits<double>::infinity();   ///< s
   double last_fix_t_ = -std::numeric_limits<double>::infinity();    ///< s
   std::size_t dropped_ = 0;
-  std::size_t ignored_ = 0;
   Streamed streamed_;
   SerialReader* gyro_serial_ = nullptr;  ///< the serial device's gyro (add_gyro)
   std::deque<ImuRow> serial_gyro_;       ///< its samples, not yet handed out
