@@ -199,7 +199,9 @@ int run_wizard(const WizardArgs& args) {
   const bool gyro_possible = args.imu && (live.serial != nullptr || replay_log.imu);
   say("moa calibrate --guided --live: {} sensors of {}, from {}{}\n", config.names.size(),
       args.config, live.origin,
-      gyro_possible ? "; the spin calibrates the gyro too (--no-imu: the mice alone)" : "");
+      gyro_possible ? "; the spin calibrates the gyro too, if one sends its rows (--no-imu: the "
+                      "mice alone)"
+                    : "");
   say("Keys: Enter keeps a motion, r redoes it, k keeps one that failed a check, q quits.\n");
 
   GuidedSession session(config.array, limits, !args.no_push_y);
@@ -211,7 +213,7 @@ int run_wizard(const WizardArgs& args) {
   spin.mice_where = fmt::format("the spin's rows from {}", live.where);
   spin.imu_where = fmt::format("the spin's gyro rows from {}",
                                replay_log.imu ? replay_files.imu->string() : live.where);
-  bool recording = false, spin_overflow = false;
+  bool recording = false, spin_overflow = false, gyro_seen = false;
   double last_row_t = 0.0;
   const auto announce_step = [&] {
     const GuidedStep step = session.steps()[session.current()];
@@ -295,6 +297,7 @@ int run_wizard(const WizardArgs& args) {
       if (watching && r->t > spin.start) record(spin.mice, *r);
       last_row_t = std::max(last_row_t, r->t);
     } else if (const auto* g = std::get_if<io::ImuRow>(&row)) {
+      gyro_seen = true;
       if (watching) record(spin.imu, *g);
     }
     poll_keys();
@@ -355,7 +358,7 @@ int run_wizard(const WizardArgs& args) {
     say("\n{}", gyro->gyro->table());
     for (const auto& f : gyro->facts) say("{}\n", f);
     for (const auto& w : gyro->warnings) say("warning: {}\n", w);
-  } else if (gyro_possible) {
+  } else if (gyro_possible && gyro_seen) {  // a serial board may have no gyro
     say("\nwarning: the gyro was not calibrated ({}): the config keeps the imu: block of {}\n",
         spin_overflow ? "the spin was too long to keep" : "no gyro rows came during the spin",
         args.config);
