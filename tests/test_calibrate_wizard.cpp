@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <numbers>
 #include <string>
 
@@ -103,6 +104,37 @@ TEST(CalibrateWizard, WalksThroughEveryStepWithARedoAndWritesTheCalibration) {
   EXPECT_LT(std::abs(cal.imu->bias - truth.imu->bias), 4.0 * std::hypot(sb, 1.5e-4))
       << cal.imu->bias;
   EXPECT_LT(std::abs(cal.imu->latency - truth.imu->latency), 4.0 * sl) << cal.imu->latency;
+  if (!HasFailure()) fs::remove_all(dir);
+}
+
+// A gyro whose rows are not the spin's motion (imu.csv replaced by noise)
+// is refused as `--method guided` refuses it: nothing written, and the
+// message names --no-imu, the way to keep the mice's calibration.
+TEST(CalibrateWizard, AGyroOfAnotherMotionIsRefusedAndNothingWritten) {
+  const fs::path dir = test::scratch_dir("calibrate-wizard-bad-gyro");
+  const auto sim =
+      test::run_moa("simulate --scenario guided --seed 2 --out " + (dir / "log").string());
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  {
+    std::ofstream imu(dir / "log" / "imu.csv");
+    imu << "t,gz\n";
+    for (int k = 1; k <= 3100; ++k)
+      imu << k * 0.01 << "," << ((k * 7919) % 101 - 50) * 0.01 << "\n";
+  }
+  PtyMoa moa({"calibrate", "--guided", "--live", "--config", (dir / "log" / "robot.yaml").string(),
+              "--replay", (dir / "log").string(), "--speed", "8", "--distance", "1", "--turns", "3",
+              "--out", (dir / "cal.yaml").string()});
+  const auto deadline = Clock::now() + std::chrono::seconds(40);
+  ASSERT_TRUE(moa.wait_for("turned while pushing", 1, deadline)) << moa.output();
+  moa.type("r");
+  for (int k = 1; k <= 3; ++k) {
+    ASSERT_TRUE(moa.wait_for("Good enough.", k, deadline)) << moa.output();
+    moa.type("\r");
+  }
+  EXPECT_EQ(moa.exit_code(10.0), 1) << moa.output();
+  EXPECT_THAT(moa.output(), HasSubstr("gyro calibration against array refused"));
+  EXPECT_THAT(moa.output(), HasSubstr("Nothing written (--no-imu calibrates the mice alone)"));
+  EXPECT_FALSE(fs::exists(dir / "cal.yaml"));
   if (!HasFailure()) fs::remove_all(dir);
 }
 

@@ -47,11 +47,11 @@ namespace moa::cli {
 namespace {
 
 volatile std::sig_atomic_t g_quit = 0;
+extern "C" void on_quit_signal(int) { g_quit = 1; }
 
 // The spin's rows are kept in memory for the gyro's calibration: at most
 // this many of each kind (mice, gyro), about 9 min of four sensors at 1 kHz.
 constexpr std::size_t kMaxSpinRows = std::size_t{1} << 21;
-extern "C" void on_quit_signal(int) { g_quit = 1; }
 
 // Non-canonical, no echo, for single keys; restored (and the signal
 // handlers put back) on every way out.

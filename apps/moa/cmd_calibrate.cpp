@@ -197,7 +197,13 @@ void add_calibrate(CLI::App& app, Action& action) {
       wizard->tolerances = args->options.tolerances;
       wizard->imu = !args->no_imu;
       wizard->imu_reference = args->imu_reference;
-      action = [wizard] { return run_wizard(*wizard); };
+      action = [wizard] {
+        try {
+          return run_wizard(*wizard);
+        } catch (const io::OptionError& e) {  // the gyro's refusal names its flags
+          throw io::Error(with_flags(e));
+        }
+      };
       return;
     }
     if (wizard->guided && args->method.empty()) args->method = "guided";
