@@ -35,11 +35,19 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 using test::PtyMoa;
 
+// A scratch folder `name` with a simulated guided session (scenario guided,
+// `seed`) in its log/.
+fs::path simulated_session(const std::string& name, int seed) {
+  const fs::path dir = test::scratch_dir(name);
+  const auto sim = test::run_moa("simulate --scenario guided --seed " + std::to_string(seed) +
+                                 " --out " + (dir / "log").string());
+  EXPECT_EQ(sim.exit_code, 0) << sim.err;
+  return dir;
+}
+
 TEST(CalibrateWizard, WalksThroughEveryStepWithARedoAndWritesTheCalibration) {
-  const fs::path dir = test::scratch_dir("calibrate-wizard");
-  const auto sim =
-      test::run_moa("simulate --scenario guided --seed 2 --out " + (dir / "log").string());
-  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const fs::path dir = simulated_session("calibrate-wizard", 2);
+  ASSERT_FALSE(HasFailure());
   // 31 s of log at 4x: ~8 s. Every answer is typed within milliseconds of
   // its question, well inside the 3 s (0.75 s at 4x) the robot rests.
   PtyMoa moa({"calibrate", "--guided", "--live", "--config", (dir / "log" / "robot.yaml").string(),
@@ -111,10 +119,8 @@ TEST(CalibrateWizard, WalksThroughEveryStepWithARedoAndWritesTheCalibration) {
 // is refused as `--method guided` refuses it: nothing written, and the
 // message names --no-imu, the way to keep the mice's calibration.
 TEST(CalibrateWizard, AGyroOfAnotherMotionIsRefusedAndNothingWritten) {
-  const fs::path dir = test::scratch_dir("calibrate-wizard-bad-gyro");
-  const auto sim =
-      test::run_moa("simulate --scenario guided --seed 2 --out " + (dir / "log").string());
-  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const fs::path dir = simulated_session("calibrate-wizard-bad-gyro", 2);
+  ASSERT_FALSE(HasFailure());
   {
     std::ofstream imu(dir / "log" / "imu.csv");
     imu << "t,gz\n";
@@ -139,10 +145,8 @@ TEST(CalibrateWizard, AGyroOfAnotherMotionIsRefusedAndNothingWritten) {
 }
 
 TEST(CalibrateWizard, QuitWritesNothing) {
-  const fs::path dir = test::scratch_dir("calibrate-wizard-quit");
-  const auto sim =
-      test::run_moa("simulate --scenario guided --seed 1 --out " + (dir / "log").string());
-  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const fs::path dir = simulated_session("calibrate-wizard-quit", 1);
+  ASSERT_FALSE(HasFailure());
   PtyMoa moa({"calibrate", "--guided", "--live", "--config", (dir / "log" / "robot.yaml").string(),
               "--replay", (dir / "log").string(), "--speed", "4", "--out",
               (dir / "cal.yaml").string()});
@@ -160,10 +164,8 @@ TEST(CalibrateWizard, QuitWritesNothing) {
 // and end. The replay waits for the wizard: no motion is skipped, and the
 // last key, typed after the data's last row was read, still writes.
 TEST(CalibrateWizard, TheReplayWaitsForLateKeys) {
-  const fs::path dir = test::scratch_dir("calibrate-wizard-late");
-  const auto sim =
-      test::run_moa("simulate --scenario guided --seed 2 --out " + (dir / "log").string());
-  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  const fs::path dir = simulated_session("calibrate-wizard-late", 2);
+  ASSERT_FALSE(HasFailure());
   PtyMoa moa({"calibrate", "--guided", "--live", "--config", (dir / "log" / "robot.yaml").string(),
               "--replay", (dir / "log").string(), "--speed", "20", "--distance", "1", "--turns",
               "3", "--no-imu", "--out", (dir / "cal.yaml").string()});

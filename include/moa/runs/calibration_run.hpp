@@ -250,7 +250,8 @@ struct SpinRecording {
 /// as `moa calibrate --method guided` does with the spin's imu.csv: the fit
 /// into r.gyro and r.calibrated.imu, its facts and warnings into `r`.
 /// `config`: the nominal config (its imu: block, if any, is the nominal).
-/// Throws io::Error when the fit is refused.
+/// Throws io::OptionError (runs/option_error.hpp: the front end renders its
+/// option names, "{no_imu}") when the fit is refused, io::Error on bad rows.
 void calibrate_spin_gyro(CalibrationSummary& r, const RobotConfig& config,
                          const SpinRecording& spin, const CalibrationOptions& options = {});
 
