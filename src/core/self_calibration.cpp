@@ -22,13 +22,15 @@ OptionCheck SelfCalibrationOptions::validate() const {
       .non_negative("relative_noise", relative_noise)
       .non_negative("deadband", deadband)
       .non_negative("isotropic_deadband", isotropic_deadband)
-      .positive("gate", gate)
+      .open("gross_alpha", gross_alpha, 0.0, 1.0)
       .open("predictor_alpha", predictor_alpha, 0.0, 1.0)
       .open("runaway_scale", runaway_scale, 0.0, 1.0)
       .positive("runaway_yaw", runaway_yaw)
       .open("runaway_alpha", runaway_alpha, 0.0, 0.5)
-      .at_least("reacquire_blocks", reacquire_blocks, 2)
-      .positive("reacquire_spread", reacquire_spread)
+      .positive("reset_false_alarm_time", reset_false_alarm_time)
+      .open("reset_rate", reset_rate, gross_alpha, 1.0)
+      .positive("reset_scale_sd", reset_scale_sd)
+      .positive("reset_yaw_sd", reset_yaw_sd)
       .positive("settle_time", settle_time)
       .positive("settle_threshold", settle_threshold)
       .non_negative("apply_step", apply_step)
@@ -58,6 +60,15 @@ SelfCalibration::SelfCalibration(const SensorArray& array, SelfCalibrationOption
     chi2_gate_[d] =
         static_cast<real>(chi2_quantile(1.0 - options_.predictor_alpha, static_cast<int>(d)));
   }
+  block_gate_ = static_cast<real>(chi2_quantile(1.0 - options_.gross_alpha, 2));
+  wheel_gate_ = static_cast<real>(chi2_quantile(1.0 - options_.gross_alpha, 3));
+  // The rejections' CUSUM (header): log-likelihood ratios of a block
+  // rejected and fused, rejection rate reset_rate against gross_alpha.
+  const double a = options_.gross_alpha, b = options_.reset_rate;
+  llr_rejected_ = static_cast<real>(std::log(b / a));
+  llr_fused_ = static_cast<real>(std::log((1.0 - b) / (1.0 - a)));
+  reset_h_ = static_cast<real>(
+      std::log(std::max(1.0, options_.reset_false_alarm_time / options_.block)));
   // One-sided normal quantile from the chi-square of 1 dof: P(Z > z) = alpha
   // is P(Z^2 > z^2) = 2 alpha.
   runaway_z_ = static_cast<real>(std::sqrt(chi2_quantile(1.0 - 2.0 * options_.runaway_alpha, 1)));
@@ -296,12 +307,13 @@ void SelfCalibration::update_gauge(double t) {
       w.sum_v_wheels.y(), w.sum_v_wheels.x(),    //
       radius_ * w.sum_theta_wheels, 0.0;
   const Vec3 r = y - h * w.k;
-  if (r.norm() > options_.gate * d) return;  // the wheels slipped grossly
-  // 4. Measurement variance, m^2 per component; Huber's weight (kalman.hpp).
-  real var = (options_.wheel_noise * options_.wheel_noise * d * d + w.sum_var) * w.factor + 1e-12;
-  var *= huber_inflation<3>(r.squaredNorm() / var);
-  // 5. The core's Kalman update (kalman.hpp, Joseph form).
-  joseph_update<2, 3>(w.k, w.p, r, h, Mat3(var * Mat3::Identity()));
+  // 4. Measurement variance, m^2 per component.
+  const real var =
+      (options_.wheel_noise * options_.wheel_noise * d * d + w.sum_var) * w.factor + 1e-12;
+  // 5. The core's gated update (kalman.hpp, Joseph form): a block whose
+  // innovation fails the chi-square test at gross_alpha is the wheels
+  // slipping grossly, not the gauge.
+  if (!gated_update<2, 3>(w.k, w.p, r, h, Mat3(var * Mat3::Identity()), wheel_gate_).fused) return;
   w.p = 0.5 * (w.p + w.p.transpose()).eval();
   ++w.updates;
   // 6. The new common part to every sensor.
@@ -316,12 +328,14 @@ void SelfCalibration::update(int i, double t) {
   // Forgetting: the random walk since the last update, capped at the prior.
   if (s.last_update >= 0.0) {
     const real e = static_cast<real>(t - s.last_update);
+    // Capped at the prior, or at what it was when wider (after a reset).
+    const Vec3 cap = Vec3(options_.prior_scale_sd * options_.prior_scale_sd,
+                          options_.prior_scale_sd * options_.prior_scale_sd,
+                          options_.prior_yaw_sd * options_.prior_yaw_sd)
+                         .cwiseMax(s.p.diagonal());
     s.p.diagonal() +=
         e * Vec3(options_.scale_walk * options_.scale_walk,
                  options_.scale_walk * options_.scale_walk, options_.yaw_walk * options_.yaw_walk);
-    const Vec3 cap(options_.prior_scale_sd * options_.prior_scale_sd,
-                   options_.prior_scale_sd * options_.prior_scale_sd,
-                   options_.prior_yaw_sd * options_.prior_yaw_sd);
     for (int k = 0; k < 3; ++k) {
       if (s.p(k, k) > cap(k)) {
         const real f = std::sqrt(cap(k) / s.p(k, k));
@@ -339,23 +353,33 @@ void SelfCalibration::update(int i, double t) {
   hj << rw.x(), 0.0, s.theta.scale_x * (-sn * w.x() + c * w.y()),  //
       0.0, rw.y(), s.theta.scale_y * (-c * w.x() - sn * w.y());
   const Vec2 r = s.sum_meas - h;
-  if (r.norm() > options_.gate * w.norm()) {
-    // A gross error, not a calibration: unless it persists.
-    if (!reacquire(s, h)) return;
+  const real mpc = metres_per_count_[static_cast<std::size_t>(i)];
+  const real relative = options_.relative_noise * w.norm();
+  const real var = (mpc * mpc / 3.0 + s.sum_var + relative * relative) * s.factor;
+  // The core's gated update (kalman.hpp, Joseph form) of (s_x, s_y, delta):
+  // a block whose innovation fails the chi-square test at gross_alpha
+  // (S = H P H^T + R) is not this calibration: a gross error, unless it
+  // persists as another calibration (the reset below).
+  Vec3 x(s.theta.scale_x, s.theta.scale_y, s.theta.yaw_offset);
+  const Mat2 noise = var * Mat2::Identity();
+  bool fused = gated_update<3, 2>(x, s.p, r, hj, noise, block_gate_).fused;
+  // The rejections' CUSUM (header, "Reset"): blocks rejected at more than
+  // the test's false-alarm rate say the calibration is not this one. While
+  // it is above zero the blocks are kept (sums); once it alarms, a
+  // calibration that explains them all is looked for (reset()).
+  s.rejections = std::max<real>(0.0, s.rejections + (fused ? llr_fused_ : llr_rejected_));
+  if (s.rejections > 0.0) {
+    s.run.add(w, s.sum_meas, var);
   } else {
-    s.gross = {};
-    const real mpc = metres_per_count_[static_cast<std::size_t>(i)];
-    const real rel = options_.relative_noise * w.norm();
-    real var = (mpc * mpc / 3.0 + s.sum_var + rel * rel) * s.factor;
-    // Huber's weight (kalman.hpp): a block far out weighs as one at the edge.
-    var *= huber_inflation<2>(r.squaredNorm() / var);
-    // The core's Kalman update (kalman.hpp, Joseph form) of (s_x, s_y, delta).
-    Vec3 x(s.theta.scale_x, s.theta.scale_y, s.theta.yaw_offset);
-    joseph_update<3, 2>(x, s.p, r, hj, Mat2(var * Mat2::Identity()));
-    s.theta = {x(0), x(1), x(2)};
-    s.p = 0.5 * (s.p + s.p.transpose()).eval();
-    ++s.updates;
+    s.run = {};
   }
+  if (!fused) {
+    if (!(s.rejections > reset_h_ && reset(s))) return;
+    if (!gated_update<3, 2>(x, s.p, r, hj, noise, block_gate_).fused) return;
+  }
+  s.theta = {x(0), x(1), x(2)};
+  s.p = 0.5 * (s.p + s.p.transpose()).eval();
+  ++s.updates;
   // Settling: theta against its own exponential average over settle_time
   // (lagged <- lagged + (theta - lagged) min(1, elapsed / settle_time)).
   // A ramp of rate r per second leaves them r settle_time apart (0.1 % on
@@ -390,48 +414,49 @@ void SelfCalibration::update(int i, double t) {
   }
 }
 
-bool SelfCalibration::reacquire(SensorState& s, const Vec2& h) {
-  // A block over the gate: m against the prediction h = C(theta) w as one
-  // scale and one rotation, m ~ rho R(phi) h, with
-  //   rho cos(phi) = h.m / |h|^2,   rho sin(phi) = (h x m) / |h|^2.
-  // A spike or a slipping sensor gives scattered (rho, phi); a calibration
-  // far off (a wrong resolution in the config, a sensor mounted turned)
-  // gives the same pair block after block. After reacquire_blocks such
-  // blocks in a row whose (log rho, phi) scatter by less than
-  // reacquire_spread, theta is restarted there (s <- rho s on both axes,
-  // delta <- delta - phi, the prior's covariance): the filter refines it
-  // from then on, and the runaway bounds judge it.
-  const real hh = h.squaredNorm();
-  if (!(hh > 0.0)) return false;
-  const Vec2 m = s.sum_meas;
-  const real c = h.dot(m) / hh, sn = (h.x() * m.y() - h.y() * m.x()) / hh;
-  const real rho = std::hypot(c, sn);
-  if (!(rho > 0.0)) {
-    s.gross = {};
-    return false;
+void SelfCalibration::RejectionRun::add(const Vec2& w, const Vec2& m, real var) {
+  const real v = 1.0 / var;
+  ww += v * w * w.transpose();
+  mw += v * m * w.transpose();
+  mm += v * m.squaredNorm();
+  wx += v * (w.x() * m.y() - w.y() * m.x());
+  ++blocks;
+}
+
+bool SelfCalibration::reset(SensorState& s) {
+  // Do the run's blocks agree with one calibration (they are then the
+  // sensor's new one, not a fault's)? m_k = M w_k + n_k, n_k ~ N(0, var_k I),
+  // fitted by weighted least squares as one scale and rotation, M = a I + b J
+  // (J the rotation by 90 degrees; 2 parameters), and, when that fails, as
+  // any linear map M = (sum m w^T / v)(sum w w^T / v)^-1 (4 parameters: both
+  // axes' scales, a yaw and a shear). Each fit's residual chi-square,
+  // sum |m|^2 / v less what the fit explains, is tested at gross_alpha on
+  // its 2 n - p degrees of freedom. Blocks of one calibration pass; a
+  // fault's (a tracking loss, spikes) do not, and the run starts again. When
+  // they agree, theta keeps its mean and its covariance is reset to the wide
+  // prior (reset_scale_sd, reset_yaw_sd): the blocks from then on are fused
+  // against it, and what a path along one direction does not excite keeps
+  // its value.
+  RejectionRun& run = s.run;
+  if (run.blocks < 3) return false;
+  const real tr = run.ww.trace();
+  if (!(tr > 0.0)) return false;
+  const real a = run.mw.trace() / tr, b = run.wx / tr;  // M = a I + b J
+  bool agree = run.mm - (a * a + b * b) * tr <=
+               static_cast<real>(chi2_quantile(1.0 - options_.gross_alpha, 2 * run.blocks - 2));
+  if (!agree && run.ww.determinant() > 0.0) {
+    const Mat2 m = run.mw * run.ww.inverse();
+    agree = run.mm - (m * run.mw.transpose()).trace() <=
+            static_cast<real>(chi2_quantile(1.0 - options_.gross_alpha, 2 * run.blocks - 4));
   }
-  const Vec2 x(std::log(rho), std::atan2(sn, c));
-  GrossRun& g = s.gross;
-  // Welford's running mean and sum of squared deviations.
-  ++g.blocks;
-  const Vec2 delta = x - g.mean;
-  g.mean += delta / static_cast<real>(g.blocks);
-  g.m2 += delta.cwiseProduct(x - g.mean);
-  if (g.blocks < options_.reacquire_blocks) return false;
-  const Vec2 spread = (g.m2 / static_cast<real>(g.blocks - 1)).cwiseSqrt();
-  if (spread.maxCoeff() < options_.reacquire_spread) {
-    const real k = std::exp(g.mean.x());
-    s.theta.scale_x *= k;
-    s.theta.scale_y *= k;
-    s.theta.yaw_offset -= g.mean.y();
-    const Vec3 prior(options_.prior_scale_sd, options_.prior_scale_sd, options_.prior_yaw_sd);
-    s.p = prior.cwiseAbs2().asDiagonal();
-    ++s.reacquired;
-    g = {};
-    return true;
-  }
-  g = {};
-  return false;
+  run = {};
+  if (!agree) return false;
+  s.p = Vec3(options_.reset_scale_sd, options_.reset_scale_sd, options_.reset_yaw_sd)
+            .cwiseAbs2()
+            .asDiagonal();
+  s.rejections = 0.0;
+  ++s.reacquired;
+  return true;
 }
 
 void SelfCalibration::fix_gauge() {

@@ -42,17 +42,6 @@ void joseph_update(Mat<N, 1>& x, Mat<N, N>& p, const Mat<M, 1>& y, const Mat<M, 
   p = a * p * a.transpose() + k * r * k.transpose();
 }
 
-/// Huber's weight for a measurement that is to be taken but may be gross
-/// (the self-calibration's blocks, whose slow states a rejected block would
-/// starve): its variance grown by nu2 / (3^2 M) when its squared
-/// normalised residual nu2 is beyond 3 standard deviations per component,
-/// so that it weighs as one at that edge. Returns the factor (>= 1).
-template <int M>
-real huber_inflation(real nu2) {
-  constexpr real kEdge = real(9 * M);  // (3 sd)^2 on each of M components
-  return nu2 > kEdge ? nu2 / kEdge : real(1);
-}
-
 /// Tests the measurement, then fuses it when its ratio is at most 1.
 template <int N, int M>
 AidStatus gated_update(Mat<N, 1>& x, Mat<N, N>& p, const Mat<M, 1>& y, const Mat<M, N>& h,

@@ -162,7 +162,9 @@ struct SelfCalibrationOptions {
   /// both axes when each is within `deadband` (dust dims both axes
   /// alike; the good sensors' scatter is mostly one axis against the other).
   real isotropic_deadband = 0.0125;
-  real gate = 0.3;  ///< relative residual above which a block is not used
+  /// False-alarm rate of the test that calls a block gross (not used): its
+  /// innovation's chi-square against the filter's prediction.
+  real gross_alpha = 0.001;
   /// An epoch is not used for sensor i when the other sensors' fit fails
   /// the chi-square test at this level (they disagree among themselves).
   real predictor_alpha = 0.001;
@@ -170,11 +172,17 @@ struct SelfCalibrationOptions {
   real runaway_yaw = 0.2;     ///< rad, tolerance of |delta| of a sound sensor
   /// False-alarm rate per component and update of the runaway test (z sd).
   real runaway_alpha = 0.001;
-  /// Blocks over `gate` in a row, read as one scale and rotation against the
-  /// prediction, that restart a sensor's estimate there when they agree
-  /// (a calibration far off: docs/self-calibration.md "Runaway").
-  int reacquire_blocks = 20;
-  real reacquire_spread = 0.05;  ///< sd of their log scale and rotation (rad) that agrees
+  /// s, mean time between false resets of one sensor's calibration by the
+  /// rejections' CUSUM (header, "Reset").
+  real reset_false_alarm_time = 3600.0;
+  /// The rejection rate the CUSUM is to detect (the alternative hypothesis):
+  /// a calibration that fails half the blocks' tests is not this one.
+  real reset_rate = 0.5;
+  /// sd of the wide prior a reset restarts theta's covariance from: a
+  /// calibration unknown within the range where the model still linearises
+  /// (a resolution 50 % off, a sensor turned by 30 degrees).
+  real reset_scale_sd = 0.5;
+  real reset_yaw_sd = 0.5;  ///< rad
   /// A corrected sensor whose estimate moves (more than settle_threshold,
   /// in scale or rad, from its own average over settle_time s) is held out
   /// of the estimate as drift while it moves (held_as_drift): a partial
@@ -262,11 +270,13 @@ class SelfCalibration {
   long gauge_updates() const { return wheel_.updates; }
 
  private:
-  /// Blocks over the gate in a row: running mean and sum of squared
-  /// deviations of (log rho, phi) (reacquire()).
-  struct GrossRun {
+  /// The blocks since the rejections' CUSUM left zero, summed for reset()'s
+  /// least-squares fits (weights 1 / var).
+  struct RejectionRun {
+    Mat2 ww = Mat2::Zero(), mw = Mat2::Zero();  ///< sum w w^T / v, sum m w^T / v
+    real mm = 0.0, wx = 0.0;                    ///< sum |m|^2 / v, sum (w x m) / v
     int blocks = 0;
-    Vec2 mean{0.0, 0.0}, m2{0.0, 0.0};
+    void add(const Vec2& w, const Vec2& m, real var);
   };
   struct SensorState {
     SelfCalibrationEstimate theta;
@@ -291,7 +301,8 @@ class SelfCalibration {
     SelfCalibrationEstimate lagged;      ///< theta / (G, D) averaged over settle_time
     bool settling = false;               ///< theta is moving away from lagged
     bool corrected = false;              ///< its own correction (beyond the gauge's) is applied
-    GrossRun gross;                      ///< the blocks over the gate in a row
+    real rejections = 0.0;               ///< the rejections' CUSUM (log-likelihood ratio)
+    RejectionRun run;                    ///< the blocks while it is above zero
     Mat2 correction = Mat2::Identity();  ///< counts -> corrected counts
   };
   /// kWheels: the array's twist against the wheels', summed over a block.
@@ -307,8 +318,9 @@ class SelfCalibration {
     long updates = 0;
   };
   void update(int i, double t);
-  /// True when theta was restarted.
-  bool reacquire(SensorState& s, const Vec2& h);
+  /// True when the run's blocks agree with one calibration: theta's
+  /// covariance is then reset to the wide prior.
+  bool reset(SensorState& s);
   void fix_gauge();
   void renew(int i);
   void observe_wheels(const ArraySample& raw, SensorMask used, const Twist2& wheels);
@@ -326,6 +338,10 @@ class SelfCalibration {
   std::array<real, kMaxSensors> metres_per_count_{};
   std::array<real, 2 * kMaxSensors> chi2_gate_{};  ///< by degrees of freedom
   real runaway_z_ = 0.0;                           ///< Phi^-1(1 - runaway_alpha), sd
+  real block_gate_ = 0.0;  ///< q(1 - gross_alpha, 2): a sensor's block
+  real wheel_gate_ = 0.0;  ///< q(1 - gross_alpha, 3): a block of the wheels' gauge
+  real llr_rejected_ = 0.0, llr_fused_ = 0.0;  ///< the rejections' CUSUM steps
+  real reset_h_ = 0.0;                         ///< its threshold
   std::array<SensorState, kMaxSensors> state_{};
   PointMeasurements points_;
   WheelGauge wheel_;
