@@ -209,6 +209,14 @@ void SelfCalibration::observe(const ArraySample& raw, const RobustEstimate& esti
       state_[u].clear_block();
       continue;
     }
+    // Over its rating a sensor loses counts at random (the noise model's
+    // gross error, not a calibration): its block is dropped, as the health
+    // monitor's test is not fed there (health.hpp), so that neither the
+    // update nor the rejections' CUSUM reads it.
+    if (estimate.noise_flags[u] & kNoiseOverRating) {
+      state_[u].clear_block();
+      continue;
+    }
     const SensorMask others = used & ~repeating & ~(SensorMask{1} << i);
     if (count_sensors(others) < 2) continue;
     const auto fit = solver_.fit(others, points_);
