@@ -25,12 +25,38 @@
 // carries the rest: motion along the sensor's x axis informs s_x and delta,
 // along y s_y and delta. Not used: epochs without a mice estimate, or where
 // the sensor was lifted, frozen, zero, faulty, its SQUAL low or its counts
-// overflowed, blocks whose relative residual |m - C w| / |w| exceeds `gate`.
-// Near its rating a sensor weighs as the estimators' noise model says: the
-// block's variance times the largest speed factor m of its epochs
-// (NoiseModelOptions::speed_factor, at most speed_cap); over its rating a
-// sensor under-reads by random fractions, gross errors that the gate and
-// the Huber weight below leave out.
+// overflowed, blocks with an epoch over the sensor's rating (it loses counts
+// at random there: the noise model's gross error, which the health monitor
+// does not test either). Near its rating a sensor weighs as the estimators'
+// noise model says: the block's variance times the largest speed factor m
+// of its epochs (NoiseModelOptions::speed_factor, at most speed_cap).
+//
+// Gate: each block is one gated update (kalman.hpp): innovation r = m - C w,
+// S = H P H^T + R with R = ((m per count)^2 / 3 + the prediction's variance +
+// (relative_noise |w|)^2) I times the speed factor; fused when
+// r^T S^-1 r <= q(1 - gross_alpha, 2), else rejected (a gross block: a
+// spike, a slip, or a calibration that is no longer this one).
+//
+// Reset: rejections at more than gross_alpha say the calibration is not
+// this one (a step of the resolution, a wrong cpi in the config, a sensor
+// turned on its mount). Page's CUSUM of the log-likelihood ratio of
+// rejection rate reset_rate against gross_alpha,
+//   g <- max(0, g + ln(reset_rate / gross_alpha))                 (rejected)
+//   g <- max(0, g + ln((1 - reset_rate) / (1 - gross_alpha)))     (fused),
+// alarms at h = ln(reset_false_alarm_time / block): by Lorden's bound the
+// mean run length without a fault is at least e^h blocks, so a false alarm
+// comes at most once per reset_false_alarm_time of driving. Defaults: 6.21
+// per rejection, -0.69 per fused block, h = 10.49: two rejected blocks in a
+// row alarm; a rejection rate of 50 % alarms after about h / 2.76 = 3.8
+// blocks on average, any rate over 10 % eventually. An alarm is not yet a
+// reset: the blocks since g left zero must agree with one calibration
+// (reset(): a least-squares fit as one scale and rotation, else as any
+// linear map, its residual chi-square at gross_alpha); a fault's blocks (a
+// tracking loss, spikes) do not, and the run starts again. When they
+// agree, theta keeps its mean and its covariance is reset to the wide
+// prior (reset_scale_sd, reset_yaw_sd), so the next blocks are fused and
+// pull it to the new calibration; a direction the path does not excite
+// keeps its value.
 //
 // Gauge: a common isotropic scale of all sensors is a rigid twist scaled,
 // invisible to any redundancy; a common yaw offset is invisible in
@@ -70,8 +96,9 @@
 //   second order: b keeps its estimate and its variance grows). Not used:
 //   epochs without a wheel twist or a mice estimate (a fallback to the
 //   wheels), blocks with
-//   d under min_speed times their length, and blocks whose residual exceeds
-//   `gate` times d (the wheels slipped grossly). The measurement w of each
+//   d under min_speed times their length, and blocks whose innovation fails
+//   the gated update's chi-square at gross_alpha (3 degrees of freedom; the
+//   wheels slipped grossly). The measurement w of each
 //   sensor's update (above) is predicted from the others' corrections, which
 //   carry the applied common part (Gc, Dc) (see Deadband), and is taken into
 //   theta's gauge: times (Gc / G) R(D - Dc). The wheels' bias is the
@@ -87,12 +114,10 @@
 // runaway_alpha per component and update), and the sensor is reported by
 // runaway() and left out of the estimate (Exclusion::kCalibration); it comes
 // back when every component is inside its bound by z sd (the same test the
-// other way: no hysteresis factor). It is still calibrated meanwhile. A calibration so far off that
-// every block is over the gate (a resolution 50 % off, a sensor turned by
-// 30 degrees) is reacquired: reacquire_blocks such blocks in a row that
-// agree on one scale rho and rotation phi (m ~ rho R(phi) C w; the sd of
-// their log rho and phi under reacquire_spread) restart the estimate there,
-// with the prior's covariance; then it runs away as above.
+// other way: no hysteresis factor). It is still calibrated meanwhile. A
+// calibration so far off that every block is rejected (a resolution 50 %
+// off, a sensor turned by 30 degrees) is found by the reset above; then it
+// runs away as above.
 //
 // Deadband: an estimate is applied only once it is deadband (2 %, 0.02 rad)
 // away from the configured value, or, for the scales, once their isotropic
@@ -248,7 +273,8 @@ class SelfCalibration {
   Vec3 sd(int i) const;
   /// Blocks used for sensor i so far.
   long updates(int i) const { return state_[static_cast<std::size_t>(i)].updates; }
-  /// Times sensor i's estimate was restarted from blocks over the gate.
+  /// Times sensor i's covariance was reset (the rejections' CUSUM alarmed
+  /// and the blocks agreed with one calibration).
   long reacquired(int i) const { return state_[static_cast<std::size_t>(i)].reacquired; }
   /// The estimate ran away: the sensor is left out (kCalibration).
   bool runaway(int i) const { return state_[static_cast<std::size_t>(i)].runaway; }
