@@ -27,6 +27,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 std::vector<std::string> split(const std::string& line, char sep) {
   std::vector<std::string> out;
@@ -261,6 +262,12 @@ TEST(SelfCalibrationCli, CalibrationsFarOffAreReacquiredReportedAndExcluded) {
       SCOPED_TRACE(c.truth + ", seed " + std::to_string(seed));
       const RunawayRun r = run_misconfigured(c.truth, seed, true);
       expect_m2_reported_and_excluded(r, seed);
+      // Found by the reset (its blocks rejected, agreeing with another
+      // calibration), which is said; no other sensor is reset.
+      EXPECT_THAT(r.err, HasSubstr("sensor 'm2': its self-calibration was reset at t = "));
+      for (const char* other : {"'m1'", "'m3'", "'m4'"}) {
+        EXPECT_THAT(r.err, Not(HasSubstr(std::string(other) + ": its self-calibration was reset")));
+      }
       const RunawayRun plain = run_misconfigured(c.truth, seed, false);
       EXPECT_LE(r.max_error, plain.max_error + 0.005);  // as above
       const io::SelfCalibrationRow* last = nullptr;

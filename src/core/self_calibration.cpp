@@ -67,8 +67,8 @@ SelfCalibration::SelfCalibration(const SensorArray& array, SelfCalibrationOption
   const double a = options_.gross_alpha, b = options_.reset_rate;
   llr_rejected_ = static_cast<real>(std::log(b / a));
   llr_fused_ = static_cast<real>(std::log((1.0 - b) / (1.0 - a)));
-  reset_h_ = static_cast<real>(
-      std::log(std::max(1.0, options_.reset_false_alarm_time / options_.block)));
+  reset_h_ =
+      static_cast<real>(std::log(std::max(1.0, options_.reset_false_alarm_time / options_.block)));
   // One-sided normal quantile from the chi-square of 1 dof: P(Z > z) = alpha
   // is P(Z^2 > z^2) = 2 alpha.
   runaway_z_ = static_cast<real>(std::sqrt(chi2_quantile(1.0 - 2.0 * options_.runaway_alpha, 1)));

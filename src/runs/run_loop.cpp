@@ -26,7 +26,22 @@ OdometryRun run_loop(const RobotConfig& config, const std::string& config_path,
   // A sensor whose self-calibration ran away is excluded as 'calibration'
   // while beyond the bounds: said once per sensor.
   SensorMask runaway_seen = 0;
+  // A reset of a sensor's calibration (SelfCalibration: a test over time
+  // that alarms at most once an hour of driving by chance): said each time.
+  std::array<long, kMaxSensors> resets_seen{};
   const auto sink = [&](const OdometryStep& step) {
+    if (step.calibration_resets != nullptr) {
+      for (int i = 0; i < config.array.size(); ++i) {
+        const auto u = static_cast<std::size_t>(i);
+        if ((*step.calibration_resets)[u] <= resets_seen[u]) continue;
+        resets_seen[u] = (*step.calibration_resets)[u];
+        warn(fmt::format(
+            "sensor '{}': its self-calibration was reset at t = {} s (its blocks failed the "
+            "gate at more than the false-alarm rate {} and agree with another calibration): "
+            "learnt again from there",
+            config.names[u], step.t(), options.self_calibration.gross_alpha));
+      }
+    }
     if (step.calibration != nullptr) {
       for (int i = 0; i < config.array.size(); ++i) {
         if (step.estimate.excluded[static_cast<std::size_t>(i)] != Exclusion::kCalibration ||

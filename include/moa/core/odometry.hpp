@@ -151,6 +151,11 @@ struct OdometryStep {
   /// behind it (SelfCalibration::calibration; equal outside the deadbands).
   const std::array<SelfCalibrationEstimate, kMaxSensors>* calibration = nullptr;
   const std::array<SelfCalibrationEstimate, kMaxSensors>* calibration_filter = nullptr;
+  /// With self_calibration.enabled, by configured index: how many times
+  /// each sensor's calibration was reset so far (SelfCalibration::reacquired:
+  /// its blocks failed the gate at more than the false-alarm rate and agreed
+  /// with another calibration), else null.
+  const std::array<long, kMaxSensors>* calibration_resets = nullptr;
   /// With the consensus estimator and a gyro stream (use_imu, gyro rows
   /// fed), the gyro's model after this epoch (its calibration: bias() rad/s,
   /// scale(), covariance()), else null; valid during the sink call.
@@ -290,6 +295,7 @@ class Odometry {
   std::array<SelfCalibrationEstimate, kMaxSensors>
       calibration_{};  ///< applied, by configured index
   std::array<SelfCalibrationEstimate, kMaxSensors> calibration_filter_{};  ///< the filter's
+  std::array<long, kMaxSensors> calibration_resets_{};  ///< SelfCalibration::reacquired
 };
 
 }  // namespace moa

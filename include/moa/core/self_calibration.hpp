@@ -364,7 +364,7 @@ class SelfCalibration {
   std::array<real, kMaxSensors> metres_per_count_{};
   std::array<real, 2 * kMaxSensors> chi2_gate_{};  ///< by degrees of freedom
   real runaway_z_ = 0.0;                           ///< Phi^-1(1 - runaway_alpha), sd
-  real block_gate_ = 0.0;  ///< q(1 - gross_alpha, 2): a sensor's block
+  real block_gate_ = 0.0;                          ///< q(1 - gross_alpha, 2): a sensor's block
   real wheel_gate_ = 0.0;  ///< q(1 - gross_alpha, 3): a block of the wheels' gauge
   real llr_rejected_ = 0.0, llr_fused_ = 0.0;  ///< the rejections' CUSUM steps
   real reset_h_ = 0.0;                         ///< its threshold
