@@ -237,11 +237,11 @@ TEST(SelfCalibrationCli, NoCalibrationReasonWithoutSelfCalibrate) {
   for (const auto& e : r.excluded) EXPECT_EQ(e.find(":calibration"), std::string::npos) << e;
 }
 
-// Calibrations far off, beyond the 30 % relative residual over which a
-// block does not update the filter: m2 built at 1200 cpi (counts 1.5 times
-// the config's), at 560 cpi (0.7 times), turned by 30 degrees (0.5236
-// rad), or 1.4 times on its x axis alone. The blocks over the gate agree with one scale and
-// rotation, so the estimate restarts there (reacquire) and then runs away: reported, excluded as
+// Calibrations far off, whose blocks the gate rejects (docs/self-calibration.md
+// "Gate and reset"): m2 built at 1200 cpi (counts 1.5 times the config's), at 560
+// cpi (0.7 times), turned by 30 degrees (0.5236 rad), or 1.4 times on its x axis
+// alone. The rejections alarm the CUSUM and the blocks agree with one calibration,
+// so the filter is reset (said on stderr) and then runs away: reported, excluded as
 // `calibration` to the end, as above. And the filter's final estimate is the truth: within the
 // issue's 2 % on each scale (the good sensors' estimates scatter up to 1.2 % on cruise,
 // docs/self-calibration.md) and 0.01 rad on the yaw offset (the true yaw errors of the other

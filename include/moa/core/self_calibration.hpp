@@ -323,7 +323,7 @@ class SelfCalibration {
     double last_update = -1.0;  ///< s; < 0: never
     long updates = 0;
     bool runaway = false;
-    long reacquired = 0;                 ///< restarts by reacquire()
+    long reacquired = 0;                 ///< covariance resets by reset()
     SelfCalibrationEstimate lagged;      ///< theta / (G, D) averaged over settle_time
     bool settling = false;               ///< theta is moving away from lagged
     bool corrected = false;              ///< its own correction (beyond the gauge's) is applied
