@@ -31,6 +31,7 @@
 #include "support/http.hpp"
 #include "support/json_value.hpp"
 #include "support/run.hpp"
+#include "support/slow.hpp"
 #include "support/synth.hpp"
 
 extern char** environ;
@@ -66,6 +67,12 @@ std::vector<std::vector<std::string>> csv_rows(const fs::path& file) {
 }
 
 TEST(LiveLoop, PosesOverAStalledReaderAreTheRecordingsReplayAndDropsAreCounted) {
+  // Real time: moa must keep up with a 1 kHz replay against a sender of
+  // wheel and gyro rows on the wall clock. Built for AddressSanitizer it
+  // does not, and the streams then lead the mice rows past their bound (a
+  // refusal, as designed: "wheel rows fed too far ahead"). The Release pass
+  // runs it.
+  MOA_SKIP_UNDER_SANITIZER("a 1 kHz replay against a real-time sender");
   const fs::path dir = scratch_dir("live_loop");
   const SensorArray array = skewed_array();
   const std::vector<std::string> names{"m1", "m2", "m3", "m4"};
@@ -206,14 +213,7 @@ TEST(LiveLoop, PosesOverAStalledReaderAreTheRecordingsReplayAndDropsAreCounted) 
     EXPECT_EQ(j["source"].string(), row[10]) << line;
   }
   EXPECT_EQ(got + dropped, lines) << "every line delivered or counted";
-#if defined(__SANITIZE_ADDRESS__)
-  // Built for AddressSanitizer (Debug) the estimator does not keep up with
-  // 1 kHz in real time: what the reader got in its second is then no
-  // measure of the stream, only that it flowed. The Release pass checks it.
-  EXPECT_GT(got, 0u) << "lines were read before the reader stalled";
-#else
   EXPECT_GT(got, 500u) << "the first second's lines were read";
-#endif
 }
 
 }  // namespace
