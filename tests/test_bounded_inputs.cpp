@@ -126,6 +126,19 @@ TEST(BoundedInputs, ANamedPipeAsTheLogIsRefusedClearly) {
                        "one first\n");
 }
 
+// A directory called mice.csv: named as one, not "no such file".
+TEST(BoundedInputs, ADirectoryAsTheLogsMiceIsRefusedClearly) {
+  const fs::path log = log_with("mice-dir", "");
+  fs::remove(log / "mice.csv");
+  fs::create_directory(log / "mice.csv");
+  const auto r = test::run_moa_bounded(odometry_args(log, log / "o.csv"));
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(r.err, "moa odometry: error: " + (log / "mice.csv").string() +
+                       ": not a regular file (a directory): a log is read from files; copy it to "
+                       "one first\n");
+  EXPECT_FALSE(fs::exists(log / "o.csv"));
+}
+
 TEST(BoundedInputs, AnInterruptedRecordingIsRecognisedWithHowToRecover) {
   const fs::path log = log_with("part", "");
   fs::rename(log / "mice.csv", log / "mice.csv.part");

@@ -20,6 +20,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 const std::string kExample = std::string(MOA_SOURCE_DIR) + "/examples/logs/mixed-motion";
 
@@ -93,6 +94,20 @@ TEST(CarelessCalls, SelfCalibrationFileNameIsNotAnOption) {
       EXPECT_FALSE(fs::exists(out)) << command << " " << value;
       EXPECT_FALSE(fs::exists(fs::current_path() / "--quiet"));
     }
+  }
+}
+
+// An empty --out is a usage error naming the option, as an empty
+// --self-calibration is (it was "error: : cannot write" at exit 3).
+TEST(CarelessCalls, AnEmptyOutIsAUsageError) {
+  const fs::path dir = example_copy("careless-empty-out");
+  for (const std::string& command :
+       {odometry(dir, "--out ''"), std::string("simulate --scenario kimlee --out ''"),
+        "calibrate --config " + (dir / "robot.yaml").string() + " --method kimlee --log " +
+            dir.string() + " --out ''"}) {
+    const auto r = test::run_moa(command);
+    EXPECT_EQ(r.exit_code, cli::kExitUsage) << command << "\n" << r.err;
+    EXPECT_THAT(r.err, HasSubstr("--out: an empty file name")) << command;
   }
 }
 
@@ -231,6 +246,52 @@ TEST(CarelessCalls, InfinityAndOutOfRangeNumbersGetOneShortMessage) {
     EXPECT_EQ(r.err, message + "Run with --help for more information.\n") << args;
   }
   EXPECT_FALSE(fs::exists(out));
+}
+
+// The ends of --rate's range: each runs, or is refused saying why and with
+// the flag that helps (a tester found them refused by a field's name, or
+// by a bound no flag names).
+TEST(CarelessCalls, RatesAtTheEndsOfTheirRangeRunOrSayWhy) {
+  const fs::path dir = test::scratch_dir("careless-rates");
+  const std::string odometry = "odometry --config " + kExample + "/robot.yaml --log " + kExample;
+  // 5000 Hz: the default --max-row-interval (0.05 s) would be 250 epochs,
+  // beyond the synchroniser's ring of 61; not given, it is 60 epochs (12
+  // ms: the log's 100 Hz rows still cover their 10 ms, no epoch is held).
+  const auto fast = test::run_moa(odometry + " --rate 5000 --out " + (dir / "fast.csv").string());
+  EXPECT_EQ(fast.exit_code, 0) << fast.err;
+  EXPECT_THAT(fast.out, Not(HasSubstr("not usable"))) << fast.out;
+  // Given beyond the ring, it is refused by its flag.
+  const auto given =
+      test::run_moa(odometry + " --max-row-interval 5 --out " + (dir / "given.csv").string());
+  EXPECT_EQ(given.exit_code, 1);
+  EXPECT_THAT(given.err, HasSubstr("invalid option: --max-row-interval: must be <= 61 periods"))
+      << given.err;
+  EXPECT_FALSE(fs::exists(dir / "given.csv"));
+  // 0.5 Hz against 100 Hz wheels: an epoch is 200 wheel rows, more than
+  // the 256-row ring holds with the rows fed ahead: refused saying so.
+  const fs::path log = dir / "log";
+  ASSERT_EQ(test::run_moa("simulate --scenario kimlee --quiet --out " + log.string()).exit_code, 0);
+  const auto slow =
+      test::run_moa("odometry --config " + (log / "robot.yaml").string() + " --log " +
+                    log.string() + " --rate 0.5 --out " + (dir / "slow.csv").string());
+  EXPECT_EQ(slow.exit_code, 1);
+  EXPECT_THAT(slow.err, HasSubstr("wheel rows fed too far ahead of the mice rows (at most 256 rows "
+                                  "are kept ahead of the mice rows; an epoch is 2 s at --rate 0.5"))
+      << slow.err;
+  EXPECT_FALSE(fs::exists(dir / "slow.csv"));
+  // The wheels estimator on a log without wheels.csv: refused, not a run
+  // of holds.
+  const auto wheels =
+      test::run_moa(odometry + " --estimator wheels --out " + (dir / "wheels.csv").string());
+  EXPECT_EQ(wheels.exit_code, 1);
+  EXPECT_THAT(wheels.err, HasSubstr("--estimator wheels: " + kExample + " has no wheels.csv"))
+      << wheels.err;
+  // One sensor selected of four, without a gyro: refused, not the wheels
+  // in every epoch.
+  const auto one = test::run_moa(odometry + " --sensors front --out " + (dir / "one.csv").string());
+  EXPECT_EQ(one.exit_code, 1);
+  EXPECT_THAT(one.err, HasSubstr("one sensor (the one --sensors selects) needs a gyro")) << one.err;
+  EXPECT_FALSE(fs::exists(dir / "one.csv"));
 }
 
 TEST(CarelessCalls, DuplicatedRowIsRefusedWithItsLine) {

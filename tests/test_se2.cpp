@@ -148,7 +148,10 @@ TEST(Se2, ExpStepJacobiansMatchFiniteDifferencesAtIdentityNearZeroAndRandom) {
     std::uniform_real_distribution<double> d(-3.0, 3.0);
     cases.push_back({Pose2{{d(rng), d(rng)}, d(rng)}, test::random_twist(rng)});
   }
-  for (const auto& [pose, twist] : cases) {
+  for (const auto& c : cases) {
+    // Named copies: clang 14 (the sanitizer pass) cannot capture structured bindings.
+    const Pose2 pose = c.first;
+    const Twist2 twist = c.second;
     for (double dt : {0.01, 0.5}) {
       const auto f_pose = [&](const Eigen::Vector3d& x) {
         return vec(integrate_exact(pose_of(x), twist, dt));

@@ -255,7 +255,7 @@ TEST(SelfCalibration, AGarbledSensorIsNotResetAFarOffCalibrationIs) {
       ASSERT_TRUE(consensus.estimate(s).has_value());
     }
     const auto* c = consensus.self_calibration();
-    EXPECT_EQ(c->reacquired(1), 0);
+    EXPECT_EQ(c->resets(1), 0);
     EXPECT_FALSE(c->runaway(1));
     EXPECT_NEAR(c->calibration(1).scale_x, 1.0, 0.01);
     EXPECT_NEAR(c->calibration(1).scale_y, 1.0, 0.01);
@@ -276,11 +276,11 @@ TEST(SelfCalibration, AGarbledSensorIsNotResetAFarOffCalibrationIs) {
       ASSERT_TRUE(consensus.estimate(s).has_value());
     }
     const auto* c = consensus.self_calibration();
-    EXPECT_GE(c->reacquired(1), 1);
+    EXPECT_GE(c->resets(1), 1);
     EXPECT_NEAR(c->calibration(1).scale_x, 1.4, 0.014);
     EXPECT_NEAR(c->calibration(1).scale_y, 1.0, 0.01);
     EXPECT_TRUE(c->runaway(1));
-    for (int i : {0, 2, 3}) EXPECT_EQ(c->reacquired(i), 0) << i;
+    for (int i : {0, 2, 3}) EXPECT_EQ(c->resets(i), 0) << i;
   }
 }
 

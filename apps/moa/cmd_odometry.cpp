@@ -39,6 +39,9 @@ int run_odometry(const OdometryArgs& args) {
     throw io::Error(
         fmt::format("--self-calibration-gauge wheels: {} has no wheels.csv", log.dir.string()));
   }
+  if (options.estimator == EstimatorKind::kWheels && !log.wheels) {
+    throw io::Error(fmt::format("--estimator wheels: {} has no wheels.csv", log.dir.string()));
+  }
   io::refuse_output_onto_inputs(
       args.out, "--out",
       {args.config, log.mice, log.wheels.value_or(""), log.camera.value_or(""),
@@ -103,7 +106,8 @@ void add_odometry(CLI::App& app, Action& action) {
       ->required()
       ->check(CLI::ExistingPath);
   cmd->add_option("--out", args->out, "Output odometry.csv (written whole or not at all)")
-      ->required();
+      ->required()
+      ->check(output_file_name());
   add_odometry_flags(cmd, args->flags);
   cmd->add_option("--faults", args->faults,
                   "oracle: the simulator's faults.csv (default: the log's own)")

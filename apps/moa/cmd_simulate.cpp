@@ -14,6 +14,7 @@
 #include "moa/runs/output_path.hpp"
 #include "moa/sim/log_writer.hpp"
 #include "moa/sim/scenario.hpp"
+#include "odometry_options.hpp"
 
 namespace moa::cli {
 namespace {
@@ -93,7 +94,9 @@ void add_simulate(CLI::App& app, Action& action) {
                   "same bytes")
       ->capture_default_str()
       ->check(seed_check());
-  cmd->add_option("--out", args->out, "Output log directory (created if needed)")->required();
+  cmd->add_option("--out", args->out, "Output log directory (created if needed)")
+      ->required()
+      ->check(output_file_name());
   cmd->add_flag("--quiet", args->quiet, "Print nothing on success");
   cmd->callback([&action, args] { action = [args] { return run_simulate(*args); }; });
 }

@@ -2,6 +2,7 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -41,9 +42,6 @@ CLI::Validator finite_within(double lo, double hi, bool open_low) {
 const CLI::Validator kPositive = finite_within(0.0, std::numeric_limits<double>::infinity(), true);
 const CLI::Validator kNonNegative = finite_within(0.0, std::numeric_limits<double>::infinity());
 
-namespace {
-// An output file name: not "" (nothing would be written) nor an option
-// taken for a file name (--self-calibration --quiet).
 CLI::Validator output_file_name() {
   return CLI::Validator(
       [](std::string& v) -> std::string {
@@ -53,7 +51,6 @@ CLI::Validator output_file_name() {
       },
       "");
 }
-}  // namespace
 
 void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
   OdometryOptions& o = f.options;
@@ -79,8 +76,9 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
                   "sekimori: r_th of eq. (7), agreeing pairs a sensor needs to be reliable "
                   "(default max(1, N - 2))")
       ->check(CLI::Range(1, kMaxSensors));
-  cmd->add_option("--alpha", o.consensus.alpha,
-                  "consensus: false-rejection rate of the chi-square consistency test, in (0, 0.5)")
+  cmd->add_option(
+         "--alpha", o.consensus.alpha,
+         "consensus: false-rejection rate of the chi-square consistency test, 1e-12 to 0.5")
       ->check(finite_within(1e-12, 0.5))
       ->capture_default_str();
   cmd->add_flag("--no-motion-prior", f.no_motion_prior,
@@ -118,11 +116,11 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
   cmd->add_option("--rate", o.rate, "Epoch rate of the synchroniser, Hz (0.1 to 10000)")
       ->check(finite_within(0.1, 10000.0))
       ->capture_default_str();
-  cmd->add_option("--max-row-interval", o.max_row_interval,
+  cmd->add_option("--max-row-interval", f.max_row_interval,
                   "Longest interval one mice.csv row may cover, s (a sensor silent for longer "
-                  "was still before its row); at most 61 epochs")
-      ->check(finite_within(1e-4, 10.0))
-      ->capture_default_str();
+                  "was still before its row); at most 61 epochs [default: 0.05, or 60 epochs "
+                  "where that is shorter]")
+      ->check(finite_within(1e-4, 10.0));
   cmd->add_option("--max-gap", o.max_gap,
                   "Longest time all sensors may stay silent, s (a gap is no motion, written "
                   "epoch by epoch; a longer one is an error); the silences summed over the log "
@@ -182,6 +180,7 @@ std::vector<std::string> self_calibration_warnings(const OdometryOptions& o) {
 OdometryOptions resolve_odometry_flags(const OdometryFlags& f, const io::RobotConfig& config,
                                        const std::string& config_path) {
   OdometryOptions o = f.options;
+  o.max_row_interval = f.max_row_interval.value_or(std::min(o.max_row_interval, 60.0 / o.rate));
   o.consensus.motion_prior = !f.no_motion_prior;
   o.use_imu = !f.no_imu;
   o.self_calibration.enabled =

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,9 @@ CLI::Validator finite_within(double lo, double hi, bool open_low = false);
 extern const CLI::Validator kPositive;
 /// finite_within(0, inf): zero or more.
 extern const CLI::Validator kNonNegative;
+/// An output file or directory name: not "" (nothing would be written) nor
+/// an option taken for a file name (--self-calibration --quiet).
+CLI::Validator output_file_name();
 
 struct OdometryFlags {
   std::string estimator = "consensus";
@@ -36,6 +40,9 @@ struct OdometryFlags {
   std::string diagnostics_out;       ///< --diagnostics FILE.csv
   /// --self-calibration-gauge sensors|wheels; empty: not given (sensors)
   std::string self_calibration_gauge;
+  /// --max-row-interval; not given: OdometryOptions' 0.05 s, or 60 epochs
+  /// where that is shorter (above 1200 Hz: the synchroniser's ring holds 61)
+  std::optional<double> max_row_interval;
   OdometryOptions options;
 };
 

@@ -63,9 +63,8 @@ OptionCheck OdometryOptions::validate() const {
                    (estimator != EstimatorKind::kLs && estimator != EstimatorKind::kSekimori &&
                     estimator != EstimatorKind::kOracle),
                "self_calibration",
-               "needs the consensus estimator (ls and sekimori use every sensor, so one whose "
-               "calibration runs away could not be left out; oracle selects by the simulator's "
-               "fault labels, not by tested hypotheses)");
+               "needs the consensus estimator (ls, sekimori: one that runs away could not be "
+               "left out; oracle: selects by fault labels)");
   return c.result();
 }
 
@@ -374,7 +373,7 @@ bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& 
       const auto i = static_cast<std::size_t>(selected_[static_cast<std::size_t>(k)]);
       calibration_[i] = c->applied(k);
       calibration_filter_[i] = c->calibration(k);
-      calibration_resets_[i] = c->reacquired(k);
+      calibration_resets_[i] = c->resets(k);
     }
   }
   if (all) {

@@ -463,7 +463,7 @@ bool SelfCalibration::reset(SensorState& s) {
             .cwiseAbs2()
             .asDiagonal();
   s.rejections = 0.0;
-  ++s.reacquired;
+  ++s.resets;
   return true;
 }
 

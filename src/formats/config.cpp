@@ -72,8 +72,8 @@ std::string speed_scale_message(const SpeedScale& s, SpeedScale::Error e) {
       return fmt::format("speeds[{}]: must be > speeds[{}] (found {} after {})", k, k - 1,
                          s.speed(k), s.speed(k - 1));
     case SpeedScale::Error::kRatioOutOfRange:
-      return fmt::format("ratios[{}]: must be within [{}, {}] (found {})", k,
-                         SpeedScale::kMinRatio, SpeedScale::kMaxRatio, s.ratio_at(k));
+      return fmt::format("ratios[{}]: must be within [{}, {}] (found {})", k, SpeedScale::kMinRatio,
+                         SpeedScale::kMaxRatio, s.ratio_at(k));
     case SpeedScale::Error::kNotMonotone:
       return fmt::format(
           "between speeds[{0}] and speeds[{1}]: {2} (ratio falls from {3} to {4} over {5}..{6} "
@@ -150,8 +150,8 @@ SensorMount parse_sensor(const YamlSource& source, const YAML::Node& node, std::
                          std::string& name) {
   name = sensor_name(source, node, index);
   const YamlFields f(source, node, "",
-                     {"name", "position", "yaw", "cpi", "scale", "mirrored", "max_speed", "noise", "latency",
-                      "speed_scale"},
+                     {"name", "position", "yaw", "cpi", "scale", "mirrored", "max_speed", "noise",
+                      "latency", "speed_scale"},
                      sensor_label(index, name));
   SensorMount m;
   const auto position = f.numbers("position", 2);
@@ -268,8 +268,8 @@ RobotConfig parse_config(std::string_view yaml, std::string_view source_name) {
       source.fail(v, fmt::format("key 'version': expected an integer, found {}", describe_kind(v)));
     }
     if (v.Scalar() != std::to_string(kConfigVersion)) {
-      source.fail(
-          v, fmt::format("version {} is not supported (expected {})", v.Scalar(), kConfigVersion));
+      source.fail(v, fmt::format("version {} is not supported (expected {})", excerpt(v.Scalar()),
+                                 kConfigVersion));
     }
   }
   if (!has_version) source.fail(root, "missing key 'version'");
@@ -296,8 +296,10 @@ RobotConfig parse_config(std::string_view yaml, std::string_view source_name) {
   config.array = SensorArray(std::move(mounts));
   if (const auto limits = top.get("limits")) config.limits = parse_limits(source, *limits);
   if (const auto imu = top.get("imu")) config.imu = parse_imu(source, *imu);
-  if (const auto camera = top.get("camera")) config.camera_latency = parse_latency(source, *camera, "camera");
-  if (const auto wheels = top.get("wheels")) config.wheels_latency = parse_latency(source, *wheels, "wheels");
+  if (const auto camera = top.get("camera"))
+    config.camera_latency = parse_latency(source, *camera, "camera");
+  if (const auto wheels = top.get("wheels"))
+    config.wheels_latency = parse_latency(source, *wheels, "wheels");
   return config;
 }
 
@@ -344,8 +346,8 @@ std::string format_config(const RobotConfig& config) {
         speeds += fmt::format("{}{}", k ? ", " : "", m.speed_scale.speed(k));
         ratios += fmt::format("{}{}", k ? ", " : "", m.speed_scale.ratio_at(k));
       }
-      out += fmt::format("    speed_scale:\n      speeds: [{}]\n      ratios: [{}]\n", speeds,
-                         ratios);
+      out +=
+          fmt::format("    speed_scale:\n      speeds: [{}]\n      ratios: [{}]\n", speeds, ratios);
     }
   }
   if (config.limits) {

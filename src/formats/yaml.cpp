@@ -111,7 +111,7 @@ std::string describe_kind(const YAML::Node& node) {
     case YAML::NodeType::Map:
       return "a map";
     default:
-      return fmt::format("'{}'", node.Scalar());
+      return fmt::format("'{}'", excerpt(node.Scalar()));
   }
 }
 
@@ -141,11 +141,11 @@ YamlFields::YamlFields(const YamlSource& source, const YAML::Node& map, std::str
     if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
       std::string known;
       for (const auto k : allowed) known += (known.empty() ? "" : ", ") + std::string(k);
-      source.fail(entry.first,
-                  fmt::format("{}unknown key '{}' (known here: {})", prefix(), full(key), known));
+      source.fail(entry.first, fmt::format("{}unknown key '{}' (known here: {})", prefix(),
+                                           excerpt(full(key)), known));
     }
     if (!values_.emplace(key, entry).second) {
-      source.fail(entry.first, fmt::format("{}duplicate key '{}'", prefix(), full(key)));
+      source.fail(entry.first, fmt::format("{}duplicate key '{}'", prefix(), excerpt(full(key))));
     }
   }
 }
@@ -230,7 +230,7 @@ long YamlFields::integer(std::string_view key, long min, long max) const {
   long value = 0;
   const auto [end, ec] = std::from_chars(begin, text.data() + text.size(), value);
   if (ec != std::errc{} || end != text.data() + text.size() || begin == end) {
-    fail(key, fmt::format("'{}' is not an integer", text));
+    fail(key, fmt::format("'{}' is not an integer", excerpt(text)));
   }
   if (value < min || value > max) {
     fail(key, fmt::format("must be within [{}, {}] (found {})", min, max, value));
@@ -278,7 +278,7 @@ std::string YamlFields::choice(std::string_view key,
   if (std::find(choices.begin(), choices.end(), value) == choices.end()) {
     std::string list;
     for (const auto c : choices) list += (list.empty() ? "" : ", ") + std::string(c);
-    fail(key, fmt::format("'{}' is not one of: {}", value, list));
+    fail(key, fmt::format("'{}' is not one of: {}", excerpt(value), list));
   }
   return value;
 }

@@ -20,6 +20,23 @@
 namespace moa::io {
 namespace fs = std::filesystem;
 
+namespace {
+// OdometryOptions::validate()'s refusal, "path: what". The options that
+// every front end gives by the field's own name (rate, max_row_interval,
+// max_gap) are named as the front end names them (OptionError).
+[[noreturn]] void refuse(const InvalidOption& e) {
+  const std::string_view text = e.view();
+  for (const std::string_view field : {"rate", "max_row_interval", "max_gap"}) {
+    if (text.size() > field.size() && text.substr(0, field.size()) == field &&
+        text[field.size()] == ':') {
+      throw OptionError(fmt::format("invalid option: {{{}}}{}", field,
+                                    OptionError::literal(text.substr(field.size()))));
+    }
+  }
+  throw Error(fmt::format("invalid option: {}", text));
+}
+}  // namespace
+
 OdometryOptions resolve_odometry_options(OdometryOptions o, std::string_view estimator,
                                          const std::vector<std::string>& sensors, bool no_wheels,
                                          const RobotConfig& config,
@@ -31,6 +48,16 @@ OdometryOptions resolve_odometry_options(OdometryOptions o, std::string_view est
   }
   o.estimator = *kind;
   o.use_wheels = !no_wheels;
+  if (o.self_calibration.enabled &&
+      (o.estimator == EstimatorKind::kLs || o.estimator == EstimatorKind::kSekimori ||
+       o.estimator == EstimatorKind::kOracle)) {
+    // The core refuses it too (OdometryOptions::validate); here with the flags.
+    throw OptionError(fmt::format(
+        "{{self_calibrate}} needs {{estimator}} consensus, not {}: ls and sekimori use every "
+        "sensor, so one whose calibration runs away could not be left out; oracle selects by "
+        "the simulator's fault labels, not by tested hypotheses",
+        estimator));
+  }
   if (o.estimator == EstimatorKind::kWheels && no_wheels) {
     throw OptionError("{estimator} wheels and {no_wheels} exclude each other");
   }
@@ -56,7 +83,7 @@ OdometryOptions resolve_odometry_options(OdometryOptions o, std::string_view est
       o.sensors |= SensorMask{1} << *i;
     }
   }
-  if (const auto e = o.validate()) throw Error(fmt::format("invalid option: {}", e->message()));
+  if (const auto e = o.validate()) refuse(*e);
   return o;
 }
 
@@ -90,11 +117,14 @@ LogFiles resolve_log(const fs::path& log) {
     }
     const fs::file_status status = fs::status(files.mice, ec);
     if (fs::is_fifo(status) || fs::is_character_file(status) || fs::is_block_file(status) ||
-        fs::is_socket(status)) {
-      throw Error(fmt::format(
-          "{}: not a regular file (a {}): a log is read from files; copy it "
-          "to one first",
-          files.mice.string(), fs::is_fifo(status) ? "named pipe" : "device or socket"));
+        fs::is_socket(status) || fs::is_directory(status)) {
+      throw Error(
+          fmt::format("{}: not a regular file (a {}): a log is read from files; copy it "
+                      "to one first",
+                      files.mice.string(),
+                      fs::is_fifo(status)        ? "named pipe"
+                      : fs::is_directory(status) ? "directory"
+                                                 : "device or socket"));
     }
     throw Error(
         fmt::format("{}: no such file (a log directory holds mice.csv)", files.mice.string()));
@@ -124,9 +154,7 @@ std::unique_ptr<Odometry> make_odometry(const RobotConfig& config, const std::st
   // A log's imu.csv is used with the defaults of GyroOptions when the config
   // has no imu: block; one sensor then takes its rotation from it.
   options.consensus.gyro_fed = options.use_imu;
-  if (const auto e = options.validate()) {
-    throw Error(fmt::format("invalid option: {}", e->message()));
-  }
+  if (const auto e = options.validate()) refuse(*e);
   const SensorMask beyond = options.sensors & ~all_sensors(config.array.size());
   if (beyond != 0 && options.sensors != ~SensorMask{0}) {
     throw Error(fmt::format("sensors: selection names a sensor beyond the {} of {}",
@@ -432,12 +460,17 @@ std::unique_ptr<ImuReader> open_log_imu(const RobotConfig& config, const LogFile
   if (options.use_imu && log.imu && options.estimator == EstimatorKind::kConsensus) {
     imu = std::make_unique<ImuReader>(*log.imu);
   }
-  if (config.array.size() == 1 && options.estimator != EstimatorKind::kWheels) {
+  // One sensor: the config's only one, or the only one --sensors selects
+  // (without a gyro the consensus would take the wheels in every epoch).
+  const bool one = count_sensors(options.sensors & all_sensors(config.array.size())) == 1;
+  if (one && options.estimator != EstimatorKind::kWheels) {
     // Another gyro (a live run's streams) may stand in for a missing imu.csv,
     // not for a pipeline that takes none.
     const bool takes_gyro = options.use_imu && options.estimator == EstimatorKind::kConsensus;
     if (!imu && (!takes_gyro || !other_gyro)) {
-      throw Error(fmt::format("{}: one sensor needs a gyro for its rotation: {}", log.mice.string(),
+      throw Error(fmt::format("{}: one sensor{} needs a gyro for its rotation: {}",
+                              log.mice.string(),
+                              config.array.size() > 1 ? " (the one --sensors selects)" : "",
                               !options.use_imu ? "--no-imu given"
                               : !log.imu       ? "no imu.csv in " + log.dir.string()
                                                : "the estimator is not consensus"));

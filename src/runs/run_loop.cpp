@@ -2,6 +2,7 @@
 
 #include <fmt/core.h>
 
+#include "moa/core/wheels.hpp"
 #include "moa/formats/error.hpp"
 #include "moa/runs/odometry_run.hpp"
 
@@ -36,7 +37,7 @@ OdometryRun run_loop(const RobotConfig& config, const std::string& config_path,
         if ((*step.calibration_resets)[u] <= resets_seen[u]) continue;
         resets_seen[u] = (*step.calibration_resets)[u];
         warn(fmt::format(
-            "sensor '{}': its self-calibration was reset at t = {} s (its blocks failed the "
+            "sensor '{}': its self-calibration was reset at t = {:.3f} s (its blocks failed the "
             "gate at more than the false-alarm rate {} and agree with another calibration): "
             "learnt again from there",
             config.names[u], step.t(), options.self_calibration.gross_alpha));
@@ -52,7 +53,7 @@ OdometryRun run_loop(const RobotConfig& config, const std::string& config_path,
         const auto& c = (*step.calibration_filter)[static_cast<std::size_t>(i)];
         warn(fmt::format(
             "sensor '{}': its self-calibration ran away (scale {:.3f}, {:.3f}, yaw offset {:.3f} "
-            "rad at t = {} s; beyond a sound sensor's tolerance {} and {} rad at false-alarm "
+            "rad at t = {:.3f} s; beyond a sound sensor's tolerance {} and {} rad at false-alarm "
             "rate {}): excluded as 'calibration' while beyond",
             config.names[static_cast<std::size_t>(i)], c.scale_x, c.scale_y, c.yaw_offset, step.t(),
             options.self_calibration.runaway_scale, options.self_calibration.runaway_yaw,
@@ -64,6 +65,14 @@ OdometryRun run_loop(const RobotConfig& config, const std::string& config_path,
   };
   // The refusal's words; for too much silence, with its numbers.
   const auto detail = [&](double t, OdometryError e) -> std::string {
+    if (e == OdometryError::kWheelsFull || e == OdometryError::kImuFull) {
+      // The rows of one epoch and those fed ahead of the mice must fit the
+      // stream's fixed ring (no heap).
+      return fmt::format(
+          "{} (at most {} rows are kept ahead of the mice rows; an epoch is {} s at --rate {} "
+          "Hz: a higher --rate needs fewer, and a log's streams must cover the same times)",
+          describe(e), IntervalAverager<3>::kCapacity, 1.0 / options.rate, options.rate);
+    }
     if (e != OdometryError::kRow) return describe(e);
     const RowError r = odometry->row_error();
     if (r != RowError::kTooMuchSilence) return describe(r);

@@ -174,7 +174,8 @@ int sensor_index(const Fields& f, std::string_view key, const YAML::Node& at,
   if (!index) {
     std::string names;
     for (const auto& n : config.names) names += (names.empty() ? "" : ", ") + n;
-    f.fail_at(at, key, fmt::format("no sensor called '{}' (sensors: {})", at.Scalar(), names));
+    f.fail_at(at, key,
+              fmt::format("no sensor called '{}' (sensors: {})", io::excerpt(at.Scalar()), names));
   }
   return *index;
 }

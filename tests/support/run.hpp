@@ -4,6 +4,8 @@
 #include <filesystem>
 #include <string>
 
+#include "support/slow.hpp"
+
 namespace moa::test {
 
 struct RunResult {
@@ -28,7 +30,7 @@ struct BoundedRunResult : RunResult {
 /// moa runs about ten times slower (writing 360 000 epochs: 0.5 s against
 /// more than 15 s), so its time bound is ten times the Release one. Memory
 /// and output bounds are not scaled.
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(MOA_SANITIZED)
 inline constexpr double kBuildTimeScale = 10.0;
 #else
 inline constexpr double kBuildTimeScale = 1.0;

@@ -7,7 +7,17 @@
 
 #include <gtest/gtest.h>
 
+// MOA_SANITIZED: built for AddressSanitizer. GCC says so with
+// __SANITIZE_ADDRESS__, clang (14) only through __has_feature.
 #if defined(__SANITIZE_ADDRESS__)
+#define MOA_SANITIZED 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define MOA_SANITIZED 1
+#endif
+#endif
+
+#if defined(MOA_SANITIZED)
 #define MOA_SKIP_UNDER_SANITIZER(why) \
   GTEST_SKIP() << why << ": run in the Release build, minutes under ASan"
 #else

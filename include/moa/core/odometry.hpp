@@ -152,7 +152,7 @@ struct OdometryStep {
   const std::array<SelfCalibrationEstimate, kMaxSensors>* calibration = nullptr;
   const std::array<SelfCalibrationEstimate, kMaxSensors>* calibration_filter = nullptr;
   /// With self_calibration.enabled, by configured index: how many times
-  /// each sensor's calibration was reset so far (SelfCalibration::reacquired:
+  /// each sensor's calibration was reset so far (SelfCalibration::resets:
   /// its blocks failed the gate at more than the false-alarm rate and agreed
   /// with another calibration), else null.
   const std::array<long, kMaxSensors>* calibration_resets = nullptr;
@@ -295,7 +295,7 @@ class Odometry {
   std::array<SelfCalibrationEstimate, kMaxSensors>
       calibration_{};  ///< applied, by configured index
   std::array<SelfCalibrationEstimate, kMaxSensors> calibration_filter_{};  ///< the filter's
-  std::array<long, kMaxSensors> calibration_resets_{};  ///< SelfCalibration::reacquired
+  std::array<long, kMaxSensors> calibration_resets_{};  ///< SelfCalibration::resets
 };
 
 }  // namespace moa

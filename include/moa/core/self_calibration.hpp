@@ -275,7 +275,7 @@ class SelfCalibration {
   long updates(int i) const { return state_[static_cast<std::size_t>(i)].updates; }
   /// Times sensor i's covariance was reset (the rejections' CUSUM alarmed
   /// and the blocks agreed with one calibration).
-  long reacquired(int i) const { return state_[static_cast<std::size_t>(i)].reacquired; }
+  long resets(int i) const { return state_[static_cast<std::size_t>(i)].resets; }
   /// The estimate ran away: the sensor is left out (kCalibration).
   bool runaway(int i) const { return state_[static_cast<std::size_t>(i)].runaway; }
   SensorMask runaways() const;
@@ -323,7 +323,7 @@ class SelfCalibration {
     double last_update = -1.0;  ///< s; < 0: never
     long updates = 0;
     bool runaway = false;
-    long reacquired = 0;                 ///< covariance resets by reset()
+    long resets = 0;                     ///< covariance resets by reset()
     SelfCalibrationEstimate lagged;      ///< theta / (G, D) averaged over settle_time
     bool settling = false;               ///< theta is moving away from lagged
     bool corrected = false;              ///< its own correction (beyond the gauge's) is applied
