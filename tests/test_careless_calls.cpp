@@ -286,6 +286,14 @@ TEST(CarelessCalls, RatesAtTheEndsOfTheirRangeRunOrSayWhy) {
   EXPECT_EQ(wheels.exit_code, 1);
   EXPECT_THAT(wheels.err, HasSubstr("--estimator wheels: " + kExample + " has no wheels.csv"))
       << wheels.err;
+  // --faults with another estimator than the oracle: refused, not ignored.
+  const auto faults = test::run_moa(odometry + " --faults " + kExample + "/truth.csv --out " +
+                                    (dir / "faults.csv").string());
+  EXPECT_EQ(faults.exit_code, 1);
+  EXPECT_THAT(faults.err, HasSubstr("--faults is read by --estimator oracle only (the estimator is "
+                                    "consensus)"))
+      << faults.err;
+  EXPECT_FALSE(fs::exists(dir / "faults.csv"));
   // One sensor selected of four, without a gyro: refused, not the wheels
   // in every epoch.
   const auto one = test::run_moa(odometry + " --sensors front --out " + (dir / "one.csv").string());

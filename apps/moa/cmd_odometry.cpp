@@ -39,6 +39,10 @@ int run_odometry(const OdometryArgs& args) {
     throw io::Error(
         fmt::format("--self-calibration-gauge wheels: {} has no wheels.csv", log.dir.string()));
   }
+  if (!args.faults.empty() && options.estimator != EstimatorKind::kOracle) {
+    throw io::Error(fmt::format("--faults is read by --estimator oracle only (the estimator is {})",
+                                to_name(options.estimator)));
+  }
   if (options.estimator == EstimatorKind::kWheels && !log.wheels) {
     throw io::Error(fmt::format("--estimator wheels: {} has no wheels.csv", log.dir.string()));
   }
