@@ -355,6 +355,14 @@ CsvReader::CsvReader(const std::filesystem::path& file) : file_(file.string()) {
   block_.resize(kBlockSize);
   if (!read_record()) fail_at(line_ + 1, "no header row (the file is empty)");
   header_line_ = line_;
+  // A first line that starts with a number is data: the header is missing
+  // (else its repeated values read as duplicate column names).
+  if (!fields_.empty() && std::holds_alternative<double>(parse_number(fields_[0]))) {
+    fail(
+        fmt::format("no header row: the first line is data ('{}'...); the first line names the "
+                    "columns",
+                    excerpt(fields_[0])));
+  }
   header_.reserve(fields_.size());
   for (std::size_t i = 0; i < fields_.size(); ++i) {
     if (fields_[i].empty()) fail(fmt::format("column {} of the header has no name", i + 1));
