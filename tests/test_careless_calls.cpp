@@ -284,8 +284,10 @@ TEST(CarelessCalls, RatesAtTheEndsOfTheirRangeRunOrSayWhy) {
   const auto wheels =
       test::run_moa(odometry + " --estimator wheels --out " + (dir / "wheels.csv").string());
   EXPECT_EQ(wheels.exit_code, 1);
-  EXPECT_THAT(wheels.err, HasSubstr("--estimator wheels: " + kExample + " has no wheels.csv"))
+  EXPECT_THAT(wheels.err,
+              HasSubstr(kExample + "/wheels.csv: the wheels estimator needs wheels.csv in the log"))
       << wheels.err;
+  EXPECT_FALSE(fs::exists(dir / "wheels.csv"));
   // --faults with another estimator than the oracle: refused, not ignored.
   const auto faults = test::run_moa(odometry + " --faults " + kExample + "/truth.csv --out " +
                                     (dir / "faults.csv").string());

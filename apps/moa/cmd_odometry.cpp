@@ -43,9 +43,6 @@ int run_odometry(const OdometryArgs& args) {
     throw io::Error(fmt::format("--faults is read by --estimator oracle only (the estimator is {})",
                                 to_name(options.estimator)));
   }
-  if (options.estimator == EstimatorKind::kWheels && !log.wheels) {
-    throw io::Error(fmt::format("--estimator wheels: {} has no wheels.csv", log.dir.string()));
-  }
   io::refuse_output_onto_inputs(
       args.out, "--out",
       {args.config, log.mice, log.wheels.value_or(""), log.camera.value_or(""),

@@ -494,6 +494,11 @@ std::unique_ptr<ImuReader> open_log_imu(const RobotConfig& config, const LogFile
 LogStreams open_log_streams(const RobotConfig& config, const LogFiles& log,
                             const OdometryOptions& options, bool other_streams) {
   LogStreams s;
+  if (options.estimator == EstimatorKind::kWheels && !log.wheels && !other_streams) {
+    // Else every epoch would be a hold (the pose never moves).
+    throw Error(fmt::format("{}: the wheels estimator needs wheels.csv in the log",
+                            (log.dir / "wheels.csv").string()));
+  }
   if (options.use_wheels && log.wheels) s.wheels = std::make_unique<WheelsReader>(*log.wheels);
   s.imu = open_log_imu(config, log, options, other_streams);
   if (options.fuse_camera) {
