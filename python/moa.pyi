@@ -120,7 +120,7 @@ def odometry(
     r_th: Optional[int] = None,
     alpha: Optional[float] = None,
     initial_pose: Optional[Sequence[float]] = None,
-    max_row_interval: float = 0.05,
+    max_row_interval: Optional[float] = None,
     max_gap: float = 3600.0,
     ekf_scale: bool = False,
 ) -> Steps:
@@ -129,7 +129,8 @@ def odometry(
     estimator: ls, sekimori, consensus, wheels or oracle. The options are the
     command's flags: sensors (names), rate (Hz), no_wheels, fuse_camera,
     camera_latency (s), camera_sigma (m), e_th (m^2), r_th, alpha,
-    initial_pose (x, y, theta), max_row_interval (s), max_gap (s), ekf_scale.
+    initial_pose (x, y, theta), max_row_interval (s; default 0.05, or 60
+    epochs where that is shorter), max_gap (s), ekf_scale.
     """
 
 class Odometry:

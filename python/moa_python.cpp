@@ -184,7 +184,8 @@ OdometryOptions odometry_options(const std::string& estimator, const py::kwargs&
   o.set("e_th", options.sekimori.e_th);
   o.set("r_th", options.sekimori.r_th);
   o.set("alpha", options.consensus.alpha);
-  o.set("max_row_interval", options.max_row_interval);
+  options.max_row_interval = o.get<double>("max_row_interval")
+                                 .value_or(OdometryOptions::default_max_row_interval(options.rate));
   o.set("max_gap", options.max_gap);
   options.use_imu = !o.get<bool>("no_imu").value_or(false);
   if (const auto pose = o.get<std::vector<double>>("initial_pose")) {
@@ -782,7 +783,8 @@ config: path of robot.yaml (or a moa.Config); log_dir: the log directory or
 its mice.csv; estimator: ls, sekimori, consensus, wheels or oracle.
 Options, as the command's flags: sensors (list of names), rate (Hz),
 no_wheels, fuse_camera, camera_latency (s), camera_sigma (m), e_th (m^2),
-r_th, alpha, initial_pose (x, y, theta), max_row_interval (s), max_gap (s),
+r_th, alpha, initial_pose (x, y, theta), max_row_interval (s; default 0.05,
+or 60 epochs where that is shorter), max_gap (s),
 ekf_scale.
 
 Returns a dict of arrays, one row per epoch, equal to odometry.csv: t (s,

@@ -111,6 +111,48 @@ TEST(CarelessCalls, AnEmptyOutIsAUsageError) {
   }
 }
 
+// An empty name in --sensors (a doubled or trailing comma) is a usage
+// error, not dropped; "a,b" and "a b" select the same sensors.
+TEST(CarelessCalls, AnEmptySensorNameIsAUsageError) {
+  const fs::path dir = example_copy("careless-sensors");
+  for (const char* list : {"front,,left", "front,", ",front", "''"}) {
+    const auto r = test::run_moa(
+        odometry(dir, std::string("--sensors ") + list + " --out " + (dir / "o.csv").string()));
+    EXPECT_EQ(r.exit_code, cli::kExitUsage) << list << "\n" << r.err;
+    EXPECT_THAT(r.err, HasSubstr("--sensors: an empty sensor name in")) << list;
+  }
+  EXPECT_FALSE(fs::exists(dir / "o.csv"));
+  const auto comma = test::run_moa(
+      odometry(dir, "--sensors front,left,rear --out " + (dir / "comma.csv").string()));
+  const auto space = test::run_moa(
+      odometry(dir, "--sensors front left rear --out " + (dir / "space.csv").string()));
+  ASSERT_EQ(comma.exit_code, 0) << comma.err;
+  ASSERT_EQ(space.exit_code, 0) << space.err;
+  EXPECT_EQ(slurp(dir / "comma.csv"), slurp(dir / "space.csv"));
+  EXPECT_THAT(slurp(dir / "comma.csv"), HasSubstr("right:unselected"));
+}
+
+TEST(CarelessCalls, ADirectoryAsAnOutputFileIsAUsageError) {
+  const fs::path dir = example_copy("careless-dir-out");
+  const fs::path sub = dir / "results";
+  fs::create_directories(sub);
+  const std::string config = (dir / "robot.yaml").string();
+  for (const std::string& name : {sub.string(), sub.string() + "/", (dir / "new").string() + "/"}) {
+    for (const std::string& command :
+         {odometry(dir, "--out " + name),
+          odometry(dir, "--out " + (dir / "o.csv").string() + " --diagnostics " + name),
+          odometry(dir, "--out " + (dir / "o.csv").string() + " --self-calibration " + name),
+          "calibrate --config " + config + " --method kimlee --log " + dir.string() + " --out " +
+              name}) {
+      const auto r = test::run_moa(command);
+      EXPECT_EQ(r.exit_code, cli::kExitUsage) << command << "\n" << r.err;
+      EXPECT_THAT(r.err, HasSubstr("'" + name + "' is a directory")) << command;
+    }
+  }
+  EXPECT_FALSE(fs::exists(dir / "new")) << "nothing is created";
+  EXPECT_FALSE(fs::exists(dir / "o.csv")) << "nothing is written";
+}
+
 // Every command that writes refuses an output that names one of its
 // inputs, before it writes anything (issue #20); `what` is the start of
 // the message after the option and path.
@@ -302,6 +344,20 @@ TEST(CarelessCalls, RatesAtTheEndsOfTheirRangeRunOrSayWhy) {
   EXPECT_EQ(one.exit_code, 1);
   EXPECT_THAT(one.err, HasSubstr("one sensor (the one --sensors selects) needs a gyro")) << one.err;
   EXPECT_FALSE(fs::exists(dir / "one.csv"));
+  // The oracle with a faults.csv longer than mice.csv (another log's):
+  // refused, not read as far as mice.csv goes.
+  const fs::path longer = dir / "faults-longer.csv";
+  fs::copy_file(log / "faults.csv", longer);
+  const std::string faults_text = slurp(longer);
+  std::ofstream(longer, std::ios::app)
+      << faults_text.substr(faults_text.rfind('\n', faults_text.size() - 2) + 1);
+  const auto oracle = test::run_moa("odometry --config " + (log / "robot.yaml").string() +
+                                    " --log " + log.string() + " --estimator oracle --faults " +
+                                    longer.string() + " --out " + (dir / "oracle.csv").string());
+  EXPECT_EQ(oracle.exit_code, 1);
+  EXPECT_THAT(oracle.err, HasSubstr(longer.string() + ":"));
+  EXPECT_THAT(oracle.err, HasSubstr("has rows past mice.csv's end")) << oracle.err;
+  EXPECT_FALSE(fs::exists(dir / "oracle.csv"));
 }
 
 TEST(CarelessCalls, DuplicatedRowIsRefusedWithItsLine) {

@@ -412,9 +412,9 @@ TEST(Report, SelfCalibrationIsPlottedPerSensorOverTime) {
     std::getline(in, line);
     ASSERT_EQ(line,
               "t,sensor,scale_x,scale_y,yaw_offset,filter_scale_x,filter_scale_y,"
-              "filter_yaw_offset");
+              "filter_yaw_offset,filter_sd_scale_x,filter_sd_scale_y,filter_sd_yaw_offset");
     while (std::getline(in, line)) {
-      // The chart shows the filter's estimates (the last three columns).
+      // The chart shows the filter's estimates (filter_scale_x and _y).
       std::stringstream ss(line);
       std::string t, name, f[5];
       std::getline(ss, t, ',');

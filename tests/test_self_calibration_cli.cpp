@@ -319,14 +319,24 @@ TEST(SelfCalibrationCli, LiveWritesTheEstimatesAboutOnceASecond) {
   std::string header;
   const auto rows = rows_of(cal, &header);
   EXPECT_EQ(header,
-            "t,sensor,scale_x,scale_y,yaw_offset,filter_scale_x,filter_scale_y,filter_yaw_offset");
+            "t,sensor,scale_x,scale_y,yaw_offset,filter_scale_x,filter_scale_y,filter_yaw_offset,"
+            "filter_sd_scale_x,filter_sd_scale_y,filter_sd_yaw_offset");
   const std::vector<std::string> names{"m1", "m2", "m3", "m4"};
   ASSERT_EQ(rows.size(), due.size() * names.size());
   for (std::size_t k = 0; k < rows.size(); ++k) {
-    ASSERT_EQ(rows[k].size(), 8u);
+    ASSERT_EQ(rows[k].size(), 11u);
     EXPECT_DOUBLE_EQ(std::stod(rows[k][0]), due[k / names.size()]) << "row " << k;
     EXPECT_EQ(rows[k][1], names[k % names.size()]) << "row " << k;
-    for (int c = 2; c <= 4; ++c) EXPECT_TRUE(std::isfinite(std::stod(rows[k][c])));
+    for (int c = 2; c <= 7; ++c) EXPECT_TRUE(std::isfinite(std::stod(rows[k][c])));
+    // The filter's sds: positive, and never above the widest prior (a
+    // reset's, reset_scale_sd and reset_yaw_sd).
+    const SelfCalibrationOptions prior;
+    for (int c = 8; c <= 10; ++c) {
+      const double sd = std::stod(rows[k][static_cast<std::size_t>(c)]);
+      EXPECT_GT(sd, 0.0) << "row " << k << " column " << c;
+      EXPECT_LE(sd, (c == 10 ? prior.reset_yaw_sd : prior.reset_scale_sd) * (1 + 1e-9))
+          << "row " << k << " column " << c;
+    }
   }
   // About once a second: 17 s of log, 18 or 19 sample times.
   EXPECT_GE(due.size(), 18u);

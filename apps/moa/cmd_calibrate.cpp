@@ -110,7 +110,7 @@ void add_calibrate(CLI::App& app, Action& action) {
       ->check(CLI::ExistingPath);
   cmd->add_option("--out", args->out, "Calibrated config v1 (written whole or not at all)")
       ->required()
-      ->check(output_file_name());
+      ->check(output_file());
   cmd->add_option("--push-x", args->push_x, "guided: log of a push along the robot's x axis")
       ->check(CLI::ExistingPath);
   cmd->add_option("--push-y", args->push_y, "guided: log of a push along the robot's y axis")

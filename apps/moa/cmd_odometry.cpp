@@ -108,7 +108,7 @@ void add_odometry(CLI::App& app, Action& action) {
       ->check(CLI::ExistingPath);
   cmd->add_option("--out", args->out, "Output odometry.csv (written whole or not at all)")
       ->required()
-      ->check(output_file_name());
+      ->check(output_file());
   add_odometry_flags(cmd, args->flags);
   cmd->add_option("--faults", args->faults,
                   "oracle: the simulator's faults.csv (default: the log's own)")

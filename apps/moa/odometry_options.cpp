@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <limits>
 
 #include "moa/formats/error.hpp"
@@ -52,6 +53,19 @@ CLI::Validator output_file_name() {
       "");
 }
 
+CLI::Validator output_file() {
+  return CLI::Validator(
+      [](std::string& v) -> std::string {
+        if (std::string e = output_file_name()(v); !e.empty()) return e;
+        std::error_code ec;
+        if (v.back() == '/' || std::filesystem::is_directory(v, ec)) {
+          return "'" + v + "' is a directory: name the file to write";
+        }
+        return {};
+      },
+      "");
+}
+
 void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
   OdometryOptions& o = f.options;
   cmd->add_option("--estimator", f.estimator,
@@ -64,9 +78,20 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
       ->check(live ? CLI::IsMember({"ls", "sekimori", "consensus"})
                    : CLI::IsMember({"ls", "sekimori", "consensus", "wheels", "oracle"}))
       ->capture_default_str();
+  // Split by resolve_odometry_flags, not by CLI11's delimiter, which drops
+  // empty names (m1,,m3 would read as m1,m3).
   cmd->add_option("--sensors", f.sensors,
                   "The sensors the estimator may use, by config name (e.g. m1,m3); default all")
-      ->delimiter(',');
+      ->type_name("NAME[,NAME...]")
+      ->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            if (v.empty() || v.front() == ',' || v.back() == ',' ||
+                v.find(",,") != std::string::npos) {
+              return "an empty sensor name in '" + v + "'";
+            }
+            return {};
+          },
+          ""));
   cmd->add_option("--e-th", o.sekimori.e_th,
                   "sekimori: E_th of eq. (7), m^2, threshold on a pair's displacement residual "
                   "per epoch ((0.2 mm)^2 at 100 Hz; core/sekimori.hpp says why)")
@@ -91,9 +116,10 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
   cmd->add_option("--self-calibration", f.self_calibration_out,
                   "With --self-calibrate (implied): write the calibration to this CSV, "
                   "about once a second per sensor (t,sensor,scale_x,scale_y,yaw_offset as "
-                  "applied, then the filter's filter_scale_x,filter_scale_y,filter_yaw_offset)")
+                  "applied, then the filter's filter_scale_x,filter_scale_y,filter_yaw_offset and "
+                  "their standard deviations filter_sd_*)")
       ->type_name("FILE")
-      ->check(output_file_name());
+      ->check(output_file());
   cmd->add_option(
          "--diagnostics", f.diagnostics_out,
          "Write every source's status per epoch to this CSV (t,source,test_ratio,fused,"
@@ -101,7 +127,7 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
          "test statistic over its gate, whether the epoch's twist used it, and why not; the "
          "gyro's bias (rad/s) and scale after the epoch; docs/formats/log.md)")
       ->type_name("FILE")
-      ->check(output_file_name());
+      ->check(output_file());
   cmd->add_option("--self-calibration-gauge", f.self_calibration_gauge,
                   live ? "With --self-calibrate (implied): what fixes the common scale and yaw "
                          "of all sensors, which the redundancy cannot see: sensors (their "
@@ -180,7 +206,8 @@ std::vector<std::string> self_calibration_warnings(const OdometryOptions& o) {
 OdometryOptions resolve_odometry_flags(const OdometryFlags& f, const io::RobotConfig& config,
                                        const std::string& config_path) {
   OdometryOptions o = f.options;
-  o.max_row_interval = f.max_row_interval.value_or(std::min(o.max_row_interval, 60.0 / o.rate));
+  o.max_row_interval =
+      f.max_row_interval.value_or(OdometryOptions::default_max_row_interval(o.rate));
   o.consensus.motion_prior = !f.no_motion_prior;
   o.use_imu = !f.no_imu;
   o.self_calibration.enabled =
@@ -197,8 +224,16 @@ OdometryOptions resolve_odometry_flags(const OdometryFlags& f, const io::RobotCo
     o.initial = Pose2{{f.initial_pose[0], f.initial_pose[1]}, f.initial_pose[2]};
   }
   try {
-    return io::resolve_odometry_options(o, f.estimator, f.sensors, f.no_wheels, config,
-                                        config_path);
+    std::vector<std::string> sensors;
+    for (const std::string& names : f.sensors) {
+      for (std::size_t begin = 0;;) {
+        const std::size_t comma = names.find(',', begin);
+        sensors.push_back(names.substr(begin, comma - begin));
+        if (comma == std::string::npos) break;
+        begin = comma + 1;
+      }
+    }
+    return io::resolve_odometry_options(o, f.estimator, sensors, f.no_wheels, config, config_path);
   } catch (const io::OptionError& e) {
     throw io::Error(with_flags(e));
   }

@@ -27,10 +27,14 @@ extern const CLI::Validator kNonNegative;
 /// An output file or directory name: not "" (nothing would be written) nor
 /// an option taken for a file name (--self-calibration --quiet).
 CLI::Validator output_file_name();
+/// output_file_name() for an output that is one file: not a name ending in
+/// '/' nor an existing directory (their error was the system's "Not a
+/// directory" at the end of the run).
+CLI::Validator output_file();
 
 struct OdometryFlags {
   std::string estimator = "consensus";
-  std::vector<std::string> sensors;  ///< names; empty: all
+  std::vector<std::string> sensors;  ///< as given, each NAME[,NAME...]; empty: all
   std::vector<double> initial_pose;  ///< x, y, theta
   bool no_wheels = false;
   bool no_imu = false;

@@ -86,6 +86,9 @@ def assert_equals_cli(py, csv_path):
      {"fuse_camera": True, "camera_latency": 0.1, "ekf_scale": True}),
     ("faults-liftoff", "oracle", ["--max-row-interval", "0.04", "--max-gap", "10"],
      {"max_row_interval": 0.04, "max_gap": 10}),
+    # The default row interval follows the rate as the command's does (0.05 s
+    # would be 250 epochs at 5000 Hz, beyond the synchroniser's 61).
+    ("calibration", "consensus", ["--rate", "5000"], {"rate": 5000}),
 ])
 def test_odometry_equals_the_command(logs, tmp_path, scenario, estimator, flags, options):
     d = logs[scenario]

@@ -373,6 +373,7 @@ bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& 
       const auto i = static_cast<std::size_t>(selected_[static_cast<std::size_t>(k)]);
       calibration_[i] = c->applied(k);
       calibration_filter_[i] = c->calibration(k);
+      calibration_sd_[i] = c->sd(k);
       calibration_resets_[i] = c->resets(k);
     }
   }
@@ -434,6 +435,7 @@ void Odometry::process(const ArraySample& raw, StepSink sink) {
   if (options_.self_calibration.enabled) {
     step.calibration = &calibration_;
     step.calibration_filter = &calibration_filter_;
+    step.calibration_sd = &calibration_sd_;
     step.calibration_resets = &calibration_resets_;
   }
   if (options_.use_imu && gyro_seen_) {

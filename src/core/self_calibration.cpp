@@ -20,8 +20,8 @@ OptionCheck SelfCalibrationOptions::validate() const {
       .positive("prior_scale_sd", prior_scale_sd)
       .positive("prior_yaw_sd", prior_yaw_sd)
       .non_negative("relative_noise", relative_noise)
-      .non_negative("deadband", deadband)
-      .non_negative("isotropic_deadband", isotropic_deadband)
+      .open("apply_alpha", apply_alpha, 0.0, 1.0)
+      .non_negative("mount_position_sigma", mount_position_sigma)
       .open("gross_alpha", gross_alpha, 0.0, 1.0)
       .open("predictor_alpha", predictor_alpha, 0.0, 1.0)
       .open("runaway_scale", runaway_scale, 0.0, 1.0)
@@ -72,8 +72,15 @@ SelfCalibration::SelfCalibration(const SensorArray& array, SelfCalibrationOption
   // One-sided normal quantile from the chi-square of 1 dof: P(Z > z) = alpha
   // is P(Z^2 > z^2) = 2 alpha.
   runaway_z_ = static_cast<real>(std::sqrt(chi2_quantile(1.0 - 2.0 * options_.runaway_alpha, 1)));
+  apply_z_ = static_cast<real>(std::sqrt(chi2_quantile(1.0 - options_.apply_alpha, 1)));
   real r2 = 0.0;
-  for (int i = 0; i < n_; ++i) r2 += array[i].position.squaredNorm();
+  for (int i = 0; i < n_; ++i) {
+    r2 += array[i].position.squaredNorm();
+    // The mount position's bias, relative (header, "Applied"); a sensor
+    // nearer the centre than 1 cm (its own footprint) counts as 1 cm out.
+    mount_bias_[static_cast<std::size_t>(i)] =
+        options_.mount_position_sigma / std::max<real>(array[i].position.norm(), 0.01);
+  }
   radius_ = n_ > 0 ? std::sqrt(r2 / static_cast<real>(n_)) : 0.0;
   wheel_.p = Mat2::Identity() * (options_.prior_scale_sd * options_.prior_scale_sd);
 }
@@ -107,32 +114,41 @@ void SelfCalibration::renew(int i) {
   const real change = std::max({std::abs(s.theta.scale_x - s.renewed.scale_x),
                                 std::abs(s.theta.scale_y - s.renewed.scale_y),
                                 std::abs(s.theta.yaw_offset - s.renewed.yaw_offset)});
-  if (change < options_.apply_step) return;
+  // Renewed too when the gauge's applied part changed: the others'
+  // predictions take every correction to carry the same (Gc, Dc) (observe).
+  const SelfCalibrationEstimate common = applied_gauge();
+  const bool same_common = common.scale_x == s.renewed_common.scale_x &&
+                           common.scale_y == s.renewed_common.scale_y &&
+                           common.yaw_offset == s.renewed_common.yaw_offset;
+  if (change < options_.apply_step && same_common) return;
   s.renewed = s.theta;
-  // Within the deadband the configured value stands: the estimate's own
-  // errors (mount positions read as scale in rotation, and the direction of
-  // (s_x, s_y, delta) that a translation in one direction leaves open) would
-  // cost more. Those are mostly one axis against the other; a drift (dust)
-  // dims both axes alike, so the isotropic part g = sqrt(s_x s_y) has a
-  // narrower band: beyond it, with both axes inside the wide band, g stands
-  // for both. An axis beyond the wide band is plainly off: then both axes
-  // take their estimates. The bands judge the relative calibration theta /
-  // (G, D); the gauge's common part (G, D) has its own (with kSensors it is
-  // (1, 0), exactly).
+  s.renewed_common = common;
+  // Applied where it differs from the configuration (header, "Applied"):
+  // a component is applied when it is more than z sd of its error from the
+  // configured value, the error's variance P's plus the mount position's
+  // bias b^2 (b^2 / 4 on the isotropic part). The test judges the relative
+  // calibration theta / (G, D); the gauge's common part (G, D) has its own
+  // (applied_gauge; with kSensors it is (1, 0), exactly).
   const SelfCalibrationEstimate common_part = gauge();
   const real gs = common_part.scale_x, gy = common_part.yaw_offset;
   const SelfCalibrationEstimate rel{s.theta.scale_x / gs, s.theta.scale_y / gs,
                                     s.theta.yaw_offset - gy};
+  const real b2 =
+      mount_bias_[static_cast<std::size_t>(i)] * mount_bias_[static_cast<std::size_t>(i)];
+  const auto beyond = [this](real deviation, real variance) {
+    return std::abs(deviation) > apply_z_ * std::sqrt(std::max<real>(variance, 0.0));
+  };
   const real g = std::sqrt(rel.scale_x * rel.scale_y);
-  const bool off = std::abs(rel.scale_x - 1.0) > options_.deadband ||
-                   std::abs(rel.scale_y - 1.0) > options_.deadband;
-  const bool dimmed = std::abs(g - 1.0) > options_.isotropic_deadband;
-  s.corrected = off || dimmed || std::abs(rel.yaw_offset) > options_.deadband;
-  const SelfCalibrationEstimate common = applied_gauge();
+  // g - 1 ~ ((s_x - 1) + (s_y - 1)) / 2: variance (P_xx + P_yy + 2 P_xy) / 4.
+  const real var_g = 0.25 * (s.p(0, 0) + s.p(1, 1) + 2.0 * s.p(0, 1)) / (gs * gs);
+  const bool off = beyond(rel.scale_x - 1.0, s.p(0, 0) / (gs * gs) + b2) ||
+                   beyond(rel.scale_y - 1.0, s.p(1, 1) / (gs * gs) + b2);
+  const bool dimmed = beyond(g - 1.0, var_g + 0.25 * b2);
+  const bool turned = beyond(rel.yaw_offset, s.p(2, 2) + b2);
+  s.corrected = off || dimmed || turned;
   s.applied = {common.scale_x * (off ? rel.scale_x : (dimmed ? g : 1.0)),
                common.scale_y * (off ? rel.scale_y : (dimmed ? g : 1.0)),
-               common.yaw_offset +
-                   (off || std::abs(rel.yaw_offset) > options_.deadband ? rel.yaw_offset : 0.0)};
+               common.yaw_offset + (off || turned ? rel.yaw_offset : 0.0)};
   const SelfCalibrationEstimate& used = s.applied;
   // counts -> robot velocity (configured), into the configured sensor frame,
   // C^-1 = R(delta) diag(1/s), back to the robot frame and to counts.
@@ -497,9 +513,17 @@ void SelfCalibration::fix_gauge() {
 }
 
 SelfCalibrationEstimate SelfCalibration::applied_gauge() const {
+  // The same test on the wheels' (G, D): with k = a + i b near (1, 0),
+  // G - 1 ~ a - 1 and D ~ -b / a, variances P_aa and P_bb / a^2.
   const SelfCalibrationEstimate g = gauge();
-  const real scale = std::abs(g.scale_x - 1.0) > options_.isotropic_deadband ? g.scale_x : 1.0;
-  return {scale, scale, std::abs(g.yaw_offset) > options_.deadband ? g.yaw_offset : 0.0};
+  if (options_.gauge != SelfCalibrationGauge::kWheels || wheel_.updates == 0) return g;
+  const real a = wheel_.k.x();
+  const real z = apply_z_;
+  const bool scaled =
+      std::abs(g.scale_x - 1.0) > z * std::sqrt(std::max<real>(wheel_.p(0, 0), 0.0));
+  const bool turned =
+      std::abs(g.yaw_offset) > z * std::sqrt(std::max<real>(wheel_.p(1, 1), 0.0)) / a;
+  return {scaled ? g.scale_x : 1.0, scaled ? g.scale_y : 1.0, turned ? g.yaw_offset : 0.0};
 }
 
 SelfCalibrationEstimate SelfCalibration::gauge() const {

@@ -43,7 +43,7 @@ std::vector<std::string> odometry_flags(const OdometryOptions& o, const io::Robo
       o.sekimori.e_th != d.sekimori.e_th || o.sekimori.r_th != d.sekimori.r_th ||
       o.consensus.alpha != d.consensus.alpha ||
       o.self_calibration.scale_walk != d.self_calibration.scale_walk ||
-      o.self_calibration.deadband != d.self_calibration.deadband ||
+      o.self_calibration.apply_alpha != d.self_calibration.apply_alpha ||
       o.self_calibration.runaway_scale != d.self_calibration.runaway_scale ||
       o.self_calibration.runaway_yaw != d.self_calibration.runaway_yaw ||
       o.self_calibration.runaway_alpha != d.self_calibration.runaway_alpha) {

@@ -16,14 +16,17 @@ struct SelfCalibrationCsvWriter::Impl {
        double every)
       : file(path), names(std::move(sensor_names)), selected(mask), period(every) {
     file.stream()
-        << "t,sensor,scale_x,scale_y,yaw_offset,filter_scale_x,filter_scale_y,filter_yaw_offset\n";
+        << "t,sensor,scale_x,scale_y,yaw_offset,filter_scale_x,filter_scale_y,filter_yaw_offset,"
+           "filter_sd_scale_x,filter_sd_scale_y,filter_sd_yaw_offset\n";
   }
   void rows(double t) {
     for (std::size_t i = 0; i < names.size() && i < kMaxSensors; ++i) {
       if (!contains(selected, static_cast<int>(i))) continue;
       const SelfCalibrationEstimate &a = last[i], &f = last_filter[i];
-      file.stream() << fmt::format("{},{},{},{},{},{},{},{}\n", t, names[i], a.scale_x, a.scale_y,
-                                   a.yaw_offset, f.scale_x, f.scale_y, f.yaw_offset);
+      const Vec3& sd = last_sd[i];
+      file.stream() << fmt::format("{},{},{},{},{},{},{},{},{},{},{}\n", t, names[i], a.scale_x,
+                                   a.scale_y, a.yaw_offset, f.scale_x, f.scale_y, f.yaw_offset,
+                                   sd.x(), sd.y(), sd.z());
     }
     written = t;
   }
@@ -35,6 +38,7 @@ struct SelfCalibrationCsvWriter::Impl {
   std::optional<double> first, written;
   double last_t = 0.0;
   std::array<SelfCalibrationEstimate, kMaxSensors> last{}, last_filter{};  ///< applied, filter's
+  std::array<Vec3, kMaxSensors> last_sd = zeros<Vec3>();                   ///< the filter's sds
   bool any = false;
 };
 
@@ -89,6 +93,7 @@ void SelfCalibrationCsvWriter::write(const OdometryStep& step) {
   if (!m.first) m.first = t;
   m.last = *step.calibration;
   m.last_filter = step.calibration_filter != nullptr ? *step.calibration_filter : m.last;
+  if (step.calibration_sd != nullptr) m.last_sd = *step.calibration_sd;
   m.last_t = t;
   m.any = true;
   const double due = m.written ? std::floor((*m.written - *m.first) / m.period + 1e-9) + 1.0 : 0.0;

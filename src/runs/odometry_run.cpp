@@ -193,6 +193,12 @@ class FaultsReader {
     }
     return static_cast<std::uint8_t>(csv_.integer(faults_, 0, 255));
   }
+  /// After mice.csv's last row: faults.csv must end there too.
+  void finish() {
+    if (csv_.next()) {
+      csv_.fail("has rows past mice.csv's end (one row per mice.csv row: another log's?)");
+    }
+  }
 
  private:
   CsvReader csv_;
@@ -273,6 +279,7 @@ class MiceReaderThread {
           batch = nullptr;
         }
       }
+      if (faults_ != nullptr) faults_->finish();
       if (batch != nullptr) queue_.submit();
       queue_.close();
     } catch (...) {

@@ -468,7 +468,8 @@ std::string render_report(const ReportModel& m) {
     page +=
         "<p>Each sensor's scale estimated online (<code>moa odometry --self-calibration</code>, "
         "docs/self-calibration.md), relative to its configured resolution: 1 as configured; "
-        "x axis solid, y axis dashed. An estimate within the deadband of 1 is not applied.</p>\n";
+        "x axis solid, y axis dashed. An estimate is applied only where it differs from 1 by more "
+        "than 3.29 of its standard deviations (docs/self-calibration.md, \"Applied\").</p>\n";
     page += chart("chart-self-calibration", "wide") + std::string(kHint) + "</section>\n";
   }
 

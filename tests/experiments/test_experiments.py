@@ -78,7 +78,8 @@ class Reproduction(unittest.TestCase):
         with open(csv_path) as f:
             lines = f.read().splitlines()
         self.assertEqual(lines[0], "t,sensor,scale_x,scale_y,yaw_offset,"
-                         "filter_scale_x,filter_scale_y,filter_yaw_offset")
+                         "filter_scale_x,filter_scale_y,filter_yaw_offset,"
+                         "filter_sd_scale_x,filter_sd_scale_y,filter_sd_yaw_offset")
         rows = [line.split(",") for line in lines[1:] if line.split(",")[1] == scale["sensor"]]
         # The experiment reports the filter's estimates (the last three columns).
         self.assertEqual([float(x[0]) for x in rows], series["t_s"], scenario)

@@ -3,6 +3,9 @@
 # each for SECONDS (default 60), JOBS at a time (default 2), from its seed
 # corpus tests/fuzz/<target>/; new inputs go to build-fuzz/corpus/<target>/,
 # findings to build-fuzz/findings/. Exits non-zero if any target found one.
+# FUZZ_BUILD_DIR names another build directory; one already configured with
+# MOA_BUILD_FUZZERS=ON (CI's sanitizer build) is used as it is, not
+# configured again.
 #   tests/fuzz/run.sh [SECONDS [TARGET...]]
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -16,9 +19,11 @@ if [ ${#targets[@]} -eq 0 ]; then
            fuzz_scenario fuzz_evemu fuzz_serial fuzz_evdev fuzz_stream_lines)
 fi
 
-CC=clang CXX=clang++ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DMOA_BUILD_FUZZERS=ON -DMOA_BUILD_TESTS=OFF -DMOA_BUILD_BENCHMARKS=OFF \
-  -DMOA_BUILD_EXAMPLES=OFF -DMOA_BUILD_FIRMWARE=OFF -DMOA_BUILD_EMBEDDED=OFF >/dev/null
+if ! grep -qs '^MOA_BUILD_FUZZERS:BOOL=ON$' "$build/CMakeCache.txt"; then
+  CC=clang CXX=clang++ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DMOA_BUILD_FUZZERS=ON -DMOA_BUILD_TESTS=OFF -DMOA_BUILD_BENCHMARKS=OFF \
+    -DMOA_BUILD_EXAMPLES=OFF -DMOA_BUILD_FIRMWARE=OFF -DMOA_BUILD_EMBEDDED=OFF >/dev/null
+fi
 cmake --build "$build" -j "$(nproc)" --target "${targets[@]}"
 
 run_one() {

@@ -31,6 +31,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <optional>
@@ -82,10 +83,12 @@ struct OdometryOptions {
   /// The sensors the estimator may use (bit i: sensor i); the others are
   /// reported as excluded, reason "unselected".
   SensorMask sensors = ~SensorMask{0};
-  double rate = 100.0;             ///< Hz, epochs (1 / SynchroniserOptions::period)
-  double max_row_interval = 0.05;  ///< s, longest interval one mice row covers
-  double max_gap = 3600.0;         ///< s, longest silence of all sensors
-  bool use_wheels = true;          ///< wheel rows fed are used (fallback, plausibility)
+  double rate = 100.0;  ///< Hz, epochs (1 / SynchroniserOptions::period)
+  /// s, longest interval one mice row covers; callers that leave it to the
+  /// user default it to default_max_row_interval(rate)
+  double max_row_interval = 0.05;
+  double max_gap = 3600.0;  ///< s, longest silence of all sensors
+  bool use_wheels = true;   ///< wheel rows fed are used (fallback, plausibility)
   /// gyro rows fed are used (consensus: consensus.gyro is the gyro's model)
   bool use_imu = true;
   /// world_T_robot at the first epoch's start. Unset: identity, or with
@@ -116,6 +119,11 @@ struct OdometryOptions {
   /// Ceres' Options::IsValid (options_check.hpp). Every nested struct
   /// included.
   OptionCheck validate() const;
+  /// 0.05 s, or 60 epochs where that is shorter (a row may span at most
+  /// kMaxPendingEpochs - 3 = 61 periods: at 5000 Hz 0.05 s would be 250).
+  static double default_max_row_interval(double rate) {
+    return std::min<double>(0.05, 60.0 / rate);
+  }
   SynchroniserOptions synchroniser() const { return {1.0 / rate, max_row_interval, max_gap}; }
 };
 
@@ -148,9 +156,13 @@ struct OdometryStep {
   /// With self_calibration.enabled, by configured index (1, 1, 0 for a
   /// sensor not selected), else null: the calibration applied to each
   /// sensor's counts (SelfCalibration::applied), and the filter's estimate
-  /// behind it (SelfCalibration::calibration; equal outside the deadbands).
+  /// behind it (SelfCalibration::calibration; equal where it is applied).
   const std::array<SelfCalibrationEstimate, kMaxSensors>* calibration = nullptr;
   const std::array<SelfCalibrationEstimate, kMaxSensors>* calibration_filter = nullptr;
+  /// With self_calibration.enabled, by configured index: the filter's
+  /// standard deviations of (scale_x, scale_y, yaw_offset rad)
+  /// (SelfCalibration::sd), else null.
+  const std::array<Vec3, kMaxSensors>* calibration_sd = nullptr;
   /// With self_calibration.enabled, by configured index: how many times
   /// each sensor's calibration was reset so far (SelfCalibration::resets:
   /// its blocks failed the gate at more than the false-alarm rate and agreed
@@ -295,6 +307,7 @@ class Odometry {
   std::array<SelfCalibrationEstimate, kMaxSensors>
       calibration_{};  ///< applied, by configured index
   std::array<SelfCalibrationEstimate, kMaxSensors> calibration_filter_{};  ///< the filter's
+  std::array<Vec3, kMaxSensors> calibration_sd_ = zeros<Vec3>();           ///< its sds
   std::array<long, kMaxSensors> calibration_resets_{};  ///< SelfCalibration::resets
 };
 

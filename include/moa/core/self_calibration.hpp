@@ -100,7 +100,7 @@
 //   the gated update's chi-square at gross_alpha (3 degrees of freedom; the
 //   wheels slipped grossly). The measurement w of each
 //   sensor's update (above) is predicted from the others' corrections, which
-//   carry the applied common part (Gc, Dc) (see Deadband), and is taken into
+//   carry the applied common part (Gc, Dc) (see Applied), and is taken into
 //   theta's gauge: times (Gc / G) R(D - Dc). The wheels' bias is the
 //   gauge's: their systematic slip becomes the array's scale, hence not the
 //   default (docs/self-calibration.md).
@@ -119,22 +119,26 @@
 // off, a sensor turned by 30 degrees) is found by the reset above; then it
 // runs away as above.
 //
-// Deadband: an estimate is applied only once it is deadband (2 %, 0.02 rad)
-// away from the configured value, or, for the scales, once their isotropic
-// part g = sqrt(s_x s_y) is isotropic_deadband (1.25 %) away from 1 (then g
-// is applied to both axes); once an axis is beyond the wide band both axes
-// take their own estimates (a sensor plainly off). On a path that drives
-// forward only, translation leaves one direction of (s_x, s_y, delta) to
-// rotation, where a mount position error reads as tangential scale (0.14 mm
-// at 0.1 m: 0.14 %), which the three-parameter model cannot tell apart: the
-// estimates of good sensors scatter, mostly one axis against the other,
-// while a drift (dust) dims both alike; hence the narrower isotropic band
-// (docs/self-calibration.md, "Deadband", with the measurements).
-// Within the bands the counts are used as configured, so a clean log gives
-// the same odometry. The bands judge the relative calibration theta_i / (G,
-// D); the gauge's common part is applied apart, G once it is
-// isotropic_deadband from 1 and D once it is deadband from 0 (with kSensors
-// it is (1, 0): the bands judge theta_i).
+// Applied, a test: the configured value stands unless the estimate differs
+// from it by more than z = Phi^-1(1 - apply_alpha / 2) standard deviations
+// of its error (a two-sided test at false-alarm rate apply_alpha per
+// component: a sensor as configured is corrected with that probability).
+// The error's variance is P's plus a bias the three-parameter model cannot
+// tell from a calibration: a mount position error e (sd
+// mount_position_sigma) at r from the robot's origin reads, in rotation, as
+// a scale e_r / r on the tangential axis and a yaw e_t / r. So with
+// b = mount_position_sigma / r (r at least 1 cm) a component c is applied
+// when |c - c_0| > z sqrt(P_cc + b^2), c_0 the configured 1 or 0. Its
+// isotropic part g = sqrt(s_x s_y) (g - 1 ~ ((s_x - 1) + (s_y - 1)) / 2,
+// variance (P_xx + P_yy + 2 P_xy) / 4 + b^2 / 4: the tangential axis is one
+// of two, and a drift, dust, dims both alike) is applied to both axes when
+// it alone passes; once an axis passes, both axes take their own estimates
+// (a sensor plainly off) and its yaw with them: a translation in one
+// direction pins two combinations of (s_x, s_y, delta), so scales applied
+// without the yaw they were fitted with are off along the path. The test
+// judges the relative calibration theta_i / (G, D); the gauge's common part
+// is applied apart by the same test on the wheels' (a, b) (with kSensors it
+// is (1, 0)). docs/self-calibration.md ("Applied") has the measurements.
 //
 // Fixed-size state, no allocation: runs in the heap-free core.
 #pragma once
@@ -180,13 +184,13 @@ struct SelfCalibrationOptions {
   real prior_scale_sd = 0.05;   ///< sd of the initial scale; the covariance cap
   real prior_yaw_sd = 0.02;     ///< rad, sd of the initial yaw offset; the cap
   real relative_noise = 0.003;  ///< sd of a block's displacement, fraction of it
-  /// An estimate within this of 1 (scale) or 0 (yaw offset, rad) is not
-  /// applied: the configured value stands (docs/self-calibration.md).
-  real deadband = 0.02;
-  /// An isotropic part sqrt(s_x s_y) further than this from 1 is applied to
-  /// both axes when each is within `deadband` (dust dims both axes
-  /// alike; the good sensors' scatter is mostly one axis against the other).
-  real isotropic_deadband = 0.0125;
+  /// False-alarm rate (two-sided, per component) of the test that applies
+  /// an estimate: a sensor as configured has its correction applied with
+  /// this probability (header, "Applied").
+  real apply_alpha = 0.001;
+  /// m, sd of a sensor's mount position error, which the filter does not
+  /// model: read in rotation as a scale and a yaw (header, "Applied").
+  real mount_position_sigma = 0.0003;
   /// False-alarm rate of the test that calls a block gross (not used): its
   /// innovation's chi-square against the filter's prediction.
   real gross_alpha = 0.001;
@@ -264,8 +268,8 @@ class SelfCalibration {
   const SelfCalibrationEstimate& calibration(int i) const {
     return state_[static_cast<std::size_t>(i)].theta;
   }
-  /// What is applied to sensor i's counts: the estimate where it is outside
-  /// the deadbands, else as configured (1, 1, 0).
+  /// What is applied to sensor i's counts: the estimate where it passes
+  /// the test that applies it (header, "Applied"), else as configured (1, 1, 0).
   const SelfCalibrationEstimate& applied(int i) const {
     return state_[static_cast<std::size_t>(i)].applied;
   }
@@ -306,8 +310,9 @@ class SelfCalibration {
   };
   struct SensorState {
     SelfCalibrationEstimate theta;
-    SelfCalibrationEstimate renewed;  ///< theta when the correction was last renewed
-    SelfCalibrationEstimate applied;  ///< theta through the deadbands: in the correction
+    SelfCalibrationEstimate renewed;         ///< theta when the correction was last renewed
+    SelfCalibrationEstimate renewed_common;  ///< applied_gauge() then
+    SelfCalibrationEstimate applied;  ///< theta through the test that applies it: in the correction
     Mat3 p = Mat3::Zero();
     Vec2 sum_meas{0.0, 0.0}, sum_pred{0.0, 0.0};  ///< m, configured sensor frame
     real sum_var = 0.0;                           ///< m^2, prediction variance
@@ -351,7 +356,7 @@ class SelfCalibration {
   void renew(int i);
   void observe_wheels(const ArraySample& raw, SensorMask used, const Twist2& wheels);
   void update_gauge(double t);
-  /// gauge() through its bands (isotropic_deadband, deadband): what the
+  /// gauge() through the same test (on the wheels' P): what the
   /// corrections apply of it.
   SelfCalibrationEstimate applied_gauge() const;
 
@@ -364,6 +369,8 @@ class SelfCalibration {
   std::array<real, kMaxSensors> metres_per_count_{};
   std::array<real, 2 * kMaxSensors> chi2_gate_{};  ///< by degrees of freedom
   real runaway_z_ = 0.0;                           ///< Phi^-1(1 - runaway_alpha), sd
+  real apply_z_ = 0.0;                             ///< Phi^-1(1 - apply_alpha / 2), sd
+  std::array<real, kMaxSensors> mount_bias_{};     ///< mount_position_sigma / r_i
   real block_gate_ = 0.0;                          ///< q(1 - gross_alpha, 2): a sensor's block
   real wheel_gate_ = 0.0;  ///< q(1 - gross_alpha, 3): a block of the wheels' gauge
   real llr_rejected_ = 0.0, llr_fused_ = 0.0;  ///< the rejections' CUSUM steps

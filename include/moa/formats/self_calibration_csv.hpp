@@ -1,7 +1,9 @@
 // The self-calibration's estimates over time (docs/formats/log.md,
 // self-calibration.csv): `t,sensor,scale_x,scale_y,yaw_offset` (applied to
 // the counts) `,filter_scale_x,filter_scale_y,filter_yaw_offset` (the
-// filter's estimate; equal outside the deadbands), one row per
+// filter's estimate; equal where it is applied)
+// `,filter_sd_scale_x,filter_sd_scale_y,filter_sd_yaw_offset` (its standard
+// deviations; the reader ignores them), one row per
 // selected sensor about once a second (the first epoch at or after each
 // whole second since the first epoch, and the last epoch), relative to the
 // config (1, 1, 0: as configured; yaw_offset in rad).
