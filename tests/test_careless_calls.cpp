@@ -111,6 +111,18 @@ TEST(CarelessCalls, AnEmptyOutIsAUsageError) {
   }
 }
 
+// A log directory without mice.csv: a file that cannot be opened (exit 3,
+// docs/formats/cli.md), named.
+TEST(CarelessCalls, ALogWithoutMiceCsvIsAFileThatCannotBeOpened) {
+  const fs::path dir = test::scratch_dir("careless-no-mice");
+  fs::create_directories(dir / "log");
+  const auto r = test::run_moa("odometry --config " + kExample + "/robot.yaml --log " +
+                               (dir / "log").string() + " --out " + (dir / "o.csv").string());
+  EXPECT_EQ(r.exit_code, cli::kExitIo) << r.err;
+  EXPECT_THAT(r.err, HasSubstr((dir / "log" / "mice.csv").string() + ": no such file"));
+  EXPECT_FALSE(fs::exists(dir / "o.csv"));
+}
+
 // An empty name in --sensors (a doubled or trailing comma) is a usage
 // error, not dropped; "a,b" and "a b" select the same sensors.
 TEST(CarelessCalls, AnEmptySensorNameIsAUsageError) {

@@ -449,6 +449,13 @@ TEST(Live, BadArgumentsAreRejected) {
   r = run_moa("live" + config + " --serial " + (scene.dir / "ttyNONE").string());
   EXPECT_EQ(r.err, "moa live: error: " + (scene.dir / "ttyNONE").string() +
                        ": cannot open (No such file or directory)\n");
+  EXPECT_EQ(r.exit_code, 3);  // a file that cannot be opened (docs/formats/cli.md)
+  r = run_moa("live" + config + " --mouse m1=" + (scene.dir / "event99").string());
+  EXPECT_NE(
+      r.err.find((scene.dir / "event99").string() + ": cannot open (No such file or directory)"),
+      std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.exit_code, 3);
   r = run_moa("live" + config + " --serial /dev/null --mouse m1=/dev/null");
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("excludes"), std::string::npos) << r.err;

@@ -126,7 +126,7 @@ LogFiles resolve_log(const fs::path& log) {
                       : fs::is_directory(status) ? "directory"
                                                  : "device or socket"));
     }
-    throw Error(
+    throw IoError(
         fmt::format("{}: no such file (a log directory holds mice.csv)", files.mice.string()));
   }
   const auto optional = [&](const char* name) -> std::optional<fs::path> {

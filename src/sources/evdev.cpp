@@ -130,7 +130,7 @@ Opened open_device(const EvdevDevice& spec, const EvdevOptions& options) {
   Fd fd(::open(spec.path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC));
   if (fd.get() < 0) {
     const int error = errno;
-    throw Error(
+    throw IoError(
         fmt::format("{}: cannot open ({}){}", path, errno_text(error),
                     error == EACCES ? "; see docs/hardware.md (group 'input', udev rule)" : ""));
   }

@@ -460,8 +460,8 @@ SerialReader::SerialReader(const std::filesystem::path& device, const RobotConfi
   impl.fd = ::open(device.c_str(), access | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
   if (impl.fd < 0) {
     const int error = errno;
-    throw Error(fmt::format("{}: cannot open ({}){}", impl.name, std::strerror(error),
-                            error == EACCES ? "; see docs/hardware.md (group 'dialout')" : ""));
+    throw IoError(fmt::format("{}: cannot open ({}){}", impl.name, std::strerror(error),
+                              error == EACCES ? "; see docs/hardware.md (group 'dialout')" : ""));
   }
   if (options.configure_port) set_up_port(impl.fd, impl.name, options.baud);
 }
