@@ -10,6 +10,16 @@
 
 namespace moa {
 
+namespace {
+
+/// The test that applies an estimate (header, "Applied"): |deviation| > z
+/// sqrt(variance), z = Phi^-1(1 - apply_alpha / 2).
+bool significant(real z, real deviation, real variance) {
+  return std::abs(deviation) > z * std::sqrt(std::max<real>(variance, 0.0));
+}
+
+}  // namespace
+
 OptionCheck SelfCalibrationOptions::validate() const {
   return OptionsCheck()
       .require(is_named(gauge), "gauge", "sensors (0) or wheels (1)", static_cast<double>(gauge))
@@ -135,16 +145,13 @@ void SelfCalibration::renew(int i) {
                                     s.theta.yaw_offset - gy};
   const real b2 =
       mount_bias_[static_cast<std::size_t>(i)] * mount_bias_[static_cast<std::size_t>(i)];
-  const auto beyond = [this](real deviation, real variance) {
-    return std::abs(deviation) > apply_z_ * std::sqrt(std::max<real>(variance, 0.0));
-  };
   const real g = std::sqrt(rel.scale_x * rel.scale_y);
   // g - 1 ~ ((s_x - 1) + (s_y - 1)) / 2: variance (P_xx + P_yy + 2 P_xy) / 4.
   const real var_g = 0.25 * (s.p(0, 0) + s.p(1, 1) + 2.0 * s.p(0, 1)) / (gs * gs);
-  const bool off = beyond(rel.scale_x - 1.0, s.p(0, 0) / (gs * gs) + b2) ||
-                   beyond(rel.scale_y - 1.0, s.p(1, 1) / (gs * gs) + b2);
-  const bool dimmed = beyond(g - 1.0, var_g + 0.25 * b2);
-  const bool turned = beyond(rel.yaw_offset, s.p(2, 2) + b2);
+  const bool off = significant(apply_z_, rel.scale_x - 1.0, s.p(0, 0) / (gs * gs) + b2) ||
+                   significant(apply_z_, rel.scale_y - 1.0, s.p(1, 1) / (gs * gs) + b2);
+  const bool dimmed = significant(apply_z_, g - 1.0, var_g + 0.25 * b2);
+  const bool turned = significant(apply_z_, rel.yaw_offset, s.p(2, 2) + b2);
   s.corrected = off || dimmed || turned;
   s.applied = {common.scale_x * (off ? rel.scale_x : (dimmed ? g : 1.0)),
                common.scale_y * (off ? rel.scale_y : (dimmed ? g : 1.0)),
@@ -518,11 +525,8 @@ SelfCalibrationEstimate SelfCalibration::applied_gauge() const {
   const SelfCalibrationEstimate g = gauge();
   if (options_.gauge != SelfCalibrationGauge::kWheels || wheel_.updates == 0) return g;
   const real a = wheel_.k.x();
-  const real z = apply_z_;
-  const bool scaled =
-      std::abs(g.scale_x - 1.0) > z * std::sqrt(std::max<real>(wheel_.p(0, 0), 0.0));
-  const bool turned =
-      std::abs(g.yaw_offset) > z * std::sqrt(std::max<real>(wheel_.p(1, 1), 0.0)) / a;
+  const bool scaled = significant(apply_z_, g.scale_x - 1.0, wheel_.p(0, 0));
+  const bool turned = significant(apply_z_, g.yaw_offset, wheel_.p(1, 1) / (a * a));
   return {scaled ? g.scale_x : 1.0, scaled ? g.scale_y : 1.0, turned ? g.yaw_offset : 0.0};
 }
 
