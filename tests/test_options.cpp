@@ -189,7 +189,7 @@ TEST(OdometryOptions, EveryFieldIsCheckedNamingPathBoundAndValue) {
       {"self_calibration.apply_alpha", [](auto& o) { o.self_calibration.apply_alpha = 0; },
        "must be in (0, 1), is 0"},
       {"self_calibration.mount_position_sigma",
-       [&](auto& o) { o.self_calibration.mount_position_sigma = inf; }, finite_inf},
+       [&](auto& o) { o.self_calibration.mount_position_sigma = nan; }, finite_nan},
       {"self_calibration.gross_alpha", [](auto& o) { o.self_calibration.gross_alpha = 1; },
        "must be in (0, 1), is 1"},
       {"self_calibration.predictor_alpha", [](auto& o) { o.self_calibration.predictor_alpha = 1; },
@@ -249,6 +249,16 @@ TEST(OdometryOptions, BoundsAreInclusiveWhereTheyAreStatedSo) {
               o.ekf.estimate_scale = true;
             }),
             "");
+}
+
+// The self-calibration's apply test: NaN in its rate is refused by name
+// (mount_position_sigma's NaN has its row in the table above).
+TEST(OdometryOptions, ANaNApplyAlphaIsRefusedByName) {
+  OdometryOptions o;
+  o.self_calibration.apply_alpha = std::numeric_limits<double>::quiet_NaN();
+  const std::string m = message(o.validate());
+  EXPECT_EQ(m.rfind("self_calibration.apply_alpha: ", 0), 0u) << m;
+  EXPECT_NE(m.find("nan"), std::string::npos) << m;
 }
 
 TEST(OptionsCheck, ANestedStructNamesItsFieldsRelativeToItself) {
