@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -658,6 +659,45 @@ TEST(Live, TheStreamsFeedTheirKindsNotTheReplayedLog) {
       << r.out;
   EXPECT_EQ(data_lines(record / "wheels.csv"), 20u);
   EXPECT_EQ(data_lines(record / "imu.csv"), 20u);
+  const fs::path replay = dir / "replay.csv";
+  const auto rr = run_moa("odometry --config " + (record / "robot.yaml").string() + " --log " +
+                          record.string() + " --quiet --out " + replay.string());
+  ASSERT_EQ(rr.exit_code, 0) << rr.err;
+  EXPECT_EQ(read_text(replay), read_text(live));
+  if (!HasFailure()) fs::remove_all(dir);
+}
+
+// A stamped line that arrives after the mice row of its time was fed is
+// late: it is fed at once and recorded where it was fed, so the record
+// still replays to the same poses. A FIFO whose writer sends a wheel row
+// stamped 0.0001 s some 0.4 s of wall time (4 s of log at --speed 10)
+// after moa opened it.
+TEST(Live, ALateStreamLineIsRecordedWhereItWasFed) {
+  const fs::path dir = scratch_dir("live-late-line");
+  const fs::path log = dir / "log";
+  ASSERT_EQ(run_moa("simulate --scenario gyro-compact --seed 2 --out " + log.string()).exit_code,
+            0);
+  const fs::path fifo = dir / "streams";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  std::thread writer([&] {
+    std::ofstream out(fifo);  // blocks until moa opens it
+    std::this_thread::sleep_for(400ms);
+    out << "wheels,0.0001,0.1,0,0\n" << std::flush;
+  });
+  const fs::path live = dir / "live.csv", record = dir / "rec";
+  const auto r = run_moa("live --config " + (log / "robot.yaml").string() + " --replay " +
+                         log.string() + " --speed 10 --streams " + fifo.string() + " --record " +
+                         record.string() + " --out " + live.string());
+  writer.join();
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in(record / "wheels.csv");
+  std::string line;
+  std::vector<double> t;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line[0] != '#' && line[0] != 't') t.push_back(std::stod(line));
+  }
+  ASSERT_EQ(t.size(), 1u);
+  EXPECT_GT(t[0], 1.0);  // raised from 0.0001 to where it was fed
   const fs::path replay = dir / "replay.csv";
   const auto rr = run_moa("odometry --config " + (record / "robot.yaml").string() + " --log " +
                           record.string() + " --quiet --out " + replay.string());

@@ -42,7 +42,7 @@ OptionCheck SelfCalibrationOptions::validate() const {
       .positive("reset_scale_sd", reset_scale_sd)
       .positive("reset_yaw_sd", reset_yaw_sd)
       .positive("settle_time", settle_time)
-      .positive("settle_threshold", settle_threshold)
+      .open("hold_alpha", hold_alpha, 0.0, 1.0)
       .non_negative("apply_step", apply_step)
       .at_least("repeat_run", repeat_run, 2)
       .non_negative("gauge_walk", gauge_walk)
@@ -83,6 +83,7 @@ SelfCalibration::SelfCalibration(const SensorArray& array, SelfCalibrationOption
   // is P(Z^2 > z^2) = 2 alpha.
   runaway_z_ = static_cast<real>(std::sqrt(chi2_quantile(1.0 - 2.0 * options_.runaway_alpha, 1)));
   apply_z_ = static_cast<real>(std::sqrt(chi2_quantile(1.0 - options_.apply_alpha, 1)));
+  hold_z_ = static_cast<real>(std::sqrt(chi2_quantile(1.0 - options_.hold_alpha, 1)));
   real r2 = 0.0;
   for (int i = 0; i < n_; ++i) {
     r2 += array[i].position.squaredNorm();
@@ -393,6 +394,7 @@ void SelfCalibration::update(int i, double t) {
   // persists as another calibration (the reset below).
   Vec3 x(s.theta.scale_x, s.theta.scale_y, s.theta.yaw_offset);
   const Mat2 noise = var * Mat2::Identity();
+  Vec3 predicted = s.p.diagonal();  // theta's variance before the update
   bool fused = gated_update<3, 2>(x, s.p, r, hj, noise, block_gate_).fused;
   // The rejections' CUSUM (header, "Reset"): blocks rejected at more than
   // the test's false-alarm rate say the calibration is not this one. While
@@ -406,30 +408,31 @@ void SelfCalibration::update(int i, double t) {
   }
   if (!fused) {
     if (!(s.rejections > reset_h_ && reset(s))) return;
+    predicted = s.p.diagonal();
     if (!gated_update<3, 2>(x, s.p, r, hj, noise, block_gate_).fused) return;
   }
-  s.theta = {x(0), x(1), x(2)};
   s.p = 0.5 * (s.p + s.p.transpose()).eval();
   ++s.updates;
-  // Settling: theta against its own exponential average over settle_time
-  // (lagged <- lagged + (theta - lagged) min(1, elapsed / settle_time)).
-  // A ramp of rate r per second leaves them r settle_time apart (0.1 % on
-  // faults-cruise); a step, or an estimate walking to a calibration far off,
-  // moves theta several per cent within a second.
-  // Judged on the relative calibration theta / (G, D): a change of the
-  // wheels' gauge moves every sensor alike and is not a sensor's change.
-  const SelfCalibrationEstimate common = gauge();
-  const SelfCalibrationEstimate rel{s.theta.scale_x / common.scale_x,
-                                    s.theta.scale_y / common.scale_y,
-                                    s.theta.yaw_offset - common.yaw_offset};
+  // The hold (docs/math.md, "The hold"): d, theta's own steps (this
+  // update's x - theta, not the gauge's common moves) forgotten over
+  // settle_time, d <- (1 - a)(d + step), a = min(1, elapsed / settle_time):
+  // theta less its exponential average. While the filter's model holds (a
+  // calibration that walks as scale_walk and yaw_walk say), theta is a
+  // martingale: a step's variance is what the update takes off P's
+  // diagonal, its prediction's less its posterior's (the walk since the
+  // last update and what the block taught), so d's variance is v <- (1 -
+  // a)^2 (v + P_pred - P_post). A scale beyond hold_z_ sqrt(v) holds the
+  // sensor; below half of that, it is released. The yaw is not tested: its
+  // covariance is overconfident (rms z 1.2-1.5 against the simulator's
+  // truth), so its steps are larger than v says and a sound sensor would be
+  // held far more often than hold_alpha (docs/self-calibration.md).
   const real a = std::min<real>(1.0, elapsed / options_.settle_time);
-  s.lagged.scale_x += a * (rel.scale_x - s.lagged.scale_x);
-  s.lagged.scale_y += a * (rel.scale_y - s.lagged.scale_y);
-  s.lagged.yaw_offset += a * (rel.yaw_offset - s.lagged.yaw_offset);
-  const real apart =
-      std::max({std::abs(rel.scale_x - s.lagged.scale_x), std::abs(rel.scale_y - s.lagged.scale_y),
-                std::abs(rel.yaw_offset - s.lagged.yaw_offset)});
-  s.settling = apart > (s.settling ? 0.5 : 1.0) * options_.settle_threshold;
+  const Vec3 step = x - Vec3(s.theta.scale_x, s.theta.scale_y, s.theta.yaw_offset);
+  s.moved = (1.0 - a) * (s.moved + step);
+  s.moved_var = (1.0 - a) * (1.0 - a) * (s.moved_var + (predicted - s.p.diagonal()).cwiseMax(0.0));
+  const real hold = (s.settling ? 0.5 : 1.0) * hold_z_;
+  s.settling = (s.moved.cwiseAbs2() - hold * hold * s.moved_var).head<2>().maxCoeff() > 0.0;
+  s.theta = {x(0), x(1), x(2)};
   fix_gauge();
   for (int j = 0; j < n_; ++j) {
     SensorState& o = state_[static_cast<std::size_t>(j)];

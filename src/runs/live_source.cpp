@@ -115,7 +115,9 @@ void LiveRunSource::take_streams() {
   arrived_.clear();
   streams_->take(arrived_);
   // Later than the last mice row handed out, so that a replay feeds it
-  // where this run did (before the first mice row at or after its t).
+  // where this run did (before the first mice row at or after its t): a
+  // line stamped at arrival, and a line whose own t is already past (it
+  // arrived late: fed at once, and recorded where it was fed).
   const double after = std::nextafter(t_last_, std::numeric_limits<double>::infinity());
   for (StreamRow& s : arrived_) {
     const double estimate =
@@ -123,7 +125,7 @@ void LiveRunSource::take_streams() {
     // Each stream in time order: a line with t before its stream's last
     // row is dropped (the pipeline would refuse it and end the run).
     if (auto* w = std::get_if<WheelRow>(&s.row)) {
-      if (!s.stamped) w->t = std::max({estimate, after, last_wheel_t_});
+      w->t = s.stamped ? std::max(w->t, after) : std::max({estimate, after, last_wheel_t_});
       if (w->t < last_wheel_t_) {
         ++dropped_;
         continue;
@@ -131,7 +133,7 @@ void LiveRunSource::take_streams() {
       last_wheel_t_ = w->t;
       wheels_.push_back(*w);
     } else if (auto* g = std::get_if<ImuRow>(&s.row)) {
-      if (!s.stamped) g->t = std::max({estimate, after, last_gyro_t_});
+      g->t = s.stamped ? std::max(g->t, after) : std::max({estimate, after, last_gyro_t_});
       if (g->t < last_gyro_t_) {
         ++dropped_;
         continue;
@@ -140,7 +142,7 @@ void LiveRunSource::take_streams() {
       gyro_.push_back(*g);
     } else {
       auto& f = std::get<CameraFix>(s.row);
-      if (!s.stamped) f.t = std::max({estimate, after, last_fix_t_});
+      f.t = s.stamped ? std::max(f.t, after) : std::max({estimate, after, last_fix_t_});
       if (f.t < last_fix_t_) {
         ++dropped_;
         continue;

@@ -212,12 +212,19 @@ struct SelfCalibrationOptions {
   /// (a resolution 50 % off, a sensor turned by 30 degrees).
   real reset_scale_sd = 0.5;
   real reset_yaw_sd = 0.5;  ///< rad
-  /// A corrected sensor whose estimate moves (more than settle_threshold,
-  /// in scale or rad, from its own average over settle_time s) is held out
-  /// of the estimate as drift while it moves (held_as_drift): a partial
-  /// correction would let a sensor still off pass as consistent.
+  /// A corrected sensor whose estimate moves faster than the filter's model
+  /// of a steady calibration lets it (its random walk, scale_walk and
+  /// yaw_walk) is held out of the estimate as drift while it moves
+  /// (held_as_drift): a partial correction would let a sensor still off pass
+  /// as consistent. The test: each scale against its own exponential
+  /// average over settle_time s, the difference over its sd under that
+  /// model, two-sided at hold_alpha; released below half the threshold.
   real settle_time = 1.0;
-  real settle_threshold = 0.015;
+  /// False-alarm rate (two-sided, per scale and block) of the hold
+  /// above. Higher than the accusing tests' 0.001: a false hold costs a
+  /// sensor's share of the average for about settle_time, a missed one
+  /// lets a partly corrected sensor bias the estimate.
+  real hold_alpha = 0.05;
   real apply_step = 5e-4;  ///< change of an estimate that renews the applied correction
   /// A block in which a sensor's counts repeat exactly (not zero) this many
   /// epochs in a row is dropped: what a frozen register reads before the
@@ -285,11 +292,11 @@ class SelfCalibration {
   SensorMask runaways() const;
   /// Sensor i is held out (Exclusion::kDrift) while its own correction
   /// (beyond the gauge's common part) is applied and its estimate moves
-  /// (settle_time, settle_threshold; an estimate moving inside the bands is
-  /// noise or the start: not held). Not latched: once the estimate settles
-  /// the sensor is a candidate again, judged by the estimator's tests on
-  /// its corrected counts like every other (a drift alarm of the health
-  /// monitor holds it until its release test passes).
+  /// faster than a steady calibration's would (settle_time, hold_alpha; an
+  /// estimate not applied is not held). Not latched: once the estimate
+  /// settles the sensor is a candidate again, judged by the estimator's
+  /// tests on its corrected counts like every other (a drift alarm of the
+  /// health monitor holds it until its release test passes).
   bool held_as_drift(int i) const;
   int size() const { return n_; }
   /// The common part (G, G, D) the gauge sets the median over the sensors
@@ -329,7 +336,8 @@ class SelfCalibration {
     long updates = 0;
     bool runaway = false;
     long resets = 0;                     ///< covariance resets by reset()
-    SelfCalibrationEstimate lagged;      ///< theta / (G, D) averaged over settle_time
+    Vec3 moved = Vec3::Zero();           ///< theta less its average over settle_time (own steps)
+    Vec3 moved_var = Vec3::Zero();       ///< moved's variance under the filter's model
     bool settling = false;               ///< theta is moving away from lagged
     bool corrected = false;              ///< its own correction (beyond the gauge's) is applied
     real rejections = 0.0;               ///< the rejections' CUSUM (log-likelihood ratio)
@@ -370,6 +378,7 @@ class SelfCalibration {
   std::array<real, 2 * kMaxSensors> chi2_gate_{};  ///< by degrees of freedom
   real runaway_z_ = 0.0;                           ///< Phi^-1(1 - runaway_alpha), sd
   real apply_z_ = 0.0;                             ///< Phi^-1(1 - apply_alpha / 2), sd
+  real hold_z_ = 0.0;                              ///< Phi^-1(1 - hold_alpha / 2), sd
   std::array<real, kMaxSensors> mount_bias_{};     ///< mount_position_sigma / r_i
   real block_gate_ = 0.0;                          ///< q(1 - gross_alpha, 2): a sensor's block
   real wheel_gate_ = 0.0;  ///< q(1 - gross_alpha, 3): a block of the wheels' gauge
