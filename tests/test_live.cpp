@@ -164,14 +164,28 @@ void play_device(const PseudoTerminal& pty, const SynthLog& log, const fs::path&
   done = true;
 }
 
-/// The recording in `record` replays with `moa odometry` to `odometry`, byte for byte.
-void expect_replays_identically(const Scene& scene, const fs::path& record,
-                                const fs::path& odometry) {
-  const fs::path replay = scene.dir / "replay.csv";
+/// The recording in `record` replays with `moa odometry` (with `flags`) to
+/// the text `expected`, byte for byte (the replay is written beside it).
+void expect_replays_to(const fs::path& record, const std::string& expected,
+                       const std::string& flags = "") {
+  const fs::path replay = record.parent_path() / "replay.csv";
   const auto r = run_moa("odometry --config " + (record / "robot.yaml").string() + " --log " +
-                         record.string() + " --estimator ls --quiet --out " + replay.string());
+                         record.string() + flags + " --quiet --out " + replay.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(read_text(replay), read_text(odometry));
+  EXPECT_EQ(read_text(replay), expected);
+}
+
+/// The recording in `record` replays with `moa odometry` to `odometry`, byte for byte.
+void expect_replays_identically(const fs::path& record, const fs::path& odometry) {
+  expect_replays_to(record, read_text(odometry), " --estimator ls");
+}
+
+/// `moa simulate --scenario gyro-compact --seed 2` into DIR/log.
+fs::path simulated_gyro_compact(const fs::path& dir) {
+  const fs::path log = dir / "log";
+  EXPECT_EQ(run_moa("simulate --scenario gyro-compact --seed 2 --out " + log.string()).exit_code,
+            0);
+  return log;
 }
 
 /// odometry.csv's last row at the run's end (within t_tolerance s) and at the
@@ -218,7 +232,7 @@ TEST(Live, SerialRunStopsCleanlyOnCtrlCAndItsRecordingReplaysToTheSameOdometry) 
   EXPECT_NE(moa.out().find("recorded to " + (record / "mice.csv").string()), std::string::npos);
 
   // Replay: byte-identical odometry.
-  expect_replays_identically(scene, record, odometry);
+  expect_replays_identically(record, odometry);
 
   // And the odometry is right. The counts are noise-free and quantised with
   // the fraction carried: a frame's error is r_k - r_(k-1), |r| <= 0.5
@@ -295,7 +309,7 @@ TEST(Live, MisbehavingDeviceIsRecordedSoThatItReplays) {
   EXPECT_NE(moa.err().find("device clock steps"), std::string::npos);
   EXPECT_EQ(data_lines(record / "mice.csv"), scene.log.rows.size());
 
-  expect_replays_identically(scene, record, odometry);
+  expect_replays_identically(record, odometry);
 
   // Every kept frame one window after the last: the run as the device
   // meant it, so the pose follows the truth as in the orderly run above.
@@ -321,11 +335,7 @@ TEST(Live, DeviceHangUpEndsTheRunWithEverythingWritten) {
       << moa.err();
   EXPECT_EQ(data_lines(record / "mice.csv"), scene.log.rows.size());
   // Odometry on stdout is the same text `moa odometry` writes from the recording.
-  const fs::path replay = scene.dir / "replay.csv";
-  const auto r = run_moa("odometry --config " + (record / "robot.yaml").string() + " --log " +
-                         record.string() + " --quiet --out " + replay.string());
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(moa.out(), read_text(replay));
+  expect_replays_to(record, moa.out());
 }
 
 TEST(Live, SerialGyroSamplesAreRecordedToImuCsvOnTheRowsClock) {
@@ -541,12 +551,7 @@ TEST(Live, StreamsAreFedRecordedAndTheirBadLinesCountedOnce) {
   ASSERT_TRUE(fs::exists(record / "wheels.csv"));
   EXPECT_FALSE(fs::exists(record / "camera.csv"));  // no fix came
   EXPECT_EQ(data_lines(record / "wheels.csv"), 59u);
-  const fs::path replay = scene.dir / "replay.csv";
-  const auto o =
-      run_moa("odometry --config " + (record / "robot.yaml").string() + " --log " +
-              record.string() + " --estimator sekimori --quiet --out " + replay.string());
-  ASSERT_EQ(o.exit_code, 0) << o.err;
-  EXPECT_EQ(read_text(replay), read_text(live));
+  expect_replays_to(record, read_text(live), " --estimator sekimori");
 }
 
 TEST(Live, AStreamsFileThatCannotBeReadIsRefused) {
@@ -610,11 +615,7 @@ TEST(Live, AReplayedGyroIsFedAsMoaOdometryFeedsIt) {
       EXPECT_GT(2 * n, m) << r.out;
       EXPECT_GT(data_lines(record / "imu.csv"), 0u);
       EXPECT_EQ(data_lines(record / "wheels.csv"), data_lines(log / "wheels.csv"));
-      const auto replay =
-          run_moa("odometry --config " + (record / "robot.yaml").string() + " --log " +
-                  record.string() + " --quiet --out " + (dir / "replay.csv").string());
-      ASSERT_EQ(replay.exit_code, 0) << replay.err;
-      EXPECT_EQ(read_text(dir / "replay.csv"), read_text(live));
+      expect_replays_to(record, read_text(live));
     } else {
       EXPECT_EQ(heading_line(r.out), "");
       EXPECT_FALSE(fs::exists(record / "imu.csv"));
@@ -631,9 +632,7 @@ TEST(Live, AReplayedGyroIsFedAsMoaOdometryFeedsIt) {
 // replays to the live run's odometry.
 TEST(Live, TheStreamsFeedTheirKindsNotTheReplayedLog) {
   const fs::path dir = scratch_dir("live-one-source");
-  const fs::path log = dir / "log";
-  ASSERT_EQ(run_moa("simulate --scenario gyro-compact --seed 2 --out " + log.string()).exit_code,
-            0);
+  const fs::path log = simulated_gyro_compact(dir);
   const fs::path streams = dir / "streams.csv";
   {
     std::ofstream out(streams);
@@ -659,11 +658,7 @@ TEST(Live, TheStreamsFeedTheirKindsNotTheReplayedLog) {
       << r.out;
   EXPECT_EQ(data_lines(record / "wheels.csv"), 20u);
   EXPECT_EQ(data_lines(record / "imu.csv"), 20u);
-  const fs::path replay = dir / "replay.csv";
-  const auto rr = run_moa("odometry --config " + (record / "robot.yaml").string() + " --log " +
-                          record.string() + " --quiet --out " + replay.string());
-  ASSERT_EQ(rr.exit_code, 0) << rr.err;
-  EXPECT_EQ(read_text(replay), read_text(live));
+  expect_replays_to(record, read_text(live));
   if (!HasFailure()) fs::remove_all(dir);
 }
 
@@ -674,9 +669,7 @@ TEST(Live, TheStreamsFeedTheirKindsNotTheReplayedLog) {
 // after moa opened it.
 TEST(Live, ALateStreamLineIsRecordedWhereItWasFed) {
   const fs::path dir = scratch_dir("live-late-line");
-  const fs::path log = dir / "log";
-  ASSERT_EQ(run_moa("simulate --scenario gyro-compact --seed 2 --out " + log.string()).exit_code,
-            0);
+  const fs::path log = simulated_gyro_compact(dir);
   const fs::path fifo = dir / "streams";
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
   std::thread writer([&] {
@@ -698,11 +691,7 @@ TEST(Live, ALateStreamLineIsRecordedWhereItWasFed) {
   }
   ASSERT_EQ(t.size(), 1u);
   EXPECT_GT(t[0], 1.0);  // raised from 0.0001 to where it was fed
-  const fs::path replay = dir / "replay.csv";
-  const auto rr = run_moa("odometry --config " + (record / "robot.yaml").string() + " --log " +
-                          record.string() + " --quiet --out " + replay.string());
-  ASSERT_EQ(rr.exit_code, 0) << rr.err;
-  EXPECT_EQ(read_text(replay), read_text(live));
+  expect_replays_to(record, read_text(live));
   if (!HasFailure()) fs::remove_all(dir);
 }
 
