@@ -253,12 +253,18 @@ TEST(OdometryOptions, BoundsAreInclusiveWhereTheyAreStatedSo) {
 
 // The self-calibration's apply test: NaN in its rate is refused by name
 // (mount_position_sigma's NaN has its row in the table above).
-TEST(OdometryOptions, ANaNApplyAlphaIsRefusedByName) {
-  OdometryOptions o;
-  o.self_calibration.apply_alpha = std::numeric_limits<double>::quiet_NaN();
-  const std::string m = message(o.validate());
-  EXPECT_EQ(m.rfind("self_calibration.apply_alpha: ", 0), 0u) << m;
-  EXPECT_NE(m.find("nan"), std::string::npos) << m;
+TEST(OdometryOptions, ANaNFalseAlarmRateIsRefusedByName) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (const auto& [name, set] :
+       std::vector<std::pair<std::string, std::function<void(SelfCalibrationOptions&)>>>{
+           {"apply_alpha", [&](auto& c) { c.apply_alpha = nan; }},
+           {"hold_alpha", [&](auto& c) { c.hold_alpha = nan; }}}) {
+    OdometryOptions o;
+    set(o.self_calibration);
+    const std::string m = message(o.validate());
+    EXPECT_EQ(m.rfind("self_calibration." + name + ": ", 0), 0u) << m;
+    EXPECT_NE(m.find("nan"), std::string::npos) << m;
+  }
 }
 
 TEST(OptionsCheck, ANestedStructNamesItsFieldsRelativeToItself) {
