@@ -155,7 +155,8 @@ TEST(CarelessCalls, ADirectoryAsAnOutputFileIsAUsageError) {
           odometry(dir, "--out " + (dir / "o.csv").string() + " --diagnostics " + name),
           odometry(dir, "--out " + (dir / "o.csv").string() + " --self-calibration " + name),
           "calibrate --config " + config + " --method kimlee --log " + dir.string() + " --out " +
-              name}) {
+              name,
+          "live --config " + config + " --replay " + dir.string() + " --out " + name}) {
       const auto r = test::run_moa(command);
       EXPECT_EQ(r.exit_code, cli::kExitUsage) << command << "\n" << r.err;
       EXPECT_THAT(r.err, HasSubstr("'" + name + "' is a directory")) << command;
@@ -163,6 +164,24 @@ TEST(CarelessCalls, ADirectoryAsAnOutputFileIsAUsageError) {
   }
   EXPECT_FALSE(fs::exists(dir / "new")) << "nothing is created";
   EXPECT_FALSE(fs::exists(dir / "o.csv")) << "nothing is written";
+}
+
+// An empty name, or an option taken for one, is a usage error for the
+// live run's --out and --record as for odometry's outputs ('-' is --out's
+// standard output); nothing is written.
+TEST(CarelessCalls, AnEmptyOrOptionLikeLiveOutputIsAUsageError) {
+  const fs::path dir = example_copy("careless-live-names");
+  const std::string live = "live --config " + (dir / "robot.yaml").string() + " --replay " +
+                           dir.string() + " --speed 1000 ";
+  for (const std::string& args : {std::string("--out ''"), std::string("--out --quiet"),
+                                  std::string("--record ''"), std::string("--record --quiet")}) {
+    const auto r = test::run_moa(live + args);
+    EXPECT_EQ(r.exit_code, cli::kExitUsage) << args << "\n" << r.err;
+  }
+  EXPECT_FALSE(fs::exists("--quiet"));
+  const auto r = test::run_moa(live + "--quiet --out -");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("t,x,y,theta"));
 }
 
 // Every command that writes refuses an output that names one of its
@@ -230,6 +249,15 @@ TEST(CarelessCalls, ImportLiveAndSimulateRefuseAnOutputOntoAnInput) {
   expect_refused(
       live + "--record " + (dir / "r").string() + " --out " + (dir / "r" / "mice.csv").string(),
       "--out", dir / "r" / "mice.csv", "is written by --record too");
+  // The streams' files in the recording too: written by it, or removed.
+  for (const char* name : {"wheels.csv", "imu.csv", "camera.csv"}) {
+    expect_refused(
+        live + "--record " + (dir / "r").string() + " --out " + (dir / "r" / name).string(),
+        "--out", dir / "r" / name, "is written by --record too");
+    expect_refused(live + "--record " + (dir / "r").string() + " --out " +
+                       (dir / "o.csv").string() + " --diagnostics " + (dir / "r" / name).string(),
+                   "--diagnostics", dir / "r" / name, "is written by --record too");
+  }
   EXPECT_FALSE(fs::exists(dir / "r"));
   // --self-calibration FILE: not an input, not the recording, not the --out.
   expect_refused(live + "--out " + (dir / "o.csv").string() + " --self-calibration " +

@@ -152,6 +152,10 @@ TEST(DiagnosticsCli, AgreesWithOdometryAndShowsTheCommonModeTest) {
       EXPECT_DOUBLE_EQ(d.t, o->t);
       EXPECT_EQ(d.source, config.names[i]);
       EXPECT_EQ(d.fused, contains(o->used, static_cast<int>(i))) << "t " << o->t;
+      // The reason as odometry.csv's `excluded` has it, noise flags too.
+      if (contains(o->listed, static_cast<int>(i)) && !d.fused) {
+        EXPECT_EQ(d.reason, describe_exclusion(o->excluded[i], o->noise_flags[i])) << "t " << o->t;
+      }
       if (d.reason == "common-mode") any_common = true;
     }
     const DiagnosticsRow& wheels = rows[k + config.names.size()];
@@ -170,6 +174,36 @@ TEST(DiagnosticsCli, AgreesWithOdometryAndShowsTheCommonModeTest) {
   // Three dropouts of 0.3 s at 100 Hz: at least a few epochs of each are
   // caught (the rest may be bridged as well, through the health monitor).
   EXPECT_GE(common, 3u);
+}
+
+// A sensor's reason is odometry.csv's `excluded` text, its noise flags
+// included: faults-drift at speed (a) runs over the HDNS-2051's rating, so
+// some exclusions carry `/over-speed`.
+TEST(DiagnosticsCli, ASensorsReasonIsItsExcludedTextWithItsNoiseFlags) {
+  const fs::path dir = test::scratch_dir("diagnostics-flags");
+  const std::string log = (dir / "log").string();
+  ASSERT_EQ(test::run_moa("simulate --scenario faults-drift --seed 101 --out " + log).exit_code, 0);
+  const fs::path out = dir / "o.csv", diag = dir / "d.csv";
+  const auto r = test::run_moa("odometry --config " + log + "/robot.yaml --log " + log + " --out " +
+                               out.string() + " --diagnostics " + diag.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const RobotConfig config = read_config(log + "/robot.yaml");
+  const auto rows = read_diagnostics_csv(diag);
+  OdometryCsvReader odometry(out, config, log + "/robot.yaml");
+  std::size_t k = 0, flagged = 0;
+  while (const auto o = odometry.next()) {
+    for (std::size_t i = 0; i < config.names.size(); ++i) {
+      ASSERT_LT(k + i, rows.size());
+      const DiagnosticsRow& d = rows[k + i];
+      if (contains(o->used, static_cast<int>(i))) continue;
+      const std::string excluded = describe_exclusion(o->excluded[i], o->noise_flags[i]);
+      EXPECT_EQ(d.reason, excluded) << "t " << o->t;
+      if (excluded.find('/') != std::string::npos) ++flagged;
+    }
+    k += config.names.size() + 2;
+    while (k < rows.size() && rows[k].source == "imu") ++k;
+  }
+  EXPECT_GT(flagged, 0u);
 }
 
 TEST(DiagnosticsCli, RefusesAnOutputThatIsAnInput) {

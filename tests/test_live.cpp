@@ -664,9 +664,11 @@ TEST(Live, TheStreamsFeedTheirKindsNotTheReplayedLog) {
 
 // A stamped line that arrives after the mice row of its time was fed is
 // late: it is fed at once and recorded where it was fed, so the record
-// still replays to the same poses. A FIFO whose writer sends a wheel row
-// stamped 0.0001 s some 0.4 s of wall time (4 s of log at --speed 10)
-// after moa opened it.
+// still replays to the same poses. A line whose own t is before its
+// stream's last row's is dropped and counted. A FIFO whose writer sends,
+// some 0.4 s of wall time (4 s of log at --speed 10) after moa opened it,
+// two wheel rows stamped 0.0001 and 0.0002 s (late, in order), one stamped
+// at arrival and one stamped 0.0003 s (before the one stamped at arrival).
 TEST(Live, ALateStreamLineIsRecordedWhereItWasFed) {
   const fs::path dir = scratch_dir("live-late-line");
   const fs::path log = simulated_gyro_compact(dir);
@@ -675,7 +677,9 @@ TEST(Live, ALateStreamLineIsRecordedWhereItWasFed) {
   std::thread writer([&] {
     std::ofstream out(fifo);  // blocks until moa opens it
     std::this_thread::sleep_for(400ms);
-    out << "wheels,0.0001,0.1,0,0\n" << std::flush;
+    out << "wheels,0.0001,0.1,0,0\nwheels,0.0002,0.1,0,0\nwheels,,0.1,0,0\n"
+        << "wheels,0.0003,0.1,0,0\n"
+        << std::flush;
   });
   const fs::path live = dir / "live.csv", record = dir / "rec";
   const auto r = run_moa("live --config " + (log / "robot.yaml").string() + " --replay " +
@@ -683,14 +687,20 @@ TEST(Live, ALateStreamLineIsRecordedWhereItWasFed) {
                          record.string() + " --out " + live.string());
   writer.join();
   ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("streams: 4 wheel rows, 0 gyro rows and 0 camera fixes read, 3, 0 and 0 "
+                       "fed; 0 bad lines, 1 out of time order"),
+            std::string::npos)
+      << r.out;
   std::ifstream in(record / "wheels.csv");
   std::string line;
   std::vector<double> t;
   while (std::getline(in, line)) {
     if (!line.empty() && line[0] != '#' && line[0] != 't') t.push_back(std::stod(line));
   }
-  ASSERT_EQ(t.size(), 1u);
+  ASSERT_EQ(t.size(), 3u);
   EXPECT_GT(t[0], 1.0);  // raised from 0.0001 to where it was fed
+  EXPECT_GE(t[1], t[0]);
+  EXPECT_GE(t[2], t[1]);
   expect_replays_to(record, read_text(live));
   if (!HasFailure()) fs::remove_all(dir);
 }

@@ -231,33 +231,28 @@ int run_live(LiveArgs args) {
       fs::remove(dir / name, ec);
     }
   }
+  // What --record writes (or removes: the streams are replaced as a whole).
+  std::vector<fs::path> recorded;
+  if (!args.record.empty()) {
+    const fs::path dir(args.record);
+    for (const char* name : {"mice.csv", "robot.yaml", "wheels.csv", "imu.csv", "camera.csv"}) {
+      recorded.push_back(dir / name);
+    }
+  }
   if (!args.out.empty() && !to_stdout) {
     io::refuse_output_onto_inputs(args.out, "--out", inputs);
-    if (!args.record.empty()) {
-      const fs::path dir(args.record);
-      io::refuse_output_onto_inputs(args.out, "--out", {dir / "mice.csv", dir / "robot.yaml"},
-                                    "written by --record too");
-    }
+    io::refuse_output_onto_inputs(args.out, "--out", recorded, "written by --record too");
   }
   if (const std::string& cal = args.odometry.self_calibration_out; !cal.empty()) {
     io::refuse_output_onto_inputs(cal, "--self-calibration", inputs);
-    if (!args.record.empty()) {
-      const fs::path dir(args.record);
-      io::refuse_output_onto_inputs(cal, "--self-calibration",
-                                    {dir / "mice.csv", dir / "robot.yaml"},
-                                    "written by --record too");
-    }
+    io::refuse_output_onto_inputs(cal, "--self-calibration", recorded, "written by --record too");
     if (!args.out.empty() && !to_stdout) {
       io::refuse_output_onto_inputs(cal, "--self-calibration", {args.out}, "the --out of this run");
     }
   }
   if (const std::string& diag = args.odometry.diagnostics_out; !diag.empty()) {
     io::refuse_output_onto_inputs(diag, "--diagnostics", inputs);
-    if (!args.record.empty()) {
-      const fs::path dir(args.record);
-      io::refuse_output_onto_inputs(diag, "--diagnostics", {dir / "mice.csv", dir / "robot.yaml"},
-                                    "written by --record too");
-    }
+    io::refuse_output_onto_inputs(diag, "--diagnostics", recorded, "written by --record too");
     io::refuse_output_onto_inputs(
         diag, "--diagnostics",
         {to_stdout ? fs::path{} : fs::path(args.out), args.odometry.self_calibration_out},
@@ -520,8 +515,10 @@ void add_live(CLI::App& app, Action& action) {
                   "Record the rows fed to DIR (log v1 mice.csv + robot.yaml; a serial board's or "
                   "a replayed log's gyro to imu.csv, t,gz in s, rad/s; a replayed log's and the "
                   "streams' wheels to wheels.csv, the streams' fixes to camera.csv) for replay "
-                  "with `moa odometry`");
-  cmd->add_option("--out", args->out, "Write odometry.csv to FILE (at the end), or '-' for stdout");
+                  "with `moa odometry`")
+      ->check(output_file_name());
+  cmd->add_option("--out", args->out, "Write odometry.csv to FILE (at the end), or '-' for stdout")
+      ->check(output_file_or_stdout());
   // No limit on silences: live rows come at the pace of real time, so a
   // robot parked for hours is no runaway of still epochs (a replay: see
   // run_live).

@@ -66,6 +66,12 @@ CLI::Validator output_file() {
       "");
 }
 
+CLI::Validator output_file_or_stdout() {
+  return CLI::Validator(
+      [](std::string& v) -> std::string { return v == "-" ? std::string{} : output_file()(v); },
+      "");
+}
+
 void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
   OdometryOptions& o = f.options;
   cmd->add_option("--estimator", f.estimator,

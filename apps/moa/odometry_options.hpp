@@ -31,6 +31,8 @@ CLI::Validator output_file_name();
 /// '/' nor an existing directory (their error was the system's "Not a
 /// directory" at the end of the run).
 CLI::Validator output_file();
+/// output_file(), or "-" for standard output.
+CLI::Validator output_file_or_stdout();
 
 struct OdometryFlags {
   std::string estimator = "consensus";

@@ -7,6 +7,7 @@
 
 #include "moa/formats/atomic_file.hpp"
 #include "moa/formats/csv.hpp"
+#include "moa/formats/odometry_csv.hpp"
 
 namespace moa::io {
 
@@ -40,8 +41,9 @@ void DiagnosticsCsvWriter::write(const OdometryStep& step) {
   for (std::size_t i = 0; i < impl_->names.size() && i < kMaxSensors; ++i) {
     if (!contains(impl_->selected, static_cast<int>(i))) continue;
     const bool used = contains(e.estimate.used, static_cast<int>(i));
+    // The reason as odometry.csv's `excluded` writes it (with its noise flags).
     impl_->row(t, impl_->names[i], e.tests.sensor[i], used,
-               used ? std::string_view{} : std::string_view{to_name(e.excluded[i])});
+               used ? std::string{} : describe_exclusion(e.excluded[i], e.noise_flags[i]));
   }
   impl_->row(t, "wheels", e.tests.wheels, e.source == Source::kWheels, {});
   impl_->row(t, "prior", e.tests.prior, e.source == Source::kHold, {});

@@ -114,41 +114,33 @@ void LiveRunSource::take_streams() {
   if (streams_ == nullptr) return;
   arrived_.clear();
   streams_->take(arrived_);
-  // Later than the last mice row handed out, so that a replay feeds it
-  // where this run did (before the first mice row at or after its t): a
-  // line stamped at arrival, and a line whose own t is already past (it
-  // arrived late: fed at once, and recorded where it was fed).
+  // Each stream in time order: a line whose own t is before its stream's
+  // last row's is dropped and counted (the pipeline would refuse it and
+  // end the run). A line is fed before the first mice row at or after its
+  // t and recorded there, so that a replay feeds it where this run did: a
+  // line stamped at arrival is stamped later than the last mice row handed
+  // out (and than its stream's last row), and a line whose own t is
+  // already past (it arrived late) is raised to just after that mice row.
   const double after = std::nextafter(t_last_, std::numeric_limits<double>::infinity());
-  for (StreamRow& s : arrived_) {
+  const auto admit = [&](auto& row, const StreamRow& s, StreamOrder& last, auto& queue) {
+    if (s.stamped && row.t < last.own) {
+      ++dropped_;
+      return;
+    }
     const double estimate =
         t_ref_ + speed_ * std::chrono::duration<double>(s.arrival - arrival_ref_).count();
-    // Each stream in time order: a line with t before its stream's last
-    // row is dropped (the pipeline would refuse it and end the run).
+    const double own = s.stamped ? row.t : std::max({estimate, after, last.own});
+    row.t = std::max({own, after, last.fed});
+    last = {own, row.t};
+    queue.push_back(row);
+  };
+  for (StreamRow& s : arrived_) {
     if (auto* w = std::get_if<WheelRow>(&s.row)) {
-      w->t = s.stamped ? std::max(w->t, after) : std::max({estimate, after, last_wheel_t_});
-      if (w->t < last_wheel_t_) {
-        ++dropped_;
-        continue;
-      }
-      last_wheel_t_ = w->t;
-      wheels_.push_back(*w);
+      admit(*w, s, wheel_order_, wheels_);
     } else if (auto* g = std::get_if<ImuRow>(&s.row)) {
-      g->t = s.stamped ? std::max(g->t, after) : std::max({estimate, after, last_gyro_t_});
-      if (g->t < last_gyro_t_) {
-        ++dropped_;
-        continue;
-      }
-      last_gyro_t_ = g->t;
-      gyro_.push_back(*g);
+      admit(*g, s, gyro_order_, gyro_);
     } else {
-      auto& f = std::get<CameraFix>(s.row);
-      f.t = s.stamped ? std::max(f.t, after) : std::max({estimate, after, last_fix_t_});
-      if (f.t < last_fix_t_) {
-        ++dropped_;
-        continue;
-      }
-      last_fix_t_ = f.t;
-      fixes_.push_back(f);
+      admit(std::get<CameraFix>(s.row), s, fix_order_, fixes_);
     }
   }
 }

@@ -138,9 +138,13 @@ class LiveRunSource final : public RunSource {
   std::deque<ImuRow> gyro_;
   std::deque<CameraFix> fixes_;
   std::vector<StreamRow> arrived_;
-  double last_wheel_t_ = -std::numeric_limits<double>::infinity();  ///< s
-  double last_gyro_t_ = -std::numeric_limits<double>::infinity();   ///< s
-  double last_fix_t_ = -std::numeric_limits<double>::infinity();    ///< s
+  /// A stream's last row: its own t (given, or stamped at arrival) and the
+  /// t it was fed at (raised when it arrived late), s.
+  struct StreamOrder {
+    double own = -std::numeric_limits<double>::infinity();
+    double fed = -std::numeric_limits<double>::infinity();
+  };
+  StreamOrder wheel_order_, gyro_order_, fix_order_;
   std::size_t dropped_ = 0;
   Streamed streamed_;
   SerialReader* gyro_serial_ = nullptr;  ///< the serial device's gyro (add_gyro)
