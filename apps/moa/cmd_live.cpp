@@ -16,6 +16,7 @@
 #include <fmt/core.h>
 #include <fmt/format.h>
 #include <signal.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -58,12 +59,22 @@ namespace moa::cli {
 namespace {
 
 volatile std::sig_atomic_t g_stop = 0;
+timespec g_first_stop{};  // when the first stop came (CLOCK_MONOTONIC)
 
-extern "C" void on_stop_signal(int) {
-  // A second Ctrl-C means "now": the recording's .part file keeps what was
-  // flushed.
-  if (g_stop) _exit(130);
-  g_stop = 1;
+extern "C" void on_stop_signal(int sig) {
+  timespec now{};
+  clock_gettime(CLOCK_MONOTONIC, &now);  // async-signal-safe
+  if (!g_stop) {
+    g_first_stop = now;
+    g_stop = 1;
+    return;
+  }
+  // A second stop within 1 s is the first one delivered twice (a supervisor
+  // signals the process and its group); a later one means "now": exit
+  // 128 + the signal, the recording's .part file keeping what was flushed.
+  const double since = static_cast<double>(now.tv_sec - g_first_stop.tv_sec) +
+                       1e-9 * static_cast<double>(now.tv_nsec - g_first_stop.tv_nsec);
+  if (since >= 1.0) _exit(128 + sig);
 }
 
 // Installs the handlers for the run and puts the old ones back afterwards.
@@ -74,7 +85,9 @@ class StopSignals {
     g_stop = 0;
     struct sigaction action {};
     action.sa_handler = on_stop_signal;
-    sigemptyset(&action.sa_mask);
+    sigemptyset(&action.sa_mask);  // the handler is not re-entered: both blocked in it
+    sigaddset(&action.sa_mask, SIGINT);
+    sigaddset(&action.sa_mask, SIGTERM);
     sigaction(SIGINT, &action, &old_int_);
     sigaction(SIGTERM, &action, &old_term_);
   }
