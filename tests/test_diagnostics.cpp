@@ -126,23 +126,45 @@ TEST(DiagnosticsCsv, BadRowsAreRefusedWithFileAndLine) {
   for (const auto& c : cases) expect_refused(dir / "d.csv", c.text, c.error);
 }
 
+// `moa simulate --scenario SCENARIO --seed 101`, then `moa odometry
+// --diagnostics` on it: what the tests below read (no rows on a failure).
+struct Diagnosed {
+  std::string config_path;
+  RobotConfig config;
+  std::vector<DiagnosticsRow> rows;
+  fs::path out;  ///< odometry.csv
+};
+Diagnosed diagnosed(const std::string& scenario) {
+  const fs::path dir = test::scratch_dir("diagnostics-" + scenario);
+  const std::string log = (dir / "log").string();
+  Diagnosed d;
+  d.config_path = log + "/robot.yaml";
+  d.out = dir / "o.csv";
+  const fs::path diag = dir / "d.csv";
+  const auto sim = test::run_moa("simulate --scenario " + scenario + " --seed 101 --out " + log);
+  EXPECT_EQ(sim.exit_code, 0) << sim.err;
+  if (sim.exit_code != 0) return d;
+  const auto r = test::run_moa("odometry --config " + d.config_path + " --log " + log + " --out " +
+                               d.out.string() + " --diagnostics " + diag.string());
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  if (r.exit_code != 0) return d;
+  d.config = read_config(d.config_path);
+  d.rows = read_diagnostics_csv(diag);
+  return d;
+}
+
 // moa odometry --diagnostics on common-mode dropouts (faults-bump): the file
 // agrees with odometry.csv epoch by epoch (a sensor fused exactly when
 // used, the wheels fused exactly when the source is `wheels`), and every
 // epoch reported `common-mode` has both references' statistics over their
 // gates, as the rule says (docs/math.md), and the rule fires.
 TEST(DiagnosticsCli, AgreesWithOdometryAndShowsTheCommonModeTest) {
-  const fs::path dir = test::scratch_dir("diagnostics-cli");
-  const std::string log = (dir / "log").string();
-  ASSERT_EQ(test::run_moa("simulate --scenario faults-bump --seed 101 --out " + log).exit_code, 0);
-  const fs::path out = dir / "o.csv", diag = dir / "d.csv";
-  const auto r = test::run_moa("odometry --config " + log + "/robot.yaml --log " + log + " --out " +
-                               out.string() + " --diagnostics " + diag.string());
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  const RobotConfig config = read_config(log + "/robot.yaml");
-  const auto rows = read_diagnostics_csv(diag);
+  const Diagnosed run = diagnosed("faults-bump");
+  ASSERT_FALSE(run.rows.empty());
+  const RobotConfig& config = run.config;
+  const auto& rows = run.rows;
   const std::size_t per_epoch = config.names.size() + 2;
-  OdometryCsvReader odometry(out, config, log + "/robot.yaml");
+  OdometryCsvReader odometry(run.out, config, run.config_path);
   std::size_t k = 0, common = 0;
   while (const auto o = odometry.next()) {
     ASSERT_LE(k + per_epoch, rows.size());
@@ -180,16 +202,11 @@ TEST(DiagnosticsCli, AgreesWithOdometryAndShowsTheCommonModeTest) {
 // included: faults-drift at speed (a) runs over the HDNS-2051's rating, so
 // some exclusions carry `/over-speed`.
 TEST(DiagnosticsCli, ASensorsReasonIsItsExcludedTextWithItsNoiseFlags) {
-  const fs::path dir = test::scratch_dir("diagnostics-flags");
-  const std::string log = (dir / "log").string();
-  ASSERT_EQ(test::run_moa("simulate --scenario faults-drift --seed 101 --out " + log).exit_code, 0);
-  const fs::path out = dir / "o.csv", diag = dir / "d.csv";
-  const auto r = test::run_moa("odometry --config " + log + "/robot.yaml --log " + log + " --out " +
-                               out.string() + " --diagnostics " + diag.string());
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  const RobotConfig config = read_config(log + "/robot.yaml");
-  const auto rows = read_diagnostics_csv(diag);
-  OdometryCsvReader odometry(out, config, log + "/robot.yaml");
+  const Diagnosed run = diagnosed("faults-drift");
+  ASSERT_FALSE(run.rows.empty());
+  const RobotConfig& config = run.config;
+  const auto& rows = run.rows;
+  OdometryCsvReader odometry(run.out, config, run.config_path);
   std::size_t k = 0, flagged = 0;
   while (const auto o = odometry.next()) {
     for (std::size_t i = 0; i < config.names.size(); ++i) {
