@@ -12,9 +12,11 @@
 
 #include <algorithm>
 #include <chrono>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <future>
 #include <map>
 #include <regex>
 #include <sstream>
@@ -471,6 +473,24 @@ unsigned long attribute(const std::string& tag, const std::string& name) {
   return std::stoul(m[1]);
 }
 
+/// One count of GET /status ("events", "dropped", "greeted"); -1 when the
+/// server did not answer.
+long status_count(int port, const std::string& name) {
+  const auto r = test::http_get(port, "/status", 2.0);
+  std::smatch m;
+  if (r.status != 200 || !std::regex_search(r.body, m, std::regex("\"" + name + "\": ?([0-9]+)"))) {
+    return -1;
+  }
+  return std::stol(m[1]);
+}
+
+// The page is loaded while a replay runs and is fed live events: the test
+// waits for the events it needs, not for a guessed time. moa replays the
+// whole 40 s log; once /status shows the page's stream greeted (every later
+// event is sent to it unless dropped), the test waits
+// until 45 more events were made and none of them dropped, then stops the
+// run (SIGINT), whose "end" event lets Chromium dump the DOM. Chromium's
+// start-up under load only delays the test, it cannot change what it sees.
 TEST(LiveDashboard, ChromiumDrawsTheChartsUpdatingWhileAReplayRuns) {
   const auto chromium = test::find_chromium();
   if (!chromium) GTEST_SKIP() << "no chromium on the PATH (make deps installs it)";
@@ -479,13 +499,29 @@ TEST(LiveDashboard, ChromiumDrawsTheChartsUpdatingWhileAReplayRuns) {
   const int port = test::free_port();
   test::BackgroundMoa moa("live --config " + (log / "robot.yaml").string() + " --replay " +
                           log.string() + " --serve 127.0.0.1:" + std::to_string(port) +
-                          " --duration 10 --quiet");
+                          " --quiet");
   ASSERT_TRUE(test::wait_for_server(port, 10.0)) << moa.err();
-  // The page's stream stays open until the run ends (its "end" event closes
-  // it); Chromium dumps the DOM once the network is idle and the budget spent.
-  const test::BrowserPage page = test::load_page(
-      *chromium, "http://127.0.0.1:" + std::to_string(port) + "/", dir, 1280, 900, 2000, 60);
-  ASSERT_EQ(page.exit_code, 0) << page.console;
+  auto loading = std::async(std::launch::async, [&] {
+    return test::load_page(*chromium, "http://127.0.0.1:" + std::to_string(port) + "/", dir,
+                           1280, 900, 2000, 120);
+  });
+  const auto deadline = Clock::now() + std::chrono::seconds(35);
+  long connected_at = -1;  // events made when the page's stream was first seen greeted
+  while (connected_at < 0 && Clock::now() < deadline) {
+    if (status_count(port, "greeted") >= 1) connected_at = status_count(port, "events");
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_GE(connected_at, 0) << "the page did not open /events within 35 s of the run; moa: "
+                             << moa.err();
+  long fed = 0;  // events made since then and not dropped
+  while (fed < 45 && Clock::now() < deadline + std::chrono::seconds(20)) {
+    fed = status_count(port, "events") - connected_at - status_count(port, "dropped");
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  ASSERT_GE(fed, 45) << "the run made too few events for the page; moa: " << moa.err();
+  moa.signal(SIGINT);
+  const test::BrowserPage page = loading.get();
+  ASSERT_EQ(page.failure(), "");
   const std::string& dom = page.dom;
   const std::string& console = page.console;
   EXPECT_EQ(moa.wait(15.0), 0) << moa.err();
@@ -502,14 +538,13 @@ TEST(LiveDashboard, ChromiumDrawsTheChartsUpdatingWhileAReplayRuns) {
       std::regex_search(dom, std::regex("id=\"heading-source\">heading: (mice|wheels|hold)</p>")))
       << dom.substr(std::min(dom.find("heading-source"), dom.size()), 200);
   EXPECT_EQ(console.find("CONSOLE"), std::string::npos) << console;
-  // About 20 events a second for the seconds after the page loaded (Chromium
-  // takes a few to start): every chart
-  // was redrawn for each, with data on it.
+  // The page received every live event fed to it (45 at least) and redrew
+  // every chart for each, with data on it.
   const std::string body = dom.substr(dom.find("<body"), 200);
-  EXPECT_GE(attribute(body, "data-events"), 40u) << body;
+  EXPECT_GE(attribute(body, "data-events"), 45u) << body;
   for (const char* id : {"chart-trajectory", "chart-health", "chart-twist"}) {
     const std::string tag = test::tag_of(dom, id);
-    EXPECT_GE(attribute(tag, "data-updates"), 40u) << id << ": " << tag;
+    EXPECT_GE(attribute(tag, "data-updates"), 45u) << id << ": " << tag;
     EXPECT_GE(attribute(tag, "data-points"), 8u) << id << ": " << tag;
   }
   if (!HasFailure()) fs::remove_all(dir);

@@ -4,7 +4,10 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <charconv>
 #include <memory>
+#include <string_view>
+#include <system_error>
 #include <string>
 #include <vector>
 
@@ -12,6 +15,7 @@
 #include "moa/experiments/experiment.hpp"
 #include "moa/experiments/report.hpp"
 #include "moa/formats/error.hpp"
+#include "moa/sim/random_world.hpp"
 
 namespace moa::cli {
 namespace {
@@ -22,7 +26,27 @@ struct ExperimentArgs {
   bool json = false;
   bool list = false;
   std::string report;  ///< --report FILE.html: the page of one run (experiments/report.hpp)
+  std::string seeds;   ///< --seeds A-B (random)
 };
+
+// "A-B" (or "A"): the first seed and the count, into options; a usage error
+// names the flag.
+void parse_seed_range(const std::string& text, experiments::Options& options) {
+  const auto dash = text.find('-');
+  const std::string a = text.substr(0, dash);
+  const std::string b = dash == std::string::npos ? a : text.substr(dash + 1);
+  std::uint64_t first = 0, last = 0;
+  const auto whole = [](const std::string& s, std::uint64_t& v) {
+    const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+    return !s.empty() && ec == std::errc{} && end == s.data() + s.size();
+  };
+  if (!whole(a, first) || !whole(b, last) || last < first || last - first >= 1000000) {
+    throw io::Error(fmt::format(
+        "--seeds '{}': give A-B, whole numbers with A <= B and at most 1000000 seeds", text));
+  }
+  options.seed = first;
+  options.runs = static_cast<int>(last - first + 1);
+}
 
 std::string available() {
   std::vector<std::string> names;
@@ -42,6 +66,12 @@ int run_experiment(ExperimentArgs args) {
   if (!e) {
     throw io::Error(fmt::format("unknown experiment '{}' (available: {})", args.name, available()));
   }
+  const bool random = std::string_view(e->name) == "random";
+  if (!random && (!args.seeds.empty() || !args.options.family.empty())) {
+    throw io::Error(fmt::format("{} is for `moa experiment random` only",
+                                args.seeds.empty() ? "--family" : "--seeds"));
+  }
+  if (!args.seeds.empty()) parse_seed_range(args.seeds, args.options);
   const experiments::ExperimentReportRecipe* recipe =
       experiments::experiment_report_recipe(e->name);
   if (!args.report.empty() && !recipe) {
@@ -82,6 +112,16 @@ void add_experiment(CLI::App& app, Action& action) {
   cmd->add_option("--runs", args->options.runs,
                   "Repetitions (Monte Carlo trials or runs); 0: the experiment's default")
       ->capture_default_str();
+  std::vector<std::string> families;
+  for (const auto& f : sim::random_families()) families.push_back(f);
+  cmd->add_option("--family", args->options.family,
+                  "random: the family of the worlds (" + fmt::format("{}", fmt::join(families, ", ")) +
+                      "; default any)")
+      ->check(CLI::IsMember(families));
+  cmd->add_option("--seeds", args->seeds,
+                  "random: the seeds A-B (tune on 1-9999, report from 10001); default 20 from "
+                  "--seed")
+      ->type_name("A-B");
   cmd->callback([&action, args] { action = [args] { return run_experiment(*args); }; });
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace moa {
 
@@ -202,7 +203,7 @@ std::optional<OdometryError> Odometry::push_wheels(double t, const Twist2& twist
   return deferred_error_;
 }
 
-std::optional<OdometryError> Odometry::push_gyro(double t, double gz, StepSink sink) {
+std::optional<OdometryError> Odometry::push_gyro(double t, double gz, StepSink sink, bool faulty) {
   if (!options_.use_imu) return std::nullopt;
   const double at = t - options_.consensus.gyro.latency;  // the true end of its interval
   if (!std::isfinite(at) || (gyro_seen_ && at < last_gyro_t_)) return OdometryError::kImuBackwards;
@@ -211,7 +212,10 @@ std::optional<OdometryError> Odometry::push_gyro(double t, double gz, StepSink s
       (void)gyro_.average(ready_.front().t - ready_.front().dt, ready_.front().t);
     if (gyro_.full()) return OdometryError::kImuFull;
   }
-  gyro_.push(at, IntervalAverager<1>::Value(gz));
+  // The oracle's faulty rows are NaN: an epoch they overlap averages to NaN
+  // and the oracle leaves the gyro out there. No other estimator sees the truth.
+  const bool hide = faulty && options_.estimator == EstimatorKind::kOracle;
+  gyro_.push(at, IntervalAverager<1>::Value(hide ? std::numeric_limits<double>::quiet_NaN() : gz));
   gyro_seen_ = true;
   last_gyro_t_ = at;
   deferred_error_.reset();
@@ -297,6 +301,25 @@ void Odometry::apply_fixes(double t) {
   }
 }
 
+// The oracle's gyro: the config's model taken as true (the oracle runs on
+// the true calibration), z = (g - c) / k with variance d^2 / (k^2 dt) (white
+// noise of density d averaged over the epoch), fused into the twist as a
+// measurement of omega: K = P e3 / (P_ww + r), x += K (z - omega),
+// P -= K e3' P. Not where the simulator says the gyro was faulty.
+void Odometry::fuse_oracle_gyro(real g, real dt, RobustEstimate& e) const {
+  const GyroOptions& m = options_.consensus.gyro;
+  if (!(dt > 0) || std::abs(g) >= GyroModel::kSaturation * m.max_rate) return;
+  const real z = (g - m.bias) / m.scale;
+  const real r = m.noise_density * m.noise_density / (m.scale * m.scale * dt);
+  Mat3& p = e.estimate.covariance;
+  const Vec3 k = p.col(2) / (p(2, 2) + r);
+  Vec3 x = e.estimate.twist.vector();
+  x += k * (z - x(2));
+  const Mat3 joseph = Mat3::Identity() - k * Vec3::UnitZ().transpose();
+  p = joseph * p * joseph.transpose() + r * k * k.transpose();
+  e.estimate.twist = Twist2::from_vector(x);
+}
+
 bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& wheels,
                         const std::optional<real>& gyro, RobustEstimate& out) {
   // All sensors selected and no self-calibration (the usual case): the
@@ -351,7 +374,8 @@ bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& 
         e.estimate.twist = fit->twist;
         e.estimate.covariance = fit->covariance;
         e.estimate.used = good;
-        fallback_.good(fit->twist, fit->covariance, sample.t);
+        if (gyro) fuse_oracle_gyro(*gyro, static_cast<real>(sample.dt), e);
+        fallback_.good(e.estimate.twist, e.estimate.covariance, sample.t);
       } else {
         for (int k = 0; k < m_; ++k) {
           if (contains(good, k)) e.excluded[static_cast<std::size_t>(k)] = Exclusion::kFallback;
@@ -427,8 +451,8 @@ void Odometry::process(const ArraySample& raw, StepSink sink) {
                                            : std::nullopt;
   std::optional<real> gyro;
   if (options_.use_imu && gyro_seen_) {
-    if (const auto g = gyro_.average(sample.t - sample.dt, sample.t))
-      gyro = static_cast<real>((*g)(0));
+    const auto g = gyro_.average(sample.t - sample.dt, sample.t);
+    if (g && std::isfinite((*g)(0))) gyro = static_cast<real>((*g)(0));
   }
   OdometryStep step;
   step.sample = &sample;

@@ -12,5 +12,6 @@ Result kimlee_example(const Options& options);
 Result calibration_crb(const Options& options);
 Result self_calibration(const Options& options);
 Result gyro(const Options& options);
+Result random_worlds(const Options& options);
 
 }  // namespace moa::experiments

@@ -20,6 +20,11 @@ constexpr Experiment kAll[] = {
      "Kim & Lee Section IV: calibration of the three-mouse example, eqs. (51)-(53), and the "
      "velocity estimates of Fig. 3 (default 200 runs)",
      kimlee_example},
+    {"random",
+     "Random worlds (moa simulate --random): every estimator's max errors against selection, "
+     "which knows the faults, and the oracle, which knows the calibration too; failures, worst "
+     "seeds, consistency (--family F --seeds A-B; default any, 20 seeds from --seed)",
+     random_worlds},
     {"robust-faults",
      "Each simulated sensor fault alone: least squares, voting, consensus, oracle (default 5 runs)",
      robust_faults},

@@ -56,12 +56,17 @@ template <>
 class RowParser<ImuRow> {
  public:
   explicit RowParser(const CsvReader& csv)
-      : t_(csv.required_column("t")), gz_(csv.required_column("gz")) {}
+      : t_(csv.required_column("t")), gz_(csv.required_column("gz")), faults_(csv.column("faults")) {}
 
-  ImuRow parse(CsvReader& csv) const { return ImuRow{csv.time(t_), csv.number(gz_)}; }
+  ImuRow parse(CsvReader& csv) const {
+    ImuRow row{csv.time(t_), csv.number(gz_)};
+    if (faults_) row.faults = static_cast<std::uint8_t>(csv.integer(*faults_, 0, 1));
+    return row;
+  }
 
  private:
   std::size_t t_, gz_;
+  std::optional<std::size_t> faults_;
 };
 
 template <>

@@ -461,10 +461,12 @@ class LogRunSource final : public RunSource {
 
 std::unique_ptr<ImuReader> open_log_imu(const RobotConfig& config, const LogFiles& log,
                                         const OdometryOptions& options, bool other_gyro) {
-  // The gyro goes to the consensus only (least squares and Sekimori & Miyazaki
-  // stay as their papers define them).
+  // The gyro goes to the consensus and the oracle (least squares and Sekimori
+  // & Miyazaki stay as their papers define them).
   std::unique_ptr<ImuReader> imu;
-  if (options.use_imu && log.imu && options.estimator == EstimatorKind::kConsensus) {
+  if (options.use_imu && log.imu &&
+      (options.estimator == EstimatorKind::kConsensus ||
+       options.estimator == EstimatorKind::kOracle)) {
     imu = std::make_unique<ImuReader>(*log.imu);
   }
   // One sensor: the config's only one, or the only one --sensors selects

@@ -21,6 +21,7 @@
 #include "moa/formats/cleanup.hpp"
 #include "moa/formats/config.hpp"
 #include "moa/formats/error.hpp"
+#include "moa/sim/fault_truth.hpp"
 
 namespace moa::sim {
 namespace {
@@ -69,11 +70,20 @@ class FileSink : public LogSink {
                     "; fault truth per mice.csv row, bits: 1 tracking_loss, 2 liftoff, "
                     "4 dirty, 8 spikes, 16 stuck",
                 "t,sensor,faults,faulty_frames,clean_dx,clean_dy"),
-        truth_(dir / "truth.csv", comment_, "t,x,y,theta,vx,vy,omega") {
+        truth_(dir / "truth.csv", comment_, "t,x,y,theta,vx,vy,omega"),
+        fault_truth_(s),
+        fault_json_(dir / "faults.json"),
+        seed_(seed),
+        imu_latency_(s.imu.latency) {
     if (s.drive.type != DriveType::kNone) {
       wheels_.emplace(dir / "wheels.csv", comment_, "t,vx,vy,omega");
     }
-    if (s.imu.enabled) imu_.emplace(dir / "imu.csv", comment_, "t,gz");
+    if (s.imu.enabled) {
+      imu_.emplace(dir / "imu.csv",
+                   comment_ + "; faults (moa extension): 1 where the gyro was stuck, saturated or "
+                              "its bias had stepped",
+                   "t,gz,faults");
+    }
     if (s.camera.enabled) {
       camera_.emplace(dir / "camera.csv",
                       comment_ +
@@ -91,12 +101,17 @@ class FileSink : public LogSink {
     faults_.line("{},{},{},{},{},{}", r.t, name, o.faults, o.faulty_frames, o.clean.x(),
                  o.clean.y());
     if (o.faults != 0) ++faulty_rows_;
+    fault_truth_.mice(r);
   }
   void wheels(const WheelRecord& r) override {
     wheels_->line("{},{:.9g},{:.9g},{:.9g}", r.t, tidy(r.twist.v.x()), tidy(r.twist.v.y()),
                   tidy(r.twist.omega));
   }
-  void imu(const ImuRecord& r) override { imu_->line("{},{:.9g}", r.t, tidy(r.gz)); }
+  void imu(const ImuRecord& r) override {
+    imu_->line("{},{:.9g},{}", r.t, tidy(r.gz), r.faulty ? 1 : 0);
+    fault_truth_.imu(r, imu_start_);
+    imu_start_ = r.t - imu_latency_;
+  }
   void camera(const CameraFix& f) override {
     if (f.theta) {
       camera_->line("{},{:.9g},{:.9g},{:.9g},{},{},{:.9g},{}", f.t_arrival, tidy(f.position.x()),
@@ -119,6 +134,9 @@ class FileSink : public LogSink {
     if (wheels_) wheels_->commit();
     if (imu_) imu_->commit();
     if (camera_) camera_->commit();
+    const std::string json = fault_truth_.json(seed_);
+    fault_json_.stream().write(json.data(), static_cast<std::streamsize>(json.size()));
+    fault_json_.commit();
     LogSummary s;
     s.mice_rows = mice_.rows();
     s.truth_rows = truth_.rows();
@@ -138,13 +156,18 @@ class FileSink : public LogSink {
   std::optional<CsvOut> imu_;
   std::optional<CsvOut> camera_;
   std::int64_t faulty_rows_ = 0;
+  FaultTruth fault_truth_;
+  io::AtomicFile fault_json_;
+  std::uint64_t seed_;
+  double imu_latency_;
+  double imu_start_ = 0.0;  ///< s, true start of the next gyro row
 };
 
 // The files a run writes; a directory holding only these, with a mice.csv
 // that says it was simulated, is a previous run that may be replaced.
-constexpr std::array<std::string_view, 8> kLogFiles{"mice.csv",   "wheels.csv",     "imu.csv",
-                                                    "camera.csv", "truth.csv",      "faults.csv",
-                                                    "robot.yaml", "robot.true.yaml"};
+constexpr std::array<std::string_view, 10> kLogFiles{
+    "mice.csv",   "wheels.csv",  "imu.csv",    "camera.csv",      "truth.csv",
+    "faults.csv", "faults.json", "robot.yaml", "robot.true.yaml", "scenario.yaml"};
 
 bool is_previous_run(const std::filesystem::path& dir, std::string& foreign) {
   std::error_code ec;
@@ -177,7 +200,7 @@ std::filesystem::path temporary_dir_beside(const std::filesystem::path& dir) {
 }  // namespace
 
 LogSummary write_log(const Scenario& scenario, std::uint64_t seed, const std::filesystem::path& out,
-                     const Progress& progress) {
+                     const Progress& progress, std::string_view scenario_text) {
   std::error_code ec;
   // Absolute, so that "run/", "." or ".." have a name and a parent to write beside.
   std::filesystem::path dir = std::filesystem::absolute(out, ec).lexically_normal();
@@ -232,6 +255,11 @@ LogSummary write_log(const Scenario& scenario, std::uint64_t seed, const std::fi
     // finds a log directory finds its config in it.
     io::write_config(scenario.nominal, temp / "robot.yaml");
     io::write_config(scenario.truth, temp / "robot.true.yaml");
+    if (!scenario_text.empty()) {
+      io::AtomicFile text(temp / "scenario.yaml");
+      text.stream().write(scenario_text.data(), static_cast<std::streamsize>(scenario_text.size()));
+      text.commit();
+    }
     summary = sink.commit();
   }
   if (!std::filesystem::exists(dir, ec)) {

@@ -279,7 +279,8 @@ DriveModel parse_drive(const Source& source, const YAML::Node& node, const Senso
   const Fields probe(source, node, "drive",
                      {"type", "wheel_distance", "wheel_angles_deg", "rate", "encoder_resolution",
                       "slip", "noise_speed", "noise_rate"});
-  const std::string type = probe.choice("type", {"none", "omni3", "differential", "reference"});
+  const std::string type =
+      probe.choice("type", {"none", "omni3", "differential", "mecanum", "reference"});
   if (type == "none") {
     for (const auto key : {"wheel_distance", "wheel_angles_deg", "rate", "encoder_resolution",
                            "slip", "noise_speed", "noise_rate"}) {
@@ -297,7 +298,9 @@ DriveModel parse_drive(const Source& source, const YAML::Node& node, const Senso
     }
     return d;
   }
-  d.type = type == "omni3" ? DriveType::kOmni3 : DriveType::kDifferential;
+  d.type = type == "omni3"    ? DriveType::kOmni3
+           : type == "mecanum" ? DriveType::kMecanum
+                               : DriveType::kDifferential;
   d.wheel_distance = probe.positive("wheel_distance");
   d.encoder_resolution = probe.non_negative("encoder_resolution", 0.0);
   const int wheels = d.wheel_count();
@@ -315,12 +318,12 @@ DriveModel parse_drive(const Source& source, const YAML::Node& node, const Senso
                  "the three wheels cannot drive every twist (angles too close)");
     }
   } else if (probe.has("wheel_angles_deg")) {
-    probe.fail("wheel_angles_deg", "not used by drive type 'differential'");
+    probe.fail("wheel_angles_deg", fmt::format("not used by drive type '{}'", type));
   }
   d.slip.base.assign(static_cast<std::size_t>(wheels), 0.0);
   if (const auto slip_node = probe.get("slip")) {
     const Fields s(source, *slip_node, "drive.slip",
-                   {"base", "per_speed", "per_accel", "random", "random_time"});
+                   {"base", "per_speed", "per_accel", "random", "random_time", "bursts"});
     if (const auto base = s.get("base")) {
       if (base->IsSequence()) {
         d.slip.base = s.numbers("base", static_cast<std::size_t>(wheels));
@@ -335,6 +338,25 @@ DriveModel parse_drive(const Source& source, const YAML::Node& node, const Senso
     d.slip.per_accel = s.number("per_accel", 0.0);
     d.slip.random = s.non_negative("random", 0.0);
     d.slip.random_time = s.positive("random_time", d.slip.random_time);
+    if (const auto bursts = s.get("bursts")) {
+      if (!bursts->IsSequence()) {
+        s.fail("bursts", fmt::format("expected a list of {{start, end, slip, wheel}}, found {}",
+                                     describe_kind(*bursts)));
+      }
+      for (std::size_t i = 0; i < bursts->size(); ++i) {
+        const Fields b(source, (*bursts)[i], fmt::format("drive.slip.bursts[{}]", i),
+                       {"start", "end", "slip", "wheel"});
+        SlipBurst burst;
+        burst.start = b.bounded("start", 0.0, kMaxScenarioDuration);
+        burst.end = b.bounded("end", 0.0, kMaxScenarioDuration);
+        if (burst.end <= burst.start) {
+          b.fail("end", fmt::format("must be after start ({} <= {})", burst.end, burst.start));
+        }
+        burst.slip = b.bounded("slip", -0.9, 10.0);
+        burst.wheel = b.has("wheel") ? static_cast<int>(b.integer("wheel", 0, wheels - 1)) : -1;
+        d.slip.bursts.push_back(burst);
+      }
+    }
   }
   return d;
 }
@@ -602,7 +624,8 @@ CameraModel parse_camera(const Source& source, const YAML::Node& node, double fr
 // scale 1 and bias 0), robot.true.yaml the true scale and bias.
 GyroSpec parse_imu(const Source& source, const YAML::Node& node) {
   const Fields f(source, node, "imu",
-                 {"rate", "scale", "bias", "bias_walk", "noise_density", "max_rate", "latency"});
+                 {"rate", "scale", "bias", "bias_walk", "noise_density", "max_rate", "latency",
+                  "faults"});
   GyroSpec g;
   g.enabled = true;
   g.rate = f.bounded("rate", kMinRate, kMaxFrameRate, g.rate);
@@ -612,6 +635,33 @@ GyroSpec parse_imu(const Source& source, const YAML::Node& node) {
   g.noise_density = f.positive("noise_density", g.noise_density);
   g.max_rate = f.positive("max_rate", g.max_rate);
   g.latency = f.bounded("latency", 0.0, 1.0, g.latency);
+  if (const auto faults = f.get("faults")) {
+    if (!faults->IsSequence()) {
+      f.fail("faults", fmt::format("expected a list of gyro faults, found {}", describe_kind(*faults)));
+    }
+    for (std::size_t i = 0; i < faults->size(); ++i) {
+      const YAML::Node item = (*faults)[i];
+      const std::string path = fmt::format("imu.faults[{}]", i);
+      const std::string type =
+          Fields(source, item, path, {"type", "start", "end", "step"}).choice("type", {"stuck", "bias_step"});
+      const Fields e = type == "stuck" ? Fields(source, item, path, {"type", "start", "end"})
+                                       : Fields(source, item, path, {"type", "start", "step"});
+      GyroFault fault;
+      fault.start = e.bounded("start", 0.0, kMaxScenarioDuration);
+      if (type == "stuck") {
+        fault.kind = GyroFault::kStuck;
+        fault.end = e.bounded("end", 0.0, kMaxScenarioDuration);
+        if (fault.end <= fault.start) {
+          e.fail("end", fmt::format("must be after start ({} <= {})", fault.end, fault.start));
+        }
+      } else {
+        fault.kind = GyroFault::kBiasStep;
+        fault.step = e.bounded("step", -1.0, 1.0);
+        fault.end = kMaxScenarioDuration;
+      }
+      g.faults.push_back(fault);
+    }
+  }
   return g;
 }
 
@@ -660,12 +710,25 @@ Scenario parse_scenario(std::string_view yaml, std::string_view source_name) {
   const Fields top(
       source, root, "",
       {"version", "name", "description", "duration", "truth_rate", "sensor_model", "sensors",
-       "true_sensors", "drive", "wheels", "motion", "faults", "camera", "imu"});
+       "true_sensors", "drive", "wheels", "motion", "faults", "camera", "imu", "unobservable"});
   top.required("version");
 
   Scenario s;
   s.name = top.text("name");
   if (top.has("description")) s.description = top.text("description");
+  if (const auto u = top.get("unobservable")) {
+    if (!u->IsSequence()) {
+      top.fail("unobservable", fmt::format("expected a list of texts, found {}", describe_kind(*u)));
+    }
+    for (std::size_t i = 0; i < u->size(); ++i) {
+      const YAML::Node item = (*u)[i];
+      if (!item.IsScalar()) {
+        top.fail("unobservable", fmt::format("item {}: expected a text, found {}", i,
+                                             describe_kind(item)));
+      }
+      s.unobservable.push_back(item.Scalar());
+    }
+  }
   const Fields model_fields(
       source, top.required("sensor_model"), "sensor_model",
       {"preset", "cpi", "frame_rate", "max_speed", "packets_per_row", "frame_noise",

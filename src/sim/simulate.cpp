@@ -126,7 +126,8 @@ void simulate(const Scenario& scenario, std::uint64_t seed, LogSink& sink,
     if (scenario.imu.enabled) {
       gyro.frame(step.twist.omega, h);
       if ((k + 1) % imu_every == 0 || k + 1 == frames) {
-        sink.imu({t1 + scenario.imu.latency, gyro.take_row(t1 - time(last_imu_frame))});
+        const double gz = gyro.take_row(t1 - time(last_imu_frame));
+        sink.imu({t1 + scenario.imu.latency, gz, gyro.saturated(), gyro.faulty()});
         last_imu_frame = k + 1;
       }
     }

@@ -12,6 +12,8 @@ int DriveModel::wheel_count() const {
       return 3;
     case DriveType::kDifferential:
       return 2;
+    case DriveType::kMecanum:
+      return 4;
     case DriveType::kNone:
     case DriveType::kReference:
       break;
@@ -28,15 +30,24 @@ WheelOdometry::WheelOdometry(const DriveModel& model, std::uint64_t seed)
       const double a = model_.wheel_angles[static_cast<std::size_t>(j)];
       kinematics_.row(j) << -std::sin(a), std::cos(a), r;
     }
-    forward_ = kinematics_.inverse();
+    forward_.leftCols<3>() = kinematics_.topRows<3>().inverse();
   } else if (model_.type == DriveType::kDifferential) {
     const double b = model_.wheel_distance;
     kinematics_.row(0) << 1.0, 0.0, -b;  // left wheel at (0, +b)
     kinematics_.row(1) << 1.0, 0.0, b;   // right wheel at (0, -b)
     forward_.col(0) << 0.5, 0.0, -0.5 / b;
     forward_.col(1) << 0.5, 0.0, 0.5 / b;
+  } else if (model_.type == DriveType::kMecanum) {
+    const double l = model_.wheel_distance;
+    kinematics_.row(0) << 1.0, -1.0, -l;  // front left
+    kinematics_.row(1) << 1.0, 1.0, l;    // front right
+    kinematics_.row(2) << 1.0, 1.0, -l;   // rear left
+    kinematics_.row(3) << 1.0, -1.0, l;   // rear right
+    // (W^T W)^-1 W^T: W's columns are orthogonal, W^T W = diag(4, 4, 4 l^2).
+    const Eigen::Matrix3d normal = kinematics_.transpose() * kinematics_;
+    forward_ = normal.inverse() * kinematics_.transpose();
   }
-  model_.slip.base.resize(3, 0.0);
+  model_.slip.base.resize(kMaxWheels, 0.0);
 }
 
 // Per frame, on scalars (see OpticalSensor::frame for why).
@@ -52,6 +63,15 @@ void WheelOdometry::frame(const Twist2& twist, double h) {
   }
   const int n = model_.wheel_count();
   const SlipModel& slip = model_.slip;
+  const double mid = t_ + 0.5 * h;
+  t_ += h;
+  Wheels burst = Wheels::Zero();
+  for (const SlipBurst& b : slip.bursts) {
+    if (mid < b.start || mid >= b.end) continue;
+    for (int j = 0; j < n; ++j) {
+      if (b.wheel < 0 || b.wheel == j) burst[j] += b.slip;
+    }
+  }
   const double decay = h / slip.random_time;
   const double kick = slip.random * std::sqrt(2.0 * decay);
   for (int j = 0; j < n; ++j) {
@@ -63,7 +83,8 @@ void WheelOdometry::frame(const Twist2& twist, double h) {
       random_slip_[j] += -random_slip_[j] * decay + kick * rng_.normal();
     }
     const double fraction =
-        slip.base[static_cast<std::size_t>(j)] + slip.per_speed * std::abs(g) + random_slip_[j];
+        slip.base[static_cast<std::size_t>(j)] + slip.per_speed * std::abs(g) + random_slip_[j] +
+        burst[j];
     travelled_[j] += (g * (1.0 + fraction) + slip.per_accel * accel) * h;
   }
 }
@@ -74,7 +95,7 @@ Twist2 WheelOdometry::take_row(double dt) {
     x = reference_ / dt;
     reference_.setZero();
   } else {
-    Eigen::Vector3d counted = travelled_;
+    Wheels counted = travelled_;
     if (model_.encoder_resolution > 0.0) {
       counted =
           (travelled_ / model_.encoder_resolution).array().round() * model_.encoder_resolution;

@@ -316,6 +316,7 @@ bool Dashboard::Impl::serve(const std::shared_ptr<Client>& client, httplib::Data
       for (const auto& w : warnings) greeting += *w;
       if (last) greeting += *last;
       client->queue.clear();  // the warnings queued before the greeting are in it
+      ++stats.greeted;
     } else {
       wake.wait_for(lock, std::chrono::seconds(1),
                     [&] { return stopping || finished || !client->queue.empty(); });
@@ -376,6 +377,27 @@ Dashboard::Dashboard(const RobotConfig& config, const DashboardOptions& options)
   s.server.Get("/", [this](const httplib::Request&, httplib::Response& res) {
     res.set_header("Cache-Control", "no-store");
     res.set_content(impl_->page, "text/html; charset=utf-8");
+  });
+  // The server's counts as one JSON object (Dashboard::Stats and whether the
+  // run has ended): what a watcher polls to know a page is connected.
+  s.server.Get("/status", [this](const httplib::Request&, httplib::Response& res) {
+    const Stats now = stats();
+    bool ended = false;
+    {
+      const std::lock_guard lock(impl_->mutex);
+      ended = impl_->finished;
+    }
+    JsonWriter j;
+    j.begin_object()
+        .member("events", now.events)
+        .member("dropped", now.dropped)
+        .member("clients", now.clients)
+        .member("greeted", now.greeted)
+        .member("refused", now.refused)
+        .member("ended", ended)
+        .end_object();
+    res.set_header("Cache-Control", "no-store");
+    res.set_content(j.str() + "\n", "application/json");
   });
   s.server.Get("/events", [this](const httplib::Request&, httplib::Response& res) {
     Impl& d = *impl_;

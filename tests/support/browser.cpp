@@ -1,5 +1,7 @@
 #include "support/browser.hpp"
 
+#include <sys/wait.h>
+
 #include <cstdlib>
 
 #include "support/run.hpp"
@@ -30,10 +32,26 @@ BrowserPage load_page(const std::string& chromium, const std::string& url,
       " --enable-logging=stderr --v=0 --dump-dom " + url + " >" + dom.string() + " 2>" +
       log.string();
   BrowserPage page;
-  page.exit_code = std::system(command.c_str());
+  const int status = std::system(command.c_str());
+  page.exit_code = status < 0 ? -1
+                   : WIFEXITED(status) ? WEXITSTATUS(status)
+                                       : 128 + WTERMSIG(status);
   page.dom = read_text(dom);
   page.console = read_text(log);
   return page;
+}
+
+std::string BrowserPage::failure() const {
+  std::string what;
+  if (exit_code != 0) {
+    what = "chromium exited with " + std::to_string(exit_code) +
+           (exit_code == 124 ? " (killed at its time limit)" : "");
+  } else if (dom.find("<html") == std::string::npos) {
+    what = "chromium exited 0 but dumped no page (" + std::to_string(dom.size()) + " bytes)";
+  } else {
+    return {};
+  }
+  return what + "; its log:\n" + console;
 }
 
 std::string tag_of(const std::string& dom, const std::string& id) {

@@ -16,6 +16,11 @@ struct BrowserPage {
   int exit_code = -1;   ///< Chromium's (0: loaded and dumped)
   std::string dom;      ///< the DOM after the script ran
   std::string console;  ///< Chromium's log; the page's console lines contain "CONSOLE"
+  /// "" when Chromium exited 0 and dumped a page (an <html> element), else
+  /// what went wrong with Chromium's exit code and its log: a test asserts
+  /// `page.failure().empty()` before it reads the DOM, so that an empty dump
+  /// is a failure that shows why, never a pass.
+  std::string failure() const;
 };
 
 /// Loads `url` in `chromium` (headless, a fresh profile under `dir`), lets

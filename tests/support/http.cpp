@@ -138,6 +138,10 @@ int BackgroundMoa::wait(double seconds) {
   }
 }
 
+void BackgroundMoa::signal(int signal) {
+  if (wait(0.0) < 0 && pid_ > 0) kill(pid_, signal);
+}
+
 std::string BackgroundMoa::err() const { return slurp(dir_ + "/err"); }
 std::string BackgroundMoa::out() const { return slurp(dir_ + "/out"); }
 

@@ -32,6 +32,8 @@ class BackgroundMoa {
   int wait(double seconds);
   std::string err() const;
   std::string out() const;
+  /// Sends `signal` (SIGINT: Ctrl-C) to moa if it is still running.
+  void signal(int signal);
 
  private:
   pid_t pid_ = -1;

@@ -65,7 +65,8 @@ enum class EstimatorKind : std::uint8_t {
   kSekimori,   ///< pairwise voting (Sekimori & Miyazaki eqs. (4), (7)-(9)), wheels as fallback
   kConsensus,  ///< largest chi-square-consistent subset, wheels as fallback and check
   kWheels,     ///< wheel odometry alone (the mice are not used)
-  kOracle,     ///< least squares over the sensors with no simulated fault in the epoch
+  kOracle,     ///< least squares over the sensors with no simulated fault in the epoch,
+               ///< with the gyro as configured where it had none
 };
 template <>
 struct EnumNames<EstimatorKind> {
@@ -234,8 +235,10 @@ class Odometry {
   /// A gyro row (imu.csv): the rate about z (rad/s, counter-clockwise)
   /// averaged over the interval since the previous gyro row, ending at t as
   /// stamped (the pipeline takes t - consensus.gyro.latency). Used by the
-  /// consensus estimator; ignored unless use_imu.
-  std::optional<OdometryError> push_gyro(double t, double gz, StepSink sink);
+  /// consensus estimator and the oracle (which leaves out the epochs that
+  /// overlap a `faulty` row: the simulator's truth, imu.csv's `faults`);
+  /// ignored unless use_imu.
+  std::optional<OdometryError> push_gyro(double t, double gz, StepSink sink, bool faulty = false);
   /// A camera fix (ignored unless fuse_camera).
   std::optional<OdometryError> push_fix(const CameraFix& fix);
   /// Ends the stream at t_end (the last row's time): emits every remaining
@@ -263,6 +266,7 @@ class Odometry {
   /// Into `out`, default-constructed; false when the epoch has no interval.
   bool estimate(const ArraySample& sample, const std::optional<Twist2>& wheels,
                 const std::optional<real>& gyro, RobustEstimate& out);
+  void fuse_oracle_gyro(real g, real dt, RobustEstimate& e) const;
   /// Every stream an epoch waits for has a row at or after t.
   bool covered(double t) const;
   void apply_fixes(double t);
@@ -283,7 +287,8 @@ class Odometry {
   WheelAverager wheels_;
   bool wheels_seen_ = false;
   double last_wheel_t_ = 0.0;
-  IntervalAverager<1> gyro_;  ///< rad/s, on the mice's clock (latency removed)
+  /// rad/s, on the mice's clock (latency removed); the oracle's faulty rows NaN
+  IntervalAverager<1> gyro_;
   bool gyro_seen_ = false;
   double last_gyro_t_ = 0.0;
   FixedRing<ArraySample, kMaxWaitingEpochs> ready_;  ///< final epochs waiting for wheels

@@ -9,6 +9,7 @@
 // them ($OUT a scratch directory; the last call is `moa evaluate --json`).
 // self-calibration also has "scale": per scenario the affected sensor's true
 // and estimated scale at each sample time, and each run's estimates.
+// random (random_worlds.cpp) has its own stable form, docs/formats/random.md.
 // gyro's rows are per case and method; the gyro-alone rows' runs have no
 // reproduce (no moa call integrates imu.csv alone) but the bias they used,
 // and a row the estimator refused has "refused" (its error) instead of figures.
@@ -27,6 +28,8 @@ struct Options {
   /// 1-100 (core/noise_model.hpp), the tests use 101-200, the docs 201 on.
   std::uint64_t seed = 201;
   int runs = 0;  ///< repetitions; 0: the experiment's default
+  /// `random` only: the family of the worlds (sim/random_world.hpp), "" for `any`.
+  std::string family;
   /// Called with a short status ("table 4, speed (b): run 3/10").
   std::function<void(const std::string&)> progress;
 };

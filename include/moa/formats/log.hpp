@@ -69,6 +69,10 @@ struct WheelRow {
 struct ImuRow {
   double t = 0.0;   ///< s, end of the averaging interval
   double gz = 0.0;  ///< rad/s
+  /// The simulator's truth (optional column `faults`, moa extension): 1 when
+  /// a gyro fault acted on the row (stuck, saturated, its bias stepped), 0
+  /// otherwise; only the oracle reads it.
+  std::uint8_t faults = 0;
 };
 struct CameraRow {
   double t = 0.0;                        ///< s

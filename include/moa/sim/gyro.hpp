@@ -10,15 +10,31 @@
 // over dt), clamped again (a saturated part reads its full scale). Rows come
 // every round(frame_rate / rate) frames, stamped `latency` s after the end
 // of the interval they cover (the part's filter and the bus).
+//
+// Faults (`imu: {faults: [...]}`, docs/simulator.md), by the frame's midpoint t:
+//   stuck      in [start, end): every row repeats the last row before the
+//              window (a register that stopped updating);
+//   bias_step  from start on: b(t) gains `step` rad/s once (a warm-up or a
+//              knock: the bias jumps and stays).
+// Saturation is not a fault here but the model's own clamp: a turn faster
+// than max_rate / scale reads the full scale.
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include "moa/sim/random.hpp"
 
 namespace moa::sim {
 
 /// The scenario's `imu:` block (docs/simulator.md).
+struct GyroFault {
+  enum Kind { kStuck, kBiasStep } kind = kStuck;
+  double start = 0.0;  ///< s
+  double end = 0.0;    ///< s, stuck: the window's end (a bias step stays)
+  double step = 0.0;   ///< rad/s, bias_step
+};
+
 struct GyroSpec {
   bool enabled = false;
   double rate = 100.0;            ///< rows per second
@@ -28,6 +44,7 @@ struct GyroSpec {
   double noise_density = 1.5e-4;  ///< rad/s/sqrt(Hz)
   double max_rate = 8.7;          ///< rad/s, full scale
   double latency = 0.0;           ///< s, a row's stamp after its interval's end
+  std::vector<GyroFault> faults;
 };
 
 class SimGyro {
@@ -37,6 +54,10 @@ class SimGyro {
   void frame(double omega, double h);
   /// The row over the frames since the previous one, dt s long (rad/s).
   double take_row(double dt);
+  /// Of the row last taken: a frame or the row read the full scale.
+  bool saturated() const { return row_saturated_; }
+  /// Of the row last taken: saturated, stuck, or after a bias step.
+  bool faulty() const { return row_faulty_; }
 
  private:
   double clamp(double r) const;
@@ -44,6 +65,13 @@ class SimGyro {
   Rng rng_;
   double bias_ = spec_.bias;
   double sum_ = 0.0;  ///< rad, integral of the reading over the row
+  double t_ = 0.0;    ///< s, the end of the last frame
+  double last_row_ = 0.0;
+  bool saturating_ = false;  ///< a frame of the row being made read the full scale
+  bool stepped_any_ = false;
+  bool row_saturated_ = false;
+  bool row_faulty_ = false;
+  std::vector<bool> stepped_ = std::vector<bool>(spec_.faults.size(), false);
 };
 
 }  // namespace moa::sim

@@ -10,6 +10,8 @@
 //                    sensor would have reported without its faults)
 //   robot.yaml       the nominal robot (what the user believes)
 //   robot.true.yaml  the simulated robot
+//   faults.json      the faults' truth per source and interval (fault_truth.hpp)
+//   scenario.yaml    when given: the scenario's text (a random world, to replay and edit)
 // The run is written into a hidden directory beside the target and moved
 // into place at the end: the target must be absent, empty, or a previous
 // run (only these files, mice.csv from moa simulate), which is replaced
@@ -19,6 +21,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <string_view>
 
 #include "moa/sim/scenario.hpp"
 #include "moa/sim/simulate.hpp"
@@ -39,6 +42,6 @@ struct LogSummary {
 /// io::Error naming the file or directory on failure (a directory holding
 /// anything else is refused before the run), leaving no partial file.
 LogSummary write_log(const Scenario& scenario, std::uint64_t seed, const std::filesystem::path& dir,
-                     const Progress& progress = {});
+                     const Progress& progress = {}, std::string_view scenario_text = {});
 
 }  // namespace moa::sim

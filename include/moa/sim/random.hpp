@@ -36,6 +36,8 @@ enum class Stream : std::uint64_t {
   kWheelClock = 8,
   kCameraClock = 9,
   kCameraDrop = 10,
+  kWorld = 11,        ///< a random world's draws (random_world.hpp)
+  kWorldFamily = 12,  ///< the family of a seed of family `any`
 };
 inline constexpr std::uint64_t kStreamStride = 16;
 

@@ -45,6 +45,10 @@ struct Scenario {
   CameraModel camera;
   GyroSpec imu;
   std::vector<SensorFaults> faults;  ///< one per sensor, config order
+  /// What the run's data cannot show to any estimator (`unobservable:`, a
+  /// list of texts; the random worlds say it of themselves): faults.json
+  /// carries it, and the random bench counts such worlds apart.
+  std::vector<std::string> unobservable;
 
   /// Frames simulated: the duration in whole rows of K frames, rounded up.
   /// Throws io::Error beyond kMaxScenarioFrames.

@@ -22,6 +22,10 @@
 //             "test"}}                    per true rate) and that epoch's test ratio
 //                                         (1: the gate; null: not tested)
 //
+// GET /status is the server's counts, {"events", "dropped", "clients",
+// "greeted", "refused", "ended"} (Stats, and whether finish() was called): what a
+// watcher polls to see that a page is connected and being fed.
+//
 // A client that connects first gets "event: history" (the trajectory and
 // the twist so far, {"points": [[t, x, y, vx, vy, omega], ...]}, the last
 // history_points events: s, m, m, m/s, m/s, rad/s), then one "event:
@@ -105,6 +109,9 @@ class Dashboard {
     std::size_t events = 0;   ///< events made
     std::size_t dropped = 0;  ///< events dropped from slow clients' queues
     std::size_t clients = 0;  ///< /events streams open now
+    /// /events streams greeted so far (sent the history): every event made
+    /// after a stream's greeting is sent to it, unless dropped.
+    std::size_t greeted = 0;
     std::size_t refused = 0;  ///< /events requests answered 503
   };
   Stats stats() const;
