@@ -224,8 +224,8 @@ TEST(SimCli, APreviousRunIsReplacedWholeNeverMixed) {
   const auto r = simulate("calibration", 1, root / "run");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(entries(root / "run"),
-            (std::vector<std::string>{"faults.csv", "mice.csv", "robot.true.yaml", "robot.yaml",
-                                      "truth.csv", "wheels.csv"}));
+            (std::vector<std::string>{"faults.csv", "faults.json", "mice.csv", "robot.true.yaml",
+                                      "robot.yaml", "truth.csv", "wheels.csv"}));
   EXPECT_THAT(slurp(root / "run" / "mice.csv"), HasSubstr("scenario 'calibration'"));
   // Nothing else beside it: no temporary directory left.
   EXPECT_EQ(entries(root), std::vector<std::string>{"run"});

@@ -188,7 +188,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"unknown top key", with("colour: red\n"),
                 "s.yaml:6: unknown key 'colour' (known here: version, name, description, "
                 "duration, truth_rate, sensor_model, sensors, true_sensors, drive, wheels, "
-                "motion, faults, camera, imu)"},
+                "motion, faults, camera, imu, unobservable)"},
         BadCase{"unknown nested key",
                 "version: 1\nname: t\nsensor_model: {preset: HDNS-2051, fps: 100}\n",
                 "s.yaml:3: unknown key 'sensor_model.fps' (known here: preset, cpi, frame_rate, "
@@ -306,6 +306,28 @@ INSTANTIATE_TEST_SUITE_P(
                 "max_angular_accel: 1\n",
                 "s.yaml:10: key 'motion.waypoints': segment 1 -> 2 needs sideways motion, which "
                 "a differential drive cannot make"},
+        BadCase{"wheel angles on a mecanum drive",
+                with("drive: {type: mecanum, wheel_distance: 0.2, wheel_angles_deg: [0, 1, 2]}\n"),
+                "s.yaml:6: key 'drive.wheel_angles_deg': not used by drive type 'mecanum'"},
+        BadCase{"three slip bases for four mecanum wheels",
+                with("drive: {type: mecanum, wheel_distance: 0.2, slip: {base: [0.1, 0.1, 0.1]}}\n"),
+                "s.yaml:6: key 'drive.slip.base': expected 4 numbers, found 3"},
+        BadCase{"slip burst ends before it starts",
+                with("drive: {type: omni3, wheel_distance: 0.1, slip: {bursts: [{start: 2, end: 1, "
+                     "slip: 0.5}]}}\n"),
+                "s.yaml:6: key 'drive.slip.bursts[0].end': must be after start (1 <= 2)"},
+        BadCase{"slip burst on a wheel that is not there",
+                with("drive: {type: omni3, wheel_distance: 0.1, slip: {bursts: [{start: 0, end: 1, "
+                     "slip: 0.5, wheel: 3}]}}\n"),
+                "s.yaml:6: key 'drive.slip.bursts[0].wheel': must be within [0, 2] (found 3)"},
+        BadCase{"unknown gyro fault", with("imu: {faults: [{type: drift, start: 1}]}\n"),
+                "s.yaml:6: key 'imu.faults[0].type': 'drift' is not one of: stuck, bias_step"},
+        BadCase{"stuck gyro without an end", with("imu: {faults: [{type: stuck, start: 1}]}\n"),
+                "s.yaml:6: missing key 'imu.faults[0].end'"},
+        BadCase{"absurd bias step", with("imu: {faults: [{type: bias_step, start: 1, step: 2}]}\n"),
+                "s.yaml:6: key 'imu.faults[0].step': must be within [-1, 1] (found 2)"},
+        BadCase{"unobservable not a list", with("unobservable: yes\n"),
+                "s.yaml:6: key 'unobservable': expected a list of texts, found 'yes'"},
         BadCase{"drive key of another type",
                 with("drive: {type: reference, wheel_distance: 0.1}\n"),
                 "s.yaml:6: key 'drive.wheel_distance': not used by drive type 'reference'"},

@@ -50,6 +50,7 @@ TEST(SimWheels, SlipFreeWheelsMeasureTheTwist) {
             std::string("{type: omni3, wheel_distance: 0.12, wheel_angles_deg: [60, 180, 300]}"),
             true},
         std::pair{std::string("{type: differential, wheel_distance: 0.15}"), false},
+        std::pair{std::string("{type: mecanum, wheel_distance: 0.25}"), true},
         std::pair{std::string("{type: reference}"), true}}) {
     const SimLog log = simulate(parse_scenario(drive_scenario(drive, lateral), "w.yaml"), 1);
     ASSERT_EQ(log.wheels.size(), 110u) << drive;
@@ -61,6 +62,31 @@ TEST(SimWheels, SlipFreeWheelsMeasureTheTwist) {
       EXPECT_NEAR(r.twist.omega, x.omega, 1e-9) << drive << " t " << r.t;
     }
   }
+}
+
+// A slip burst on one wheel of a mecanum drive: inside it the wheel's
+// surface turns 1 + slip times as fast as the ground under it. The
+// odometry (the least-squares inverse of the four rim speeds) then reads
+// the true twist plus slip g_j times column j of that inverse, g_j the
+// wheel's true rim speed (front left: vx - vy - L omega); outside, the
+// twist itself.
+TEST(SimWheels, ASlipBurstOnOneWheelReadsAsItsColumnOfTheInverse) {
+  const double l = 0.25, slip = 0.4;
+  const std::string drive = "{type: mecanum, wheel_distance: 0.25, slip: {bursts: [{start: 0.2, "
+                            "end: 0.4, slip: 0.4, wheel: 0}]}}";
+  const SimLog log = simulate(parse_scenario(drive_scenario(drive, true), "w.yaml"), 1);
+  int inside = 0;
+  for (const auto& r : log.wheels) {
+    const Twist2 x = commanded(r.t);
+    const bool burst = r.t > 0.2 + 1e-9 && r.t <= 0.4 + 1e-9;
+    const double g = burst ? slip * (x.v.x() - x.v.y() - l * x.omega) : 0.0;
+    // Column 0 of (W'W)^-1 W': (1/4, -1/4, -1/(4 L)).
+    EXPECT_NEAR(r.twist.v.x(), x.v.x() + g / 4, 1e-9) << r.t;
+    EXPECT_NEAR(r.twist.v.y(), x.v.y() - g / 4, 1e-9) << r.t;
+    EXPECT_NEAR(r.twist.omega, x.omega - g / (4 * l), 1e-9) << r.t;
+    inside += burst ? 1 : 0;
+  }
+  EXPECT_EQ(inside, 20);
 }
 
 TEST(SimWheels, EncoderTicksCarryTheRemainder) {
