@@ -305,6 +305,11 @@ TEST(RandomWorlds, TheBenchRunsAFewSeedsOfEachFamily) {
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_THAT(bad.err, HasSubstr("--seeds '5-2'"));
   EXPECT_NE(test::run_moa("experiment gyro --family clean").exit_code, 0);
+  for (const char* both : {"--seeds 1-2 --runs 3", "--seeds 1-2 --seed 7"}) {
+    const auto r = test::run_moa(std::string("experiment random ") + both);
+    EXPECT_EQ(r.exit_code, 1) << both;
+    EXPECT_THAT(r.err, HasSubstr("exclude each other")) << both;
+  }
 }
 
 }  // namespace

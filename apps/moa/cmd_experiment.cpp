@@ -27,6 +27,7 @@ struct ExperimentArgs {
   bool list = false;
   std::string report;  ///< --report FILE.html: the page of one run (experiments/report.hpp)
   std::string seeds;   ///< --seeds A-B (random)
+  bool seed_given = false;
 };
 
 // "A-B" (or "A"): the first seed and the count, into options; a usage error
@@ -42,7 +43,8 @@ void parse_seed_range(const std::string& text, experiments::Options& options) {
   };
   if (!whole(a, first) || !whole(b, last) || last < first || last - first >= 1000000) {
     throw io::Error(fmt::format(
-        "--seeds '{}': give A-B, whole numbers with A <= B and at most 1000000 seeds", text));
+        "--seeds '{}': give A-B (or A), whole numbers with A <= B and at most 1000000 seeds",
+        text));
   }
   options.seed = first;
   options.runs = static_cast<int>(last - first + 1);
@@ -71,7 +73,13 @@ int run_experiment(ExperimentArgs args) {
     throw io::Error(fmt::format("{} is for `moa experiment random` only",
                                 args.seeds.empty() ? "--family" : "--seeds"));
   }
-  if (!args.seeds.empty()) parse_seed_range(args.seeds, args.options);
+  if (!args.seeds.empty()) {
+    if (args.seed_given || args.options.runs != 0) {
+        throw io::Error(fmt::format("--seeds and {} exclude each other: give the seeds as A-B",
+                                    args.seed_given ? "--seed" : "--runs"));
+    }
+    parse_seed_range(args.seeds, args.options);
+  }
   const experiments::ExperimentReportRecipe* recipe =
       experiments::experiment_report_recipe(e->name);
   if (!args.report.empty() && !recipe) {
@@ -108,7 +116,8 @@ void add_experiment(CLI::App& app, Action& action) {
                   "experiment's scenario, simulated with --seed");
   cmd->add_option("--seed", args->options.seed, "First seed; run k uses seed + k")
       ->check(seed_check())
-      ->capture_default_str();
+      ->capture_default_str()
+      ->each([args](const std::string&) { args->seed_given = true; });
   cmd->add_option("--runs", args->options.runs,
                   "Repetitions (Monte Carlo trials or runs); 0: the experiment's default")
       ->capture_default_str();
@@ -119,8 +128,8 @@ void add_experiment(CLI::App& app, Action& action) {
                       "; default any)")
       ->check(CLI::IsMember(families));
   cmd->add_option("--seeds", args->seeds,
-                  "random: the seeds A-B (tune on 1-9999, report from 10001); default 20 from "
-                  "--seed")
+                  "random: the seeds A-B, or one seed A (tune on 1-9999, report from 10001); "
+                  "default 20 from --seed")
       ->type_name("A-B");
   cmd->callback([&action, args] { action = [args] { return run_experiment(*args); }; });
 }

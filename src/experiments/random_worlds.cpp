@@ -28,7 +28,9 @@
 // covariance; its mean over a world's epochs is 3 for a consistent filter.
 // And a state the data cannot see: during the initial rest (before the
 // first motion) the gyro's scale must stay at its prior, measured as the
-// largest |scale(t) - scale(t0)| over the prior's sd.
+// largest |scale(t) - scale(t0)| over the prior's sd. At the end of the run
+// the gyro's scale, and its bias where it neither walks nor steps, against
+// the truth: ((x - x_true) / sd)^2, 1 on average for a consistent filter.
 #include <fmt/core.h>
 #include <fmt/format.h>
 
@@ -92,6 +94,9 @@ struct SeedResult {
   std::array<Figures, kMethods> m;
   double nees = std::nan("");      ///< mean twist NEES of the default over the epochs
   double rest_scale = std::nan("");  ///< max |scale - scale0| / sd0 in the initial rest
+  /// The gyro's calibration at the end against the truth, ((x - x_true) / sd)^2:
+  /// its scale, and its bias where the bias neither walks nor steps.
+  double scale_nees = std::nan(""), bias_nees = std::nan("");
   std::string failure;             ///< of the estimators under test, "" if none
 };
 
@@ -154,9 +159,18 @@ void consistency(const sim::RandomWorld& world, const fs::path& dir,
   std::size_t epochs = 0;
   std::optional<double> scale0, sd0;
   double rest = 0.0;
+  const GyroModel* last_gyro = nullptr;
+  double scale_end = 0.0, scale_sd = 0.0, bias_end = 0.0, bias_sd = 0.0;
   const double dt = 1.0 / options.rate;
   io::run_odometry(config, (dir / "robot.yaml").string(), io::resolve_log(dir), options,
                    [&](const OdometryStep& step) {
+                     if (step.gyro != nullptr) {
+                       last_gyro = step.gyro;
+                       scale_end = step.gyro->scale();
+                       scale_sd = step.gyro->scale_sd();
+                       bias_end = step.gyro->bias();
+                       bias_sd = step.gyro->bias_sd();
+                     }
                      if (step.gyro != nullptr && step.t() <= moved) {
                        if (!scale0) {
                          scale0 = step.gyro->scale();
@@ -178,7 +192,16 @@ void consistency(const sim::RandomWorld& world, const fs::path& dir,
                    });
   if (epochs > 0) r.nees = sum / static_cast<double>(epochs);
   if (scale0) r.rest_scale = rest;
-  (void)world;
+  const sim::GyroSpec& g = world.scenario.imu;
+  if (last_gyro != nullptr && scale_sd > 0.0) {
+    r.scale_nees = std::pow((scale_end - g.scale) / scale_sd, 2);
+    const bool steps = std::any_of(g.faults.begin(), g.faults.end(), [](const auto& f) {
+      return f.kind == sim::GyroFault::kBiasStep;
+    });
+    if (g.bias_walk == 0.0 && !steps && bias_sd > 0.0) {
+      r.bias_nees = std::pow((bias_end - g.bias) / bias_sd, 2);
+    }
+  }
 }
 
 SeedResult run_seed(std::uint64_t seed, const std::string& family, const fs::path& scratch) {
@@ -367,22 +390,39 @@ Result random_worlds(const Options& options) {
     if (a->unobservable.empty() != b->unobservable.empty()) return a->unobservable.empty();
     return badness(*a) > badness(*b);
   });
+  // Only worlds with a ratio to selection (two sensors or more, selection ran) or a failure.
+  std::erase_if(order, [](const SeedResult* r) {
+    const Figures& s = r->m[kSelection];
+    return r->failure.empty() && (!s.run || !s.error.empty());
+  });
   const std::size_t worst = std::min<std::size_t>(5, order.size());
-  std::vector<double> nees, rest;
+  std::size_t without = 0;  // worlds with no ratio to selection: one sensor
+  for (const auto& r : results) without += r.m[kSelection].run ? 0 : 1;
+  std::vector<double> nees, rest, scale_nees, bias_nees;
   for (const auto& r : results) {
     if (std::isfinite(r.nees)) nees.push_back(r.nees);
     if (std::isfinite(r.rest_scale)) rest.push_back(r.rest_scale);
+    if (std::isfinite(r.scale_nees)) scale_nees.push_back(r.scale_nees);
+    if (std::isfinite(r.bias_nees)) bias_nees.push_back(r.bias_nees);
   }
   const Quantiles nees_q = quantiles(nees), rest_q = quantiles(rest);
+  const Quantiles scale_q = quantiles(scale_nees), bias_q = quantiles(bias_nees);
+  const auto mean = [](const std::vector<double>& v) {
+    double sum = 0.0;
+    for (const double x : v) sum += x;
+    return v.empty() ? std::nan("") : sum / static_cast<double>(v.size());
+  };
 
   // ---------------------------------------------------------------- text
   std::string t;
   auto out = std::back_inserter(t);
   fmt::format_to(out,
-                 "Random worlds, family {}, seeds {}-{} ({} worlds, {} with something no "
-                 "estimator can see, counted apart); {:.1f} seeds per minute on {} threads.\n"
+                 "Random worlds, family {}, seeds {}-{} ({} world{}, {} with something no "
+                 "estimator can see and {} with one sensor, which have no yardstick, counted "
+                 "apart); {:.1f} seeds per minute on {} thread{}.\n"
                  "Tune on seeds 1-9999, report from 10001.\n\n",
-                 family, first, first + count - 1, count, unobservable, per_minute, threads);
+                 family, first, first + count - 1, count, count == 1 ? "" : "s", unobservable,
+                 without, per_minute, threads, threads == 1 ? "" : "s");
   t += "Ratio of each method's max error to selection's and to the oracle's (median / p90 / "
        "max over the observable worlds):\n\n";
   fmt::format_to(out, "| method | vs selection, translation | heading | vs oracle, translation | "
@@ -400,6 +440,12 @@ Result random_worlds(const Options& options) {
                  "gyro; max {:.2f}).\n",
                  nees_q.median, nees_q.p90, nees_q.max, nees_q.n, rest_q.median, rest_q.n,
                  rest_q.max);
+  fmt::format_to(out,
+                 "The gyro's calibration at the end against the truth, ((x - x_true) / sd)^2 "
+                 "(mean 1 if consistent): scale mean {:.2f}, median {:.2f}, max {:.1f} over {} "
+                 "worlds; bias (no walk, no step) mean {:.2f}, median {:.2f}, max {:.1f} over {}.\n",
+                 mean(scale_nees), scale_q.median, scale_q.max, scale_q.n, mean(bias_nees),
+                 bias_q.median, bias_q.max, bias_q.n);
   t += "\nFailures (an error, a non-finite figure, or over 5x selection):\n";
   std::size_t listed = 0;
   for (const auto& r : results) {
@@ -446,13 +492,21 @@ Result random_worlds(const Options& options) {
     write_quantiles(j, o.translation);
     j.key("heading");
     write_quantiles(j, o.heading);
-    j.end_object().member("failures", static_cast<std::uint64_t>(failures[k])).end_object();
+    j.end_object();
+    if (kUnderTest[k]) j.member("failures", static_cast<std::uint64_t>(failures[k]));
+    j.end_object();
   }
-  j.end_object().member("unobservable_worlds", static_cast<std::uint64_t>(unobservable));
+  j.end_object()
+      .member("unobservable_worlds", static_cast<std::uint64_t>(unobservable))
+      .member("worlds_without_selection", static_cast<std::uint64_t>(without));
   j.key("consistency").begin_object().key("twist_nees_mean");
   write_quantiles(j, nees_q);
   j.key("rest_gyro_scale_sd");
   write_quantiles(j, rest_q);
+  j.key("gyro_scale_nees");
+  write_quantiles(j, scale_q);
+  j.key("gyro_bias_nees");
+  write_quantiles(j, bias_q);
   j.end_object();
   j.key("worst").begin_array();
   for (std::size_t i = 0; i < worst; ++i) {

@@ -68,7 +68,7 @@ class FileSink : public LogSink {
         faults_(dir / "faults.csv",
                 comment_ +
                     "; fault truth per mice.csv row, bits: 1 tracking_loss, 2 liftoff, "
-                    "4 dirty, 8 spikes, 16 stuck",
+                    "4 dirty, 8 spikes, 16 stuck, 32 drift",
                 "t,sensor,faults,faulty_frames,clean_dx,clean_dy"),
         truth_(dir / "truth.csv", comment_, "t,x,y,theta,vx,vy,omega"),
         fault_truth_(s),

@@ -98,8 +98,11 @@ class Builder {
     cpi_ = std::round(d_.log_uniform(400.0, 12000.0) / 50.0) * 50.0;
     rated_speed_ = d_.log_uniform(0.4, 6.0);
     frame_rate_ = std::round(d_.uniform(1000.0, 12000.0));
+    // K frames per row: the row rate frame_rate / K within [100, 2000].
     const double row_rate = d_.log_uniform(100.0, 2000.0);
-    packets_ = std::max(1, static_cast<int>(std::round(frame_rate_ / row_rate)));
+    const int fewest = static_cast<int>(std::ceil(frame_rate_ / 2000.0));
+    const int most = static_cast<int>(std::floor(frame_rate_ / 100.0));
+    packets_ = std::clamp(static_cast<int>(std::round(frame_rate_ / row_rate)), fewest, most);
     frame_noise_ = d_.uniform(0.0, 0.1);
     relative_noise_ = d_.uniform(0.0, 0.02);
     squal_ = d_.uniform(40.0, 150.0);
@@ -247,10 +250,7 @@ class Builder {
   }
 
   void draw_reference() {
-    const std::size_t kind =
-        family_ == Family::kCalibration && std::string_view(wheels_) == "none"
-            ? 1 + d_.pick({0.5, 0.5})
-            : d_.pick({0.5, 0.25, 0.25});
+    const std::size_t kind = d_.pick({0.5, 0.25, 0.25});
     camera_ = std::array<const char*, 3>{"none", "mocap", "camera"}[kind];
     if (kind == 1) {
       c_rate_ = d_.uniform(60.0, 240.0);
@@ -313,6 +313,7 @@ class Builder {
         break;
       }
       case 4: {  // drift (dust)
+        if (n_ == 1) lone_sensor_fault_ = true;
         const double a = d_.uniform(0.1, 0.6) * duration_;
         const double ramp = d_.uniform(2.0, 20.0), scale = 1.0 + d_.sign() * d_.uniform(0.03, 0.15);
         add_event(fmt::format("{{type: drift, sensor: {}, start: {}, end: {}, scale: {}, ramp: {}}}",
@@ -321,6 +322,7 @@ class Builder {
         break;
       }
       case 5: {  // dirty
+        if (n_ == 1) lone_sensor_fault_ = true;
         const auto [a, b] = window(0.5, 5.0);
         const double retained = d_.uniform(0.2, 0.8);
         add_event(fmt::format("{{type: dirty, sensor: {}, start: {}, end: {}, retained: {}, squal: "
@@ -355,6 +357,7 @@ class Builder {
 
   // Each listed sensor reads 0-9 % short from one moment on (a new floor).
   void floor_step(const std::vector<int>& which) {
+    if (n_ == 1) lone_sensor_fault_ = true;
     const double t = d_.uniform(0.2, 0.8) * duration_;
     const bool same = which.size() > 1 && d_.chance(0.3);
     const double common = d_.uniform(0.91, 1.0);
@@ -366,8 +369,10 @@ class Builder {
     if (static_cast<int>(which.size()) == n_) {
       floor_all_ = true;
       floor_time_ = t;
-      faults_text_.push_back(fmt::format("floor change under all {} sensors at {:.1f} s{}", n_, t,
-                                         same ? " (the same amount)" : ""));
+      faults_text_.push_back(fmt::format("floor change under {} at {:.1f} s{}",
+                                         n_ == 1 ? std::string("the sensor")
+                                                 : fmt::format("all {} sensors", n_),
+                                         t, same ? " (the same amount)" : ""));
     } else {
       std::vector<std::string> names;
       for (const int i : which) names.push_back(name(i));
@@ -409,9 +414,9 @@ class Builder {
                                               num(slip))
                                 : fmt::format("{{start: {}, end: {}, slip: {}, wheel: {}}}", num(a),
                                               num(b), num(slip), wheel));
-    faults_text_.push_back(fmt::format("{} slipping {:.0f} % {:.1f}-{:.1f} s",
+    faults_text_.push_back(fmt::format("{} slipping {:+.0f} % {:.1f}-{:.1f} s",
                                        wheel < 0 ? std::string("all wheels")
-                                                 : fmt::format("wheel {}", wheel),
+                                                 : fmt::format("wheels[{}]", wheel),
                                        100 * slip, a, b));
   }
 
@@ -476,11 +481,19 @@ class Builder {
 
   // ------------------------------------------------------------- the text
   std::string summary() const {
+    double spread = 0.0;  // the sensors' largest distance apart
+    for (const auto& a : sensors_) {
+      for (const auto& b : sensors_) spread = std::max(spread, std::hypot(a.x - b.x, a.y - b.y));
+    }
+    const std::string array =
+        n_ == 1 ? fmt::format("1 sensor {:.1f} cm from the centre",
+                              100 * std::hypot(sensors_[0].x, sensors_[0].y))
+                : fmt::format("{} sensors {:.1f} cm apart at most", n_, 100 * spread);
     std::string s = fmt::format(
-        "{}, {} sensor{} {:.1f} cm across, {:.0f} cpi rated {:.2f} m/s, {:.0f} rows/s; "
+        "{}, {}, {:.0f} cpi rated {:.2f} m/s, {:.0f} rows/s; "
         "path {:.0f} s up to {:.2f} m/s and {:.1f} rad/s; wheels {}",
-        drive_, n_, n_ == 1 ? "" : "s", 100 * across_, cpi_, rated_speed_,
-        frame_rate_ / packets_, duration_, v_max_, w_max_, wheels_);
+        drive_, array, cpi_, rated_speed_, frame_rate_ / packets_, duration_, v_max_, w_max_,
+        wheels_);
     if (gyro_) {
       s += fmt::format("; gyro scale {:+.1f} %, bias {:+.3f} rad/s, full scale {:.0f} deg/s",
                        100 * (g_scale_ - 1), g_bias_, g_max_ * 180 / kPi);

@@ -9,7 +9,7 @@
 // the sensors, the gyro and the wheels, alone or several at once), `gyro`
 // (always a gyro, miscalibrated, stuck, stepping or saturating), `floor`
 // (floor changes, per sensor or all together, and intermittent lifts),
-// `calibration` (large build errors, a reference beside the sensors), `any`
+// `calibration` (large build errors, wheels beside the sensors), `any`
 // (each seed one of the others). The ranges are in docs/simulator.md.
 #pragma once
 
