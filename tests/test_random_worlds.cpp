@@ -301,6 +301,14 @@ TEST(RandomWorlds, TheBenchRunsAFewSeedsOfEachFamily) {
       EXPECT_THAT(r.out, HasSubstr(key)) << family;
     }
   }
+  // --report: the page of the worst seed's world.
+  const fs::path page = test::scratch_dir("random-report") / "page.html";
+  const auto report =
+      test::run_moa("experiment random --family faults --seeds 1-2 --report " + page.string());
+  ASSERT_EQ(report.exit_code, 0) << report.err;
+  EXPECT_THAT(report.out, HasSubstr("report of seed "));
+  EXPECT_THAT(test::read_text(page), HasSubstr("moa experiment random: seed "));
+  fs::remove_all(page.parent_path());
   const auto bad = test::run_moa("experiment random --seeds 5-2");
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_THAT(bad.err, HasSubstr("--seeds '5-2'"));

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <charconv>
+#include <cstring>
 #include <memory>
 #include <string_view>
 #include <system_error>
@@ -82,7 +83,7 @@ int run_experiment(ExperimentArgs args) {
   }
   const experiments::ExperimentReportRecipe* recipe =
       experiments::experiment_report_recipe(e->name);
-  if (!args.report.empty() && !recipe) {
+  if (!args.report.empty() && !recipe && !random) {
     throw io::Error(fmt::format("experiment '{}' has no report page (--report)", e->name));
   }
   const bool progress = isatty(STDERR_FILENO);
@@ -95,6 +96,19 @@ int run_experiment(ExperimentArgs args) {
   if (progress) fmt::print(stderr, "\r\033[K");
   fmt::print("{}", args.json ? result.json : result.text);
   if (args.report.empty()) return 0;
+  if (random) {
+    // The page of the worst seed (the first of "worst"), else of the first seed.
+    std::uint64_t seed = args.options.seed;
+    const auto at = result.json.find("\"worst\": [{\"seed\": ");
+    if (at != std::string::npos) {
+      const char* first = result.json.data() + at + std::strlen("\"worst\": [{\"seed\": ");
+      std::from_chars(first, result.json.data() + result.json.size(), seed);
+    }
+    experiments::write_random_report(
+        seed, args.options.family.empty() ? "any" : args.options.family, args.report);
+    if (!args.json) fmt::print("report of seed {} written to {}\n", seed, args.report);
+    return 0;
+  }
   experiments::write_experiment_report(*recipe, args.options.seed, args.report);
   if (!args.json) fmt::print("report written to {}\n", args.report);
   return 0;
@@ -113,7 +127,7 @@ void add_experiment(CLI::App& app, Action& action) {
                 "it");
   cmd->add_option("--report", args->report,
                   "Also write the report page (HTML, docs/report.md) of one run of the "
-                  "experiment's scenario, simulated with --seed");
+                  "experiment's scenario, simulated with --seed (random: of its worst seed)");
   cmd->add_option("--seed", args->options.seed, "First seed; run k uses seed + k")
       ->check(seed_check())
       ->capture_default_str()

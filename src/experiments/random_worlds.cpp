@@ -58,6 +58,7 @@
 #include "moa/runs/odometry_run.hpp"
 #include "moa/sim/log_writer.hpp"
 #include "moa/sim/random_world.hpp"
+#include "moa/web/report.hpp"
 
 namespace moa::experiments {
 namespace {
@@ -327,6 +328,28 @@ void write_quantiles(io::JsonWriter& j, const Quantiles& q) {
 }
 
 }  // namespace
+
+void write_random_report(std::uint64_t seed, const std::string& family, const fs::path& out) {
+  const sim::RandomWorld world = sim::random_scenario(seed, family);
+  const ScratchDirectory dir("moa-random-report");
+  const fs::path log = dir.path() / "log";
+  sim::write_log(world.scenario, seed, log, {}, world.yaml);
+  const fs::path odometry = dir.path() / "odometry.csv";
+  const fs::path config = log / "robot.yaml";
+  io::write_odometry(io::read_config(config), config.string(), io::resolve_log(log),
+                     options_of(kDefault).options, odometry);
+  io::ReportInputs inputs;
+  inputs.config = config;
+  inputs.log = log;
+  inputs.odometry = odometry;
+  inputs.truth = log / "truth.csv";
+  inputs.title = fmt::format("moa experiment random: seed {}, family {}", seed, world.family);
+  inputs.note = fmt::format(
+      "The world: {}. The run of `moa simulate --random {} --family {}`, dead reckoning as `moa "
+      "odometry` (the default estimator); its files were temporary.",
+      world.summary, seed, family);
+  io::write_report(inputs, out);
+}
 
 Result random_worlds(const Options& options) {
   const std::string family = options.family.empty() ? "any" : options.family;

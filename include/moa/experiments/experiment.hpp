@@ -16,6 +16,7 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <functional>
 #include <span>
 #include <string>
@@ -44,6 +45,12 @@ struct Experiment {
   const char* summary;
   Result (*run)(const Options& options);
 };
+
+/// `moa experiment random --report FILE.html`: the report page (docs/report.md)
+/// of the world of `seed` in `family`, the default estimator against its
+/// truth (the bench's worst seed, or --seed's). Throws io::Error.
+void write_random_report(std::uint64_t seed, const std::string& family,
+                         const std::filesystem::path& out);
 
 /// Every experiment, sorted by name.
 std::span<const Experiment> all();
