@@ -473,24 +473,37 @@ unsigned long attribute(const std::string& tag, const std::string& name) {
   return std::stoul(m[1]);
 }
 
-/// One count of GET /status ("events", "dropped", "greeted"); -1 when the
-/// server did not answer.
-long status_count(int port, const std::string& name) {
+/// GET /status's counts; `answered` false when the server did not answer.
+struct DashboardStatus {
+  bool answered = false;
+  long events = 0, dropped = 0, greeted = 0;
+  bool ended = false;
+};
+DashboardStatus dashboard_status(int port) {
   const auto r = test::http_get(port, "/status", 2.0);
-  std::smatch m;
-  if (r.status != 200 || !std::regex_search(r.body, m, std::regex("\"" + name + "\": ?([0-9]+)"))) {
-    return -1;
-  }
-  return std::stol(m[1]);
+  DashboardStatus s;
+  const auto count = [&](const char* name, long& value) {
+    std::smatch m;
+    if (!std::regex_search(r.body, m, std::regex(std::string("\"") + name + "\": ([0-9]+)"))) {
+      return false;
+    }
+    value = std::stol(m[1]);
+    return true;
+  };
+  s.answered = r.status == 200 && count("events", s.events) && count("dropped", s.dropped) &&
+               count("greeted", s.greeted);
+  s.ended = r.body.find("\"ended\": true") != std::string::npos;
+  return s;
 }
 
 // The page is loaded while a replay runs and is fed live events: the test
 // waits for the events it needs, not for a guessed time. moa replays the
-// whole 40 s log; once /status shows the page's stream greeted (every later
-// event is sent to it unless dropped), the test waits
-// until 45 more events were made and none of them dropped, then stops the
-// run (SIGINT), whose "end" event lets Chromium dump the DOM. Chromium's
-// start-up under load only delays the test, it cannot change what it sees.
+// whole 40 s log at half speed (80 s: Chromium's start-up under load has
+// all of it); once /status shows the page's stream greeted (every later
+// event is sent to it unless dropped), the test waits until 45 more events
+// were made and none of them dropped, then stops the run (SIGINT), whose
+// "end" event lets Chromium dump the DOM. A run that ends first, or a page
+// that had to reconnect, is a failure that says so.
 TEST(LiveDashboard, ChromiumDrawsTheChartsUpdatingWhileAReplayRuns) {
   const auto chromium = test::find_chromium();
   if (!chromium) GTEST_SKIP() << "no chromium on the PATH (make deps installs it)";
@@ -498,27 +511,32 @@ TEST(LiveDashboard, ChromiumDrawsTheChartsUpdatingWhileAReplayRuns) {
   const fs::path dir = test::scratch_dir("live-dashboard-browser");
   const int port = test::free_port();
   test::BackgroundMoa moa("live --config " + (log / "robot.yaml").string() + " --replay " +
-                          log.string() + " --serve 127.0.0.1:" + std::to_string(port) +
-                          " --quiet");
+                          log.string() + " --speed 0.5 --serve 127.0.0.1:" +
+                          std::to_string(port) + " --quiet");
   ASSERT_TRUE(test::wait_for_server(port, 10.0)) << moa.err();
   auto loading = std::async(std::launch::async, [&] {
-    return test::load_page(*chromium, "http://127.0.0.1:" + std::to_string(port) + "/", dir,
-                           1280, 900, 2000, 120);
+    return test::load_page(*chromium, "http://127.0.0.1:" + std::to_string(port) + "/", dir, 1280,
+                           900, 2000, 150);
   });
-  const auto deadline = Clock::now() + std::chrono::seconds(35);
+  const auto deadline = Clock::now() + std::chrono::seconds(75);
   long connected_at = -1;  // events made when the page's stream was first seen greeted
-  while (connected_at < 0 && Clock::now() < deadline) {
-    if (status_count(port, "greeted") >= 1) connected_at = status_count(port, "events");
+  DashboardStatus now;
+  while (connected_at < 0 && Clock::now() < deadline && !now.ended) {
+    now = dashboard_status(port);
+    if (now.answered && now.greeted >= 1) connected_at = now.events;
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
-  ASSERT_GE(connected_at, 0) << "the page did not open /events within 35 s of the run; moa: "
+  ASSERT_GE(connected_at, 0) << "the page did not open /events while the run lasted; moa: "
                              << moa.err();
   long fed = 0;  // events made since then and not dropped
-  while (fed < 45 && Clock::now() < deadline + std::chrono::seconds(20)) {
-    fed = status_count(port, "events") - connected_at - status_count(port, "dropped");
+  while (fed < 45 && Clock::now() < deadline && !now.ended) {
+    now = dashboard_status(port);
+    if (now.answered) fed = now.events - connected_at - now.dropped;
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
-  ASSERT_GE(fed, 45) << "the run made too few events for the page; moa: " << moa.err();
+  ASSERT_GE(fed, 45) << "the run made too few events for the page (ended: " << now.ended
+                     << "); moa: " << moa.err();
+  ASSERT_EQ(now.greeted, 1) << "the page reconnected: events between were not counted";
   moa.signal(SIGINT);
   const test::BrowserPage page = loading.get();
   ASSERT_EQ(page.failure(), "");

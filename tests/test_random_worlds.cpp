@@ -83,7 +83,7 @@ TEST(RandomWorlds, EveryWorldIsValidAndEveryClassIsDrawn) {
     const double rows = s.sensor_model.frame_rate / s.sensor_model.packets_per_row;
     EXPECT_GE(rows, 100.0 / 1.5);
     EXPECT_LE(rows, 2000.0 * 1.5);
-    classes.insert(std::string("drive ") + (s.drive.type == sim::DriveType::kNone ? "none"
+    classes.insert(std::string("drive ") + (s.drive.type == sim::DriveType::kNone    ? "none"
                                             : s.drive.type == sim::DriveType::kOmni3 ? "omni3"
                                             : s.drive.type == sim::DriveType::kMecanum
                                                 ? "mecanum"
@@ -104,7 +104,7 @@ TEST(RandomWorlds, EveryWorldIsValidAndEveryClassIsDrawn) {
     } else {
       classes.insert("no gyro");
     }
-    classes.insert(!s.camera.enabled ? "no reference"
+    classes.insert(!s.camera.enabled                          ? "no reference"
                    : s.camera.mode == sim::CameraMode::kMocap ? "motion capture"
                                                               : "ceiling camera");
     for (const auto& f : s.faults) {
@@ -113,7 +113,8 @@ TEST(RandomWorlds, EveryWorldIsValidAndEveryClassIsDrawn) {
     if (!s.unobservable.empty()) classes.insert("unobservable");
     // The path: rests (at the start too), both turning directions, spins.
     const auto& program = std::get<sim::TwistProgram>(s.motion);
-    if (program.segments.front().twist.omega == 0.0 && program.segments.front().twist.v.norm() == 0.0) {
+    if (program.segments.front().twist.omega == 0.0 &&
+        program.segments.front().twist.v.norm() == 0.0) {
       classes.insert("rest at the start");
     }
     for (const auto& seg : program.segments) {
@@ -127,13 +128,35 @@ TEST(RandomWorlds, EveryWorldIsValidAndEveryClassIsDrawn) {
       }
     }
   }
-  for (const char* c :
-       {"mirrored", "array under 2 cm", "array over 10 cm", "drive none", "drive omni3",
-        "drive mecanum", "drive differential", "noisy wheels", "exact wheels", "slip burst",
-        "gyro stuck", "gyro bias step", "gyro bias walk", "no gyro", "no reference",
-        "motion capture", "ceiling camera", "liftoff", "dirty", "spikes", "stuck", "drift",
-        "unobservable", "rest at the start", "turn left", "turn right", "spin over 5 rad/s", "arc",
-        "past the rating"}) {
+  for (const char* c : {"mirrored",
+                        "array under 2 cm",
+                        "array over 10 cm",
+                        "drive none",
+                        "drive omni3",
+                        "drive mecanum",
+                        "drive differential",
+                        "noisy wheels",
+                        "exact wheels",
+                        "slip burst",
+                        "gyro stuck",
+                        "gyro bias step",
+                        "gyro bias walk",
+                        "no gyro",
+                        "no reference",
+                        "motion capture",
+                        "ceiling camera",
+                        "liftoff",
+                        "dirty",
+                        "spikes",
+                        "stuck",
+                        "drift",
+                        "unobservable",
+                        "rest at the start",
+                        "turn left",
+                        "turn right",
+                        "spin over 5 rad/s",
+                        "arc",
+                        "past the rating"}) {
     EXPECT_TRUE(classes.contains(c)) << "no world of seeds 1-300 has: " << c;
   }
 }
@@ -293,11 +316,11 @@ TEST(RandomWorlds, TheBenchRunsAFewSeedsOfEachFamily) {
   for (const auto& family : sim::random_families()) {
     const auto r = test::run_moa("experiment random --family " + family + " --seeds 1-2 --json");
     ASSERT_EQ(r.exit_code, 0) << family << ": " << r.err;
-    for (const char* key : {"\"family\"", "\"seeds\": [1, 2]", "\"estimators\"", "\"default\"",
-                            "\"self_calibrate\"", "\"no_imu\"", "\"selection\"", "\"oracle\"",
-                            "\"vs_selection\"", "\"vs_oracle\"", "\"median\"", "\"p90\"",
-                            "\"max\"", "\"failures\"", "\"unobservable_worlds\"", "\"worst\"",
-                            "\"command\""}) {
+    for (const char* key :
+         {"\"family\"", "\"seeds\": [1, 2]", "\"estimators\"", "\"default\"", "\"self_calibrate\"",
+          "\"no_imu\"", "\"selection\"", "\"oracle\"", "\"vs_selection\"", "\"vs_oracle\"",
+          "\"median\"", "\"p90\"", "\"max\"", "\"failures\"", "\"unobservable_worlds\"",
+          "\"worst\"", "\"command\""}) {
       EXPECT_THAT(r.out, HasSubstr(key)) << family;
     }
   }

@@ -309,9 +309,10 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"wheel angles on a mecanum drive",
                 with("drive: {type: mecanum, wheel_distance: 0.2, wheel_angles_deg: [0, 1, 2]}\n"),
                 "s.yaml:6: key 'drive.wheel_angles_deg': not used by drive type 'mecanum'"},
-        BadCase{"three slip bases for four mecanum wheels",
-                with("drive: {type: mecanum, wheel_distance: 0.2, slip: {base: [0.1, 0.1, 0.1]}}\n"),
-                "s.yaml:6: key 'drive.slip.base': expected 4 numbers, found 3"},
+        BadCase{
+            "three slip bases for four mecanum wheels",
+            with("drive: {type: mecanum, wheel_distance: 0.2, slip: {base: [0.1, 0.1, 0.1]}}\n"),
+            "s.yaml:6: key 'drive.slip.base': expected 4 numbers, found 3"},
         BadCase{"slip burst ends before it starts",
                 with("drive: {type: omni3, wheel_distance: 0.1, slip: {bursts: [{start: 2, end: 1, "
                      "slip: 0.5}]}}\n"),

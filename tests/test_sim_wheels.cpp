@@ -72,8 +72,9 @@ TEST(SimWheels, SlipFreeWheelsMeasureTheTwist) {
 // twist itself.
 TEST(SimWheels, ASlipBurstOnOneWheelReadsAsItsColumnOfTheInverse) {
   const double l = 0.25, slip = 0.4;
-  const std::string drive = "{type: mecanum, wheel_distance: 0.25, slip: {bursts: [{start: 0.2, "
-                            "end: 0.4, slip: 0.4, wheel: 0}]}}";
+  const std::string drive =
+      "{type: mecanum, wheel_distance: 0.25, slip: {bursts: [{start: 0.2, "
+      "end: 0.4, slip: 0.4, wheel: 0}]}}";
   const SimLog log = simulate(parse_scenario(drive_scenario(drive, true), "w.yaml"), 1);
   int inside = 0;
   for (const auto& r : log.wheels) {

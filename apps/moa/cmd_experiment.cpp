@@ -7,9 +7,9 @@
 #include <charconv>
 #include <cstring>
 #include <memory>
+#include <string>
 #include <string_view>
 #include <system_error>
-#include <string>
 #include <vector>
 
 #include "commands.hpp"
@@ -76,8 +76,8 @@ int run_experiment(ExperimentArgs args) {
   }
   if (!args.seeds.empty()) {
     if (args.seed_given || args.options.runs != 0) {
-        throw io::Error(fmt::format("--seeds and {} exclude each other: give the seeds as A-B",
-                                    args.seed_given ? "--seed" : "--runs"));
+      throw io::Error(fmt::format("--seeds and {} exclude each other: give the seeds as A-B",
+                                  args.seed_given ? "--seed" : "--runs"));
     }
     parse_seed_range(args.seeds, args.options);
   }
@@ -138,8 +138,8 @@ void add_experiment(CLI::App& app, Action& action) {
   std::vector<std::string> families;
   for (const auto& f : sim::random_families()) families.push_back(f);
   cmd->add_option("--family", args->options.family,
-                  "random: the family of the worlds (" + fmt::format("{}", fmt::join(families, ", ")) +
-                      "; default any)")
+                  "random: the family of the worlds (" +
+                      fmt::format("{}", fmt::join(families, ", ")) + "; default any)")
       ->check(CLI::IsMember(families));
   cmd->add_option("--seeds", args->seeds,
                   "random: the seeds A-B, or one seed A (tune on 1-9999, report from 10001); "

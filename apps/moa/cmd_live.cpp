@@ -172,8 +172,11 @@ int run_live(LiveArgs args) {
       replay_log.imu.reset();
     }
   }
-  // As `moa odometry` on the recording: the gyro goes to the consensus only.
-  if (odometry_options.estimator != EstimatorKind::kConsensus) odometry_options.use_imu = false;
+  // As `moa odometry` on the recording: the gyro goes to the consensus and the oracle.
+  if (odometry_options.estimator != EstimatorKind::kConsensus &&
+      odometry_options.estimator != EstimatorKind::kOracle) {
+    odometry_options.use_imu = false;
+  }
   for (const auto& w : self_calibration_warnings(odometry_options)) {
     fmt::print(stderr, "moa live: warning: {}\n", w);
   }

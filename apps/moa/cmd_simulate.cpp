@@ -14,8 +14,8 @@
 #include <system_error>
 
 #include "commands.hpp"
-#include "moa/runs/output_path.hpp"
 #include "moa/formats/error.hpp"
+#include "moa/runs/output_path.hpp"
 #include "moa/sim/log_writer.hpp"
 #include "moa/sim/random_world.hpp"
 #include "moa/sim/scenario.hpp"
@@ -76,8 +76,8 @@ int run_simulate(const SimulateArgs& args) {
     fmt::print(
         "moa simulate: scenario '{}', seed {}: {:.2f} s, {} sensors, {} mice rows ({} with a "
         "fault), {} wheel rows, {} camera fixes, {} truth rows; log written to {}\n",
-        scenario.name, seed, s.duration, scenario.nominal.array.size(), s.mice_rows,
-        s.faulty_rows, s.wheel_rows, s.camera_rows, s.truth_rows, args.out);
+        scenario.name, seed, s.duration, scenario.nominal.array.size(), s.mice_rows, s.faulty_rows,
+        s.wheel_rows, s.camera_rows, s.truth_rows, args.out);
     if (world) {
       fmt::print("moa simulate: the world: {}\n", world->summary);
       for (const auto& u : scenario.unobservable) fmt::print("moa simulate: unobservable: {}\n", u);

@@ -75,16 +75,16 @@ enum MethodIndex : std::size_t {
   kWheels,
   kMethods
 };
-constexpr const char* kNames[kMethods] = {"default", "self_calibrate", "no_imu", "selection",
-                                          "oracle",  "ls",             "wheels"};
+constexpr const char* kNames[kMethods] = {
+    "default", "self_calibrate", "no_imu", "selection", "oracle", "ls", "wheels"};
 constexpr bool kUnderTest[kMethods] = {true, true, true, false, false, false, false};
-constexpr double kMinTranslation = 0.001;                   // m
+constexpr double kMinTranslation = 0.001;                      // m
 constexpr double kMinHeading = 0.01 * std::numbers::pi / 180;  // rad
 constexpr double kFailureRatio = 5.0;
 
 struct Figures {
-  bool run = false;    ///< applicable to the world and run
-  std::string error;   ///< refused or failed: why
+  bool run = false;                         ///< applicable to the world and run
+  std::string error;                        ///< refused or failed: why
   double translation = 0.0, heading = 0.0;  ///< m, rad (max over the run)
 };
 
@@ -93,12 +93,12 @@ struct SeedResult {
   std::string family, world;
   std::vector<std::string> unobservable;
   std::array<Figures, kMethods> m;
-  double nees = std::nan("");      ///< mean twist NEES of the default over the epochs
+  double nees = std::nan("");        ///< mean twist NEES of the default over the epochs
   double rest_scale = std::nan("");  ///< max |scale - scale0| / sd0 in the initial rest
   /// The gyro's calibration at the end against the truth, ((x - x_true) / sd)^2:
   /// its scale, and its bias where the bias neither walks nor steps.
   double scale_nees = std::nan(""), bias_nees = std::nan("");
-  std::string failure;             ///< of the estimators under test, "" if none
+  std::string failure;  ///< of the estimators under test, "" if none
 };
 
 Method options_of(MethodIndex k) {
@@ -381,8 +381,8 @@ Result random_worlds(const Options& options) {
       }
     }
   };
-  const unsigned threads = std::max(1u, std::min<unsigned>(std::thread::hardware_concurrency(),
-                                                           static_cast<unsigned>(count)));
+  const unsigned threads = std::max(
+      1u, std::min<unsigned>(std::thread::hardware_concurrency(), static_cast<unsigned>(count)));
   std::vector<std::thread> pool;
   for (unsigned t = 0; t < threads; ++t) pool.emplace_back(worker);
   for (auto& t : pool) t.join();
@@ -448,8 +448,9 @@ Result random_worlds(const Options& options) {
                  without, per_minute, threads, threads == 1 ? "" : "s");
   t += "Ratio of each method's max error to selection's and to the oracle's (median / p90 / "
        "max over the observable worlds):\n\n";
-  fmt::format_to(out, "| method | vs selection, translation | heading | vs oracle, translation | "
-                      "heading | failures |\n|---|---|---|---|---|---|\n");
+  fmt::format_to(out,
+                 "| method | vs selection, translation | heading | vs oracle, translation | "
+                 "heading | failures |\n|---|---|---|---|---|---|\n");
   for (std::size_t k = 0; k < kMethods; ++k) {
     const Ratios s = ratios(results, k, kSelection), o = ratios(results, k, kOracle);
     fmt::format_to(out, "| {} | {} | {} | {} | {} | {} |\n", kNames[k], cell(s.translation),
@@ -459,16 +460,17 @@ Result random_worlds(const Options& options) {
   fmt::format_to(out,
                  "\nConsistency of the default: mean twist NEES per world (3 if consistent) "
                  "median {:.2f}, p90 {:.2f}, max {:.2f} over {} worlds; the gyro's scale in the "
-                 "initial rest moved at most {:.2f} prior sds (median over {} worlds with a "
-                 "gyro; max {:.2f}).\n",
-                 nees_q.median, nees_q.p90, nees_q.max, nees_q.n, rest_q.median, rest_q.n,
-                 rest_q.max);
-  fmt::format_to(out,
-                 "The gyro's calibration at the end against the truth, ((x - x_true) / sd)^2 "
-                 "(mean 1 if consistent): scale mean {:.2f}, median {:.2f}, max {:.1f} over {} "
-                 "worlds; bias (no walk, no step) mean {:.2f}, median {:.2f}, max {:.1f} over {}.\n",
-                 mean(scale_nees), scale_q.median, scale_q.max, scale_q.n, mean(bias_nees),
-                 bias_q.median, bias_q.max, bias_q.n);
+                 "initial rest: its largest move per world, in prior sds, median {:.2f}, max "
+                 "{:.2f} over {} worlds with a gyro.\n",
+                 nees_q.median, nees_q.p90, nees_q.max, nees_q.n, rest_q.median, rest_q.max,
+                 rest_q.n);
+  fmt::format_to(
+      out,
+      "The gyro's calibration at the end against the truth, ((x - x_true) / sd)^2 "
+      "(mean 1 if consistent): scale mean {:.2f}, median {:.2f}, max {:.1f} over {} "
+      "worlds; bias (no walk, no step) mean {:.2f}, median {:.2f}, max {:.1f} over {}.\n",
+      mean(scale_nees), scale_q.median, scale_q.max, scale_q.n, mean(bias_nees), bias_q.median,
+      bias_q.max, bias_q.n);
   t += "\nFailures (an error, a non-finite figure, or over 5x selection):\n";
   std::size_t listed = 0;
   for (const auto& r : results) {
@@ -482,14 +484,13 @@ Result random_worlds(const Options& options) {
     const SeedResult& r = *order[i];
     const Figures& f = r.m[kDefault];
     const Figures& s = r.m[kSelection];
-    fmt::format_to(out, "  seed {} ({}): default {:.1f} mm / {:.2f} deg, selection {}{}\n    {}\n    {}\n",
-                   r.seed, r.family, 1000 * f.translation, f.heading * 180 / std::numbers::pi,
-                   s.run && s.error.empty()
-                       ? fmt::format("{:.1f} mm / {:.2f} deg", 1000 * s.translation,
-                                     s.heading * 180 / std::numbers::pi)
-                       : std::string("-"),
-                   r.unobservable.empty() ? "" : " (unobservable)", r.world,
-                   command_of(r.seed, r.family));
+    fmt::format_to(
+        out, "  seed {} ({}): default {:.1f} mm / {:.2f} deg, selection {}{}\n    {}\n    {}\n",
+        r.seed, r.family, 1000 * f.translation, f.heading * 180 / std::numbers::pi,
+        s.run && s.error.empty() ? fmt::format("{:.1f} mm / {:.2f} deg", 1000 * s.translation,
+                                               s.heading * 180 / std::numbers::pi)
+                                 : std::string("-"),
+        r.unobservable.empty() ? "" : " (unobservable)", r.world, command_of(r.seed, r.family));
   }
 
   // ---------------------------------------------------------------- JSON

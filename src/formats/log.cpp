@@ -56,7 +56,9 @@ template <>
 class RowParser<ImuRow> {
  public:
   explicit RowParser(const CsvReader& csv)
-      : t_(csv.required_column("t")), gz_(csv.required_column("gz")), faults_(csv.column("faults")) {}
+      : t_(csv.required_column("t")),
+        gz_(csv.required_column("gz")),
+        faults_(csv.column("faults")) {}
 
   ImuRow parse(CsvReader& csv) const {
     ImuRow row{csv.time(t_), csv.number(gz_)};

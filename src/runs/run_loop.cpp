@@ -114,7 +114,8 @@ OdometryRun run_loop(const RobotConfig& config, const std::string& config_path,
       ++run.wheel_rows;
     } else if (const auto* imu = std::get_if<ImuRow>(input)) {
       if (callbacks.on_row) callbacks.on_row(*input);
-      if (const auto e = odometry->push_gyro(imu->t, imu->gz, sink, imu->faults != 0)) fail(imu->t, *e);
+      if (const auto e = odometry->push_gyro(imu->t, imu->gz, sink, imu->faults != 0))
+        fail(imu->t, *e);
       ++run.imu_rows;
     } else {
       const auto& fix = std::get<CameraFix>(*input);

@@ -1,37 +1,15 @@
 #include "moa/sim/fault_truth.hpp"
 
-
 #include "moa/formats/json.hpp"
 
 namespace moa::sim {
-namespace {
-
-const char* window_kind(FaultBit bit) {
-  switch (bit) {
-    case kFaultLiftoff:
-      return "liftoff";
-    case kFaultDirty:
-      return "dirty";
-    case kFaultSpike:
-      return "spikes";
-    case kFaultStuck:
-      return "stuck";
-    case kFaultDrift:
-      return "drift";
-    case kFaultTrackingLoss:
-      break;
-  }
-  return "tracking_loss";
-}
-
-}  // namespace
 
 FaultTruth::FaultTruth(const Scenario& scenario)
     : scenario_(scenario),
       row_period_(scenario.sensor_model.row_period()),
-      imu_period_(static_cast<double>(frames_per_row(scenario.sensor_model.frame_rate,
-                                                     scenario.imu.rate)) /
-                  scenario.sensor_model.frame_rate),
+      imu_period_(
+          static_cast<double>(frames_per_row(scenario.sensor_model.frame_rate, scenario.imu.rate)) /
+          scenario.sensor_model.frame_rate),
       loss_(scenario.nominal.names.size()) {}
 
 void FaultTruth::extend(std::vector<FaultInterval>& out, Open& open, const std::string& source,
@@ -62,12 +40,17 @@ void FaultTruth::imu(const ImuRecord& r, double row_start) {
 }
 
 std::vector<FaultInterval> FaultTruth::intervals() const {
-  const double end = static_cast<double>(scenario_.frame_count()) / scenario_.sensor_model.frame_rate;
+  const double end =
+      static_cast<double>(scenario_.frame_count()) / scenario_.sensor_model.frame_rate;
   std::vector<FaultInterval> out;
   for (std::size_t i = 0; i < scenario_.faults.size(); ++i) {
     for (const FaultWindow& w : scenario_.faults[i].windows) {
-      FaultInterval f{scenario_.nominal.names[i], window_kind(w.kind), w.start,
-                      std::min(w.end, end), false, 0.0};
+      FaultInterval f{scenario_.nominal.names[i],
+                      fault_name(w.kind),
+                      w.start,
+                      std::min(w.end, end),
+                      false,
+                      0.0};
       if (w.kind == kFaultDirty) f.amount = w.retained;
       if (w.kind == kFaultDrift) f.amount = w.scale;
       if (w.kind == kFaultSpike) f.amount = w.magnitude;
@@ -86,8 +69,8 @@ std::vector<FaultInterval> FaultTruth::intervals() const {
   std::vector<FaultInterval> emergent = emergent_;
   for (std::size_t i = 0; i < loss_.size(); ++i) {
     if (loss_[i].open) {
-      emergent.push_back({scenario_.nominal.names[i], "tracking_loss", loss_[i].start,
-                          loss_[i].end, true, 0.0});
+      emergent.push_back(
+          {scenario_.nominal.names[i], "tracking_loss", loss_[i].start, loss_[i].end, true, 0.0});
     }
   }
   if (saturated_.open) {

@@ -80,8 +80,9 @@ class FileSink : public LogSink {
     }
     if (s.imu.enabled) {
       imu_.emplace(dir / "imu.csv",
-                   comment_ + "; faults (moa extension): 1 where the gyro was stuck, saturated or "
-                              "its bias had stepped",
+                   comment_ +
+                       "; faults (moa extension): 1 where the gyro was stuck, saturated or "
+                       "its bias had stepped",
                    "t,gz,faults");
     }
     if (s.camera.enabled) {

@@ -89,8 +89,8 @@ class Builder {
  private:
   // ------------------------------------------------------------- the draws
   void draw_robot() {
-    drive_ = std::array<const char*, 3>{"omni3", "differential",
-                                        "mecanum"}[d_.pick({0.4, 0.3, 0.3})];
+    drive_ =
+        std::array<const char*, 3>{"omni3", "differential", "mecanum"}[d_.pick({0.4, 0.3, 0.3})];
     robot_radius_ = d_.uniform(0.08, 0.25);
   }
 
@@ -129,8 +129,8 @@ class Builder {
       double closest = 1e9;
       for (int i = 0; i < n_; ++i) {
         for (int j = i + 1; j < n_; ++j) {
-          closest = std::min(closest, std::hypot(sensors_[i].x - sensors_[j].x,
-                                                 sensors_[i].y - sensors_[j].y));
+          closest = std::min(
+              closest, std::hypot(sensors_[i].x - sensors_[j].x, sensors_[i].y - sensors_[j].y));
         }
       }
       if (closest >= across_ / (2.0 * n_)) break;
@@ -209,8 +209,8 @@ class Builder {
         }
         case 3:  // a turn in place, either way
           s.omega = d_.sign() * d_.uniform(0.2, 1.0) * w_max_;
-          s.duration = std::min(d_.uniform(0.3, 4.0), d_.uniform(0.5, 2.0) * 2.0 * kPi /
-                                                          std::abs(s.omega));
+          s.duration =
+              std::min(d_.uniform(0.3, 4.0), d_.uniform(0.5, 2.0) * 2.0 * kPi / std::abs(s.omega));
           break;
         default:  // a spin: several turns fast
           s.omega = d_.sign() * d_.uniform(0.7, 1.0) * w_max_;
@@ -230,13 +230,13 @@ class Builder {
   }
 
   void draw_wheels() {
-    const std::size_t kind = family_ == Family::kCalibration ? d_.pick({0.0, 0.5, 0.5})
-                                                             : d_.pick({0.25, 0.25, 0.5});
+    const std::size_t kind =
+        family_ == Family::kCalibration ? d_.pick({0.0, 0.5, 0.5}) : d_.pick({0.25, 0.25, 0.5});
     wheels_ = std::array<const char*, 3>{"none", "exact", "noisy"}[kind];
     if (kind == 0) return;
     wheel_distance_ = std::string_view(drive_) == "mecanum" ? d_.uniform(0.1, 0.4) : robot_radius_;
     encoder_ = d_.log_uniform(1e-5, 1e-4);
-    const int count = std::string_view(drive_) == "omni3" ? 3
+    const int count = std::string_view(drive_) == "omni3"     ? 3
                       : std::string_view(drive_) == "mecanum" ? 4
                                                               : 2;
     for (int j = 0; j < count; ++j) slip_base_.push_back(d_.uniform(0.0, 0.1));
@@ -269,7 +269,8 @@ class Builder {
   // A window inside the run, away from its first and last tenth.
   std::pair<double, double> window(double lo, double hi) {
     const double length = d_.uniform(lo, hi);
-    const double start = d_.uniform(0.1 * duration_, std::max(0.1 * duration_, 0.9 * duration_ - length));
+    const double start =
+        d_.uniform(0.1 * duration_, std::max(0.1 * duration_, 0.9 * duration_ - length));
     return {start, std::min(start + length, duration_ - 0.01)};
   }
   std::string name(int i) const { return fmt::format("m{}", i + 1); }
@@ -316,9 +317,10 @@ class Builder {
         if (n_ == 1) lone_sensor_fault_ = true;
         const double a = d_.uniform(0.1, 0.6) * duration_;
         const double ramp = d_.uniform(2.0, 20.0), scale = 1.0 + d_.sign() * d_.uniform(0.03, 0.15);
-        add_event(fmt::format("{{type: drift, sensor: {}, start: {}, end: {}, scale: {}, ramp: {}}}",
-                              m, num(a), num(duration_), num(scale), num(ramp)),
-                  fmt::format("{} drifting to {:+.1f} % from {:.1f} s", m, 100 * (scale - 1), a));
+        add_event(
+            fmt::format("{{type: drift, sensor: {}, start: {}, end: {}, scale: {}, ramp: {}}}", m,
+                        num(a), num(duration_), num(scale), num(ramp)),
+            fmt::format("{} drifting to {:+.1f} % from {:.1f} s", m, 100 * (scale - 1), a));
         break;
       }
       case 5: {  // dirty
@@ -345,9 +347,9 @@ class Builder {
     for (double t = a + d_.uniform(0.0, 1.0); t < b; t += d_.uniform(1.0, 3.0)) {
       const double end = std::min(t + d_.uniform(0.05, 0.3), duration_ - 0.01);
       if (end <= t) break;
-      events_.push_back(fmt::format(
-          "{{type: liftoff, sensor: {}, start: {}, end: {}, squal: {}, lift_flag: {}}}", name(i),
-          num(t), num(end), squal, flag ? "true" : "false"));
+      events_.push_back(
+          fmt::format("{{type: liftoff, sensor: {}, start: {}, end: {}, squal: {}, lift_flag: {}}}",
+                      name(i), num(t), num(end), squal, flag ? "true" : "false"));
       ++lifts;
     }
     faults_text_.push_back(fmt::format("{} lifting {} times {:.1f}-{:.1f} s{}", name(i), lifts, a,
@@ -369,14 +371,15 @@ class Builder {
     if (static_cast<int>(which.size()) == n_) {
       floor_all_ = true;
       floor_time_ = t;
-      faults_text_.push_back(fmt::format("floor change under {} at {:.1f} s{}",
-                                         n_ == 1 ? std::string("the sensor")
-                                                 : fmt::format("all {} sensors", n_),
-                                         t, same ? " (the same amount)" : ""));
+      faults_text_.push_back(
+          fmt::format("floor change under {} at {:.1f} s{}",
+                      n_ == 1 ? std::string("the sensor") : fmt::format("all {} sensors", n_), t,
+                      same ? " (the same amount)" : ""));
     } else {
       std::vector<std::string> names;
       for (const int i : which) names.push_back(name(i));
-      faults_text_.push_back(fmt::format("floor change under {} at {:.1f} s", fmt::join(names, ","), t));
+      faults_text_.push_back(
+          fmt::format("floor change under {} at {:.1f} s", fmt::join(names, ","), t));
     }
   }
 
@@ -384,8 +387,8 @@ class Builder {
     const auto [a, b] = window(0.1, 0.5);
     for (int i = 0; i < n_; ++i) {
       events_.push_back(fmt::format(
-          "{{type: liftoff, sensor: {}, start: {}, end: {}, squal: {}, lift_flag: false}}",
-          name(i), num(a), num(b), static_cast<int>(squal_)));
+          "{{type: liftoff, sensor: {}, start: {}, end: {}, squal: {}, lift_flag: false}}", name(i),
+          num(a), num(b), static_cast<int>(squal_)));
     }
     faults_text_.push_back(fmt::format("all sensors zero {:.2f}-{:.2f} s", a, b));
     dropouts_.push_back(a);
@@ -394,14 +397,13 @@ class Builder {
   void gyro_fault() {
     if (d_.chance(0.5)) {
       const auto [a, b] = window(0.2, 3.0);
-      gyro_faults_.push_back(
-          fmt::format("{{type: stuck, start: {}, end: {}}}", num(a), num(b)));
+      gyro_faults_.push_back(fmt::format("{{type: stuck, start: {}, end: {}}}", num(a), num(b)));
       faults_text_.push_back(fmt::format("gyro stuck {:.1f}-{:.1f} s", a, b));
     } else {
       const double a = d_.uniform(0.2, 0.7) * duration_;
       const double step = d_.sign() * d_.uniform(0.005, 0.03);
-      gyro_faults_.push_back(fmt::format("{{type: bias_step, start: {}, step: {}}}", num(a),
-                                         num(step)));
+      gyro_faults_.push_back(
+          fmt::format("{{type: bias_step, start: {}, step: {}}}", num(a), num(step)));
       faults_text_.push_back(fmt::format("gyro bias step {:+.3f} rad/s at {:.1f} s", step, a));
     }
   }
@@ -410,14 +412,14 @@ class Builder {
     const auto [a, b] = window(0.3, 3.0);
     const double slip = d_.uniform(0.2, 1.0);
     const int wheel = d_.chance(0.6) ? d_.integer(0, wheel_count_ - 1) : -1;
-    bursts_.push_back(wheel < 0 ? fmt::format("{{start: {}, end: {}, slip: {}}}", num(a), num(b),
-                                              num(slip))
-                                : fmt::format("{{start: {}, end: {}, slip: {}, wheel: {}}}", num(a),
-                                              num(b), num(slip), wheel));
-    faults_text_.push_back(fmt::format("{} slipping {:+.0f} % {:.1f}-{:.1f} s",
-                                       wheel < 0 ? std::string("all wheels")
-                                                 : fmt::format("wheels[{}]", wheel),
-                                       100 * slip, a, b));
+    bursts_.push_back(
+        wheel < 0 ? fmt::format("{{start: {}, end: {}, slip: {}}}", num(a), num(b), num(slip))
+                  : fmt::format("{{start: {}, end: {}, slip: {}, wheel: {}}}", num(a), num(b),
+                                num(slip), wheel));
+    faults_text_.push_back(
+        fmt::format("{} slipping {:+.0f} % {:.1f}-{:.1f} s",
+                    wheel < 0 ? std::string("all wheels") : fmt::format("wheels[{}]", wheel),
+                    100 * slip, a, b));
   }
 
   void draw_faults() {
@@ -429,7 +431,8 @@ class Builder {
         const int count = d_.integer(1, 4);
         for (int k = 0; k < count; ++k) {
           // Sensor classes, common-mode dropout, the gyro's, the wheels'.
-          const std::size_t c = d_.pick({6.0, 1.0, gyro_ ? 1.0 : 0.0, wheel_count_ > 0 ? 1.0 : 0.0});
+          const std::size_t c =
+              d_.pick({6.0, 1.0, gyro_ ? 1.0 : 0.0, wheel_count_ > 0 ? 1.0 : 0.0});
           if (c == 0) sensor_fault(d_.integer(0, 6));
           if (c == 1) common_dropout();
           if (c == 2) gyro_fault();
@@ -469,9 +472,9 @@ class Builder {
     }
     for (const double t : dropouts_) {
       if (!wheels) {
-        unobservable_.push_back(fmt::format(
-            "the {} while every sensor reads zero from {:.2f} s (no wheels{})",
-            gyro_ ? "translation" : "motion", t, gyro_ ? "" : ", no gyro"));
+        unobservable_.push_back(
+            fmt::format("the {} while every sensor reads zero from {:.2f} s (no wheels{})",
+                        gyro_ ? "translation" : "motion", t, gyro_ ? "" : ", no gyro"));
       }
     }
     if (lone_sensor_fault_ && !wheels) {
@@ -530,15 +533,17 @@ class Builder {
     y += "true_sensors:\n";
     for (int i = 0; i < n_; ++i) {
       const Build& b = build_[static_cast<std::size_t>(i)];
-      fmt::format_to(out,
-                     "  {}: {{position_error: [{}, {}], yaw_error: {}, scale: [{}, {}], latency: {}, "
-                     "jitter: {}}}\n",
-                     name(i), num(b.dx), num(b.dy), num(b.dyaw), num(b.sx), num(b.sy),
-                     num(b.latency), num(b.jitter));
+      fmt::format_to(
+          out,
+          "  {}: {{position_error: [{}, {}], yaw_error: {}, scale: [{}, {}], latency: {}, "
+          "jitter: {}}}\n",
+          name(i), num(b.dx), num(b.dy), num(b.dyaw), num(b.sx), num(b.sy), num(b.latency),
+          num(b.jitter));
     }
     if (std::string_view(wheels_) != "none") {
-      fmt::format_to(out, "drive:\n  type: {}\n  wheel_distance: {}\n  rate: 100\n"
-                          "  encoder_resolution: {}\n",
+      fmt::format_to(out,
+                     "drive:\n  type: {}\n  wheel_distance: {}\n  rate: 100\n"
+                     "  encoder_resolution: {}\n",
                      drive_, num(wheel_distance_), num(encoder_));
       if (std::string_view(drive_) == "omni3") y += "  wheel_angles_deg: [90, 210, 330]\n";
       y += "  slip:\n    base: [";
@@ -554,8 +559,9 @@ class Builder {
       fmt::format_to(out, "  noise_speed: {}\n  noise_rate: {}\n", num(wheel_noise_speed_),
                      num(wheel_noise_rate_));
     }
-    fmt::format_to(out, "motion:\n  type: twists\n  max_accel: {}\n  max_angular_accel: {}\n"
-                        "  segments:\n",
+    fmt::format_to(out,
+                   "motion:\n  type: twists\n  max_accel: {}\n  max_angular_accel: {}\n"
+                   "  segments:\n",
                    num(accel_), num(angular_accel_));
     for (const Segment& s : segments_) {
       fmt::format_to(out, "    - {{twist: [{}, {}, {}], duration: {}}}\n", num(s.vx), num(s.vy),
@@ -567,17 +573,20 @@ class Builder {
       for (const auto& e : events_) y += "    - " + e + "\n";
     }
     if (std::string_view(camera_) == "mocap") {
-      fmt::format_to(out, "camera:\n  mode: mocap\n  rate: {}\n  noise: {}\n  heading_noise: {}\n"
-                          "  latency: {}\n",
+      fmt::format_to(out,
+                     "camera:\n  mode: mocap\n  rate: {}\n  noise: {}\n  heading_noise: {}\n"
+                     "  latency: {}\n",
                      num(c_rate_), num(c_noise_), num(c_heading_), num(c_latency_));
     } else if (std::string_view(camera_) == "camera") {
-      fmt::format_to(out, "camera:\n  mode: positions\n  rate: {}\n  noise: {}\n  latency: {}\n"
-                          "  jitter: {}\n  drop: {}\n",
+      fmt::format_to(out,
+                     "camera:\n  mode: positions\n  rate: {}\n  noise: {}\n  latency: {}\n"
+                     "  jitter: {}\n  drop: {}\n",
                      num(c_rate_), num(c_noise_), num(c_latency_), num(c_jitter_), num(c_drop_));
     }
     if (gyro_) {
-      fmt::format_to(out, "imu:\n  rate: {}\n  scale: {}\n  bias: {}\n  bias_walk: {}\n"
-                          "  noise_density: {}\n  max_rate: {}\n  latency: {}\n",
+      fmt::format_to(out,
+                     "imu:\n  rate: {}\n  scale: {}\n  bias: {}\n  bias_walk: {}\n"
+                     "  noise_density: {}\n  max_rate: {}\n  latency: {}\n",
                      num(g_rate_), num(g_scale_), num(g_bias_), num(g_walk_), num(g_noise_),
                      num(g_max_), num(g_latency_));
       if (!gyro_faults_.empty()) {

@@ -298,7 +298,7 @@ DriveModel parse_drive(const Source& source, const YAML::Node& node, const Senso
     }
     return d;
   }
-  d.type = type == "omni3"    ? DriveType::kOmni3
+  d.type = type == "omni3"     ? DriveType::kOmni3
            : type == "mecanum" ? DriveType::kMecanum
                                : DriveType::kDifferential;
   d.wheel_distance = probe.positive("wheel_distance");
@@ -623,9 +623,9 @@ CameraModel parse_camera(const Source& source, const YAML::Node& node, double fr
 // full scale and the latency, from the part's datasheet and the firmware;
 // scale 1 and bias 0), robot.true.yaml the true scale and bias.
 GyroSpec parse_imu(const Source& source, const YAML::Node& node) {
-  const Fields f(source, node, "imu",
-                 {"rate", "scale", "bias", "bias_walk", "noise_density", "max_rate", "latency",
-                  "faults"});
+  const Fields f(
+      source, node, "imu",
+      {"rate", "scale", "bias", "bias_walk", "noise_density", "max_rate", "latency", "faults"});
   GyroSpec g;
   g.enabled = true;
   g.rate = f.bounded("rate", kMinRate, kMaxFrameRate, g.rate);
@@ -637,13 +637,14 @@ GyroSpec parse_imu(const Source& source, const YAML::Node& node) {
   g.latency = f.bounded("latency", 0.0, 1.0, g.latency);
   if (const auto faults = f.get("faults")) {
     if (!faults->IsSequence()) {
-      f.fail("faults", fmt::format("expected a list of gyro faults, found {}", describe_kind(*faults)));
+      f.fail("faults",
+             fmt::format("expected a list of gyro faults, found {}", describe_kind(*faults)));
     }
     for (std::size_t i = 0; i < faults->size(); ++i) {
       const YAML::Node item = (*faults)[i];
       const std::string path = fmt::format("imu.faults[{}]", i);
-      const std::string type =
-          Fields(source, item, path, {"type", "start", "end", "step"}).choice("type", {"stuck", "bias_step"});
+      const std::string type = Fields(source, item, path, {"type", "start", "end", "step"})
+                                   .choice("type", {"stuck", "bias_step"});
       const Fields e = type == "stuck" ? Fields(source, item, path, {"type", "start", "end"})
                                        : Fields(source, item, path, {"type", "start", "step"});
       GyroFault fault;
@@ -718,13 +719,14 @@ Scenario parse_scenario(std::string_view yaml, std::string_view source_name) {
   if (top.has("description")) s.description = top.text("description");
   if (const auto u = top.get("unobservable")) {
     if (!u->IsSequence()) {
-      top.fail("unobservable", fmt::format("expected a list of texts, found {}", describe_kind(*u)));
+      top.fail("unobservable",
+               fmt::format("expected a list of texts, found {}", describe_kind(*u)));
     }
     for (std::size_t i = 0; i < u->size(); ++i) {
       const YAML::Node item = (*u)[i];
       if (!item.IsScalar()) {
-        top.fail("unobservable", fmt::format("item {}: expected a text, found {}", i,
-                                             describe_kind(item)));
+        top.fail("unobservable",
+                 fmt::format("item {}: expected a text, found {}", i, describe_kind(item)));
       }
       s.unobservable.push_back(item.Scalar());
     }

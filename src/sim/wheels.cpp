@@ -82,9 +82,8 @@ void WheelOdometry::frame(const Twist2& twist, double h) {
       // Ornstein-Uhlenbeck: stationary std. dev. `random`, correlation time tau.
       random_slip_[j] += -random_slip_[j] * decay + kick * rng_.normal();
     }
-    const double fraction =
-        slip.base[static_cast<std::size_t>(j)] + slip.per_speed * std::abs(g) + random_slip_[j] +
-        burst[j];
+    const double fraction = slip.base[static_cast<std::size_t>(j)] + slip.per_speed * std::abs(g) +
+                            random_slip_[j] + burst[j];
     travelled_[j] += (g * (1.0 + fraction) + slip.per_accel * accel) * h;
   }
 }

@@ -33,7 +33,7 @@ BrowserPage load_page(const std::string& chromium, const std::string& url,
       log.string();
   BrowserPage page;
   const int status = std::system(command.c_str());
-  page.exit_code = status < 0 ? -1
+  page.exit_code = status < 0          ? -1
                    : WIFEXITED(status) ? WEXITSTATUS(status)
                                        : 128 + WTERMSIG(status);
   page.dom = read_text(dom);

@@ -5,9 +5,9 @@
 // window faults, the gyro's stuck windows and bias steps, the wheels' slip
 // bursts); emergent ones from the simulated rows (a sensor's tracking loss,
 // which the path's speed causes, and the gyro's saturation: a turn past its
-// full scale in some frame of the row). Rows of one source that are faulty, with gaps of at most one
-// row, make one interval [first row's start, last row's end], on the true
-// clock (not the stamps).
+// full scale in some frame of the row). Rows of one source that are faulty, with gaps of at most
+// one row, make one interval [first row's start, last row's end], on the true clock (not the
+// stamps).
 #pragma once
 
 #include <cstdint>
@@ -20,11 +20,11 @@
 namespace moa::sim {
 
 struct FaultInterval {
-  std::string source;  ///< a sensor's name, "gyro" or "wheels"
-  std::string kind;    ///< liftoff | dirty | spikes | stuck | drift | tracking_loss |
-                       ///< bias_step | saturated | slip_burst
-  double start = 0.0;  ///< s
-  double end = 0.0;    ///< s (a drift or a bias step: the run's end)
+  std::string source;     ///< a sensor's name, "gyro" or "wheels"
+  std::string kind;       ///< liftoff | dirty | spikes | stuck | drift | tracking_loss |
+                          ///< bias_step | saturated | slip_burst
+  double start = 0.0;     ///< s
+  double end = 0.0;       ///< s (a drift or a bias step: the run's end)
   bool emergent = false;  ///< found in the rows, not declared by the scenario
   /// The fault's size: dirty `retained`, drift `scale`, spikes `magnitude`
   /// (counts), bias_step `step` (rad/s), slip_burst `slip`; 0 otherwise.
@@ -37,7 +37,8 @@ class FaultTruth {
   explicit FaultTruth(const Scenario& scenario);
   void mice(const MiceRecord& record);
   void imu(const ImuRecord& record, double row_start);
-  /// Declared faults first (scenario order), then emergent ones by source.
+  /// Declared faults first (scenario order), then emergent ones in the
+  /// order they closed, those still open at the run's end last.
   std::vector<FaultInterval> intervals() const;
   /// {"scenario", "seed", "duration", "faults": [{"source", "kind", "start",
   ///  "end", "emergent", "amount"}], "unobservable": [text]}

@@ -38,8 +38,8 @@ struct WheelRecord {
   Twist2 twist;
 };
 struct ImuRecord {
-  double t = 0.0;   ///< s, stamped (the interval's end plus the gyro's latency)
-  double gz = 0.0;  ///< rad/s
+  double t = 0.0;          ///< s, stamped (the interval's end plus the gyro's latency)
+  double gz = 0.0;         ///< rad/s
   bool saturated = false;  ///< a frame or the row read the full scale
   bool faulty = false;     ///< saturated, stuck, or after a bias step (imu.csv's `faults`)
 };

@@ -61,7 +61,8 @@ struct SlipModel {
 
 struct DriveModel {
   DriveType type = DriveType::kNone;
-  double wheel_distance = 0.0;  ///< m: R (omni3), half the track b (differential), lx + ly (mecanum)
+  double wheel_distance =
+      0.0;  ///< m: R (omni3), half the track b (differential), lx + ly (mecanum)
   std::vector<double> wheel_angles;  ///< rad, omni3
   double rate = 100.0;               ///< wheels.csv rows per second
   SlipModel slip;
@@ -92,11 +93,11 @@ class WheelOdometry {
   Eigen::Matrix<double, 3, kMaxWheels> forward_ = Eigen::Matrix<double, 3, kMaxWheels>::Zero();
   Wheels ground_prev_ = Wheels::Zero();
   Wheels random_slip_ = Wheels::Zero();
-  Wheels travelled_ = Wheels::Zero();  ///< m, real, per wheel
-  Wheels counted_ = Wheels::Zero();    ///< m in whole ticks, per wheel
-  Wheels reported_ = Wheels::Zero();   ///< counted_ at the previous row
+  Wheels travelled_ = Wheels::Zero();                    ///< m, real, per wheel
+  Wheels counted_ = Wheels::Zero();                      ///< m in whole ticks, per wheel
+  Wheels reported_ = Wheels::Zero();                     ///< counted_ at the previous row
   Eigen::Vector3d reference_ = Eigen::Vector3d::Zero();  ///< integral of the true twist
-  double t_ = 0.0;                                      ///< s, the end of the last frame
+  double t_ = 0.0;                                       ///< s, the end of the last frame
 };
 
 }  // namespace moa::sim
