@@ -511,8 +511,8 @@ TEST(LiveDashboard, ChromiumDrawsTheChartsUpdatingWhileAReplayRuns) {
   const fs::path dir = test::scratch_dir("live-dashboard-browser");
   const int port = test::free_port();
   test::BackgroundMoa moa("live --config " + (log / "robot.yaml").string() + " --replay " +
-                          log.string() + " --speed 0.5 --serve 127.0.0.1:" +
-                          std::to_string(port) + " --quiet");
+                          log.string() + " --speed 0.5 --serve 127.0.0.1:" + std::to_string(port) +
+                          " --quiet");
   ASSERT_TRUE(test::wait_for_server(port, 10.0)) << moa.err();
   auto loading = std::async(std::launch::async, [&] {
     return test::load_page(*chromium, "http://127.0.0.1:" + std::to_string(port) + "/", dir, 1280,
