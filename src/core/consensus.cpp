@@ -146,13 +146,38 @@ void ConsensusEstimator::test_references(const Candidate& best, const References
   }
 }
 
+void ConsensusEstimator::blame(const Candidate& best, const References& refs,
+                               const SourceTests& tests, double t) {
+  if (tests.gyro <= real(1)) {
+    blame_ = Blame::kNone;  // they agree: the episode is over
+    return;
+  }
+  if (!(tests.gyro > real(1))) return;  // not tested: the episode goes on
+  if (blame_ == Blame::kNone) {
+    // The onset: the wheels or the prior (fresh) against the array.
+    bool array_wrong = tests.wheels > real(1);
+    for (int k = 0; k < refs.size; ++k) {
+      if (k == refs.wheels) continue;
+      const Reference& ref = refs.r[static_cast<std::size_t>(k)];
+      const real d = best.fit.twist.omega - ref.x(2);
+      array_wrong = array_wrong ||
+                    d * d / (best.fit.covariance(2, 2) + ref.covariance(2, 2)) > gyro_threshold_;
+    }
+    blame_ = array_wrong ? Blame::kArray : Blame::kGyro;
+    blame_since_ = t;
+  } else if (blame_ == Blame::kArray &&
+             t - blame_since_ > static_cast<double>(options_.max_bridge)) {
+    blame_ = Blame::kGyro;  // wrong for longer than a lost floor lasts
+  }
+}
+
 bool ConsensusEstimator::common_mode(const Candidate& best, const References& refs,
                                      const SourceTests& tests, double t) const {
   if (!options_.common_mode || !options_.motion_prior) return false;
   if (!last_mice_t_ || t - *last_mice_t_ > static_cast<double>(options_.max_bridge)) return false;
-  // The gyro rejects the rotation (of any subset: consider() judged a
-  // minority against the translation references only).
-  if (tests.gyro > 1.0) return true;
+  // The gyro's disagreement blamed on the array (of any subset: consider()
+  // judged a minority against the translation references only).
+  if (blame_ == Blame::kArray && tests.gyro > real(1)) return true;
   // A minority was judged against each translation reference already.
   if (2 * count_sensors(best.mask) <= n_) return false;
   // Every translation reference there is rejects the twist (a NaN ratio is
@@ -374,6 +399,9 @@ RobustEstimate ConsensusEstimator::estimate_counts(const ArraySample& sample, Se
     const real d = x(2) - rate->omega;
     out.tests.gyro = d * d / (c(2, 2) + rate->variance) / gyro_threshold_;
   }
+  if (best) blame(*best, refs, out.tests, sample.t);
+  const bool gyro_blamed = rate && blame_ == Blame::kGyro;
+  out.tests.gyro_rejected = gyro_blamed;
   const bool common = best && common_mode(*best, refs, out.tests, sample.t);
   if (best && !common) {
     last_mice_t_ = sample.t;
@@ -387,13 +415,19 @@ RobustEstimate ConsensusEstimator::estimate_counts(const ArraySample& sample, Se
       }
     }
     const bool still = wheels && wheels->vector().isZero(real(0)) && out.tests.wheels <= real(1);
-    if (rate) {
+    if (rate && !gyro_blamed) {
       // The gyro drives the heading (gyro.hpp); the array's own rotation
       // teaches it.
       const real omega = gyro_.drive(*rate, static_cast<real>(sample.dt));
       teach_gyro(*gyro, sample, out, still);
       take_gyro_rotation(*rate, omega, out);
     } else if (gyro) {
+      // Saturated, or the one blamed: the rotation is the array's (and a
+      // blamed gyro's readings are no calibration window).
+      if (gyro_blamed) {
+        (void)gyro_.close(gyro_threshold_);
+        gyro_mask_ = 0;
+      }
       gyro_.release();
     }
     fallback_.good(out.estimate.twist, out.estimate.covariance, sample.t);
@@ -410,7 +444,7 @@ RobustEstimate ConsensusEstimator::estimate_counts(const ArraySample& sample, Se
   }
   fallback_.apply(out, wheels, options_.wheels, options_.hold, sample.t);
   if (gyro) (void)gyro_.close(gyro_threshold_);
-  if (rate) {
+  if (rate && !gyro_blamed) {
     take_gyro_rotation(*rate, gyro_.drive(*rate, static_cast<real>(sample.dt)), out);
   } else if (gyro) {
     gyro_.release();

@@ -419,6 +419,7 @@ bool Odometry::estimate(const ArraySample& sample, const std::optional<Twist2>& 
   out.tests.gyro = e.tests.gyro;
   out.tests.gyro_fused = e.tests.gyro_fused;
   out.tests.gyro_saturated = e.tests.gyro_saturated;
+  out.tests.gyro_rejected = e.tests.gyro_rejected;
   for (int i = 0; i < n_; ++i) out.excluded[static_cast<std::size_t>(i)] = Exclusion::kUnselected;
   for (int k = 0; k < m_; ++k) {
     const int i = selected_[static_cast<std::size_t>(k)];

@@ -37,15 +37,26 @@
 //     are wrong: spinning wheels against a wall).
 //  4. Nothing passes: the wheel twist (source wheels) or, without wheels,
 //     the last good twist with its covariance grown (source hold).
-// With a gyro (gyro.hpp) its calibrated rate omega_g is one more reference,
-// on the rotation only: the array is also common-mode wrong when the gyro
-// alone rejects its rotation, (omega_a - omega_g)^2 / (Cov_ww + var_g) >
-// q(1 - alpha, 1) (a translation reference cannot vouch for a rotation).
-// Whenever the gyro reads (not saturated) the rotation reported is the
-// gyro's, with the heading's error its calibration leaves taken back as the
-// array teaches it (gyro.hpp): an accepted array twist teaches the gyro's
-// bias and scale and gives the translation; a bridge (step 3, 4) takes its
-// translation from the wheels or the hold.
+// With a gyro (gyro.hpp) its calibrated rate omega_g is one more source, on
+// the rotation only, tested against the array's:
+//   (omega_a - omega_g)^2 / (Cov_ww + var_g) > q(1 - alpha, 1).
+// Either can be the one that is wrong (a stuck gyro, an array that lost the
+// floor while turning): the gyro against the array. At the onset of an
+// episode of disagreement the other references decide: the array is blamed
+// when the wheels reject its twist or the prior its rotation,
+//   (omega_a - omega_p)^2 / (Cov_ww + P_ww) > q(1 - alpha, 1),
+// the prior fresh from the epoch before; else the gyro is. The blame holds
+// until the two agree again (the prior, not renewed over a bridge, soon
+// accepts anything), the array's for at most max_bridge s: an array wrong
+// for longer than a lost floor lasts is more likely right, and the gyro is
+// blamed from then on. An array blamed is common-mode wrong (step 3); a gyro
+// blamed is not used (`gyro_rejected`): the rotation is the array's, the
+// gyro learns nothing and its heading's error is forgotten.
+// Otherwise, whenever the gyro reads (not saturated) the rotation reported is
+// the gyro's, with the heading's error its calibration leaves taken back as
+// the array teaches it (gyro.hpp): an accepted array twist teaches the
+// gyro's bias and scale and gives the translation; a bridge (step 3, 4)
+// takes its translation from the wheels or the hold.
 // The prior is the twist of step 2, or of the wheels in step 3; a hold does
 // not renew it (its covariance keeps growing). With motion_prior off the
 // estimator is the one before the prior: no prior, and the wheel test of a
@@ -67,6 +78,7 @@
 // construction (the estimator runs on microcontrollers without a heap).
 #pragma once
 
+#include <cstdint>
 #include <optional>
 
 #include "moa/core/fallback.hpp"
@@ -159,6 +171,8 @@ class ConsensusEstimator {
                 std::optional<Candidate>& best) const;
   /// The candidate's twist against each reference: tests.wheels, tests.prior.
   void test_references(const Candidate& best, const References& refs, SourceTests& tests) const;
+  /// The gyro against the array (above): updates the episode's blame.
+  void blame(const Candidate& best, const References& refs, const SourceTests& tests, double t);
   /// Step 3: every reference rejects the majority candidate's twist.
   bool common_mode(const Candidate& best, const References& refs, const SourceTests& tests,
                    double t) const;
@@ -205,7 +219,12 @@ class ConsensusEstimator {
   real gyro_q_ = 0;
   /// s, the last epoch whose twist came from the mice (none yet: nullopt)
   std::optional<double> last_mice_t_;
-  RepeatCounter repeats_;  ///< of the counts as read (health: frozen; self-calibration's guard)
+  /// An episode of disagreement between the gyro and the array: which of the
+  /// two is blamed, decided at its onset and kept until they agree again.
+  enum class Blame : std::uint8_t { kNone, kArray, kGyro };
+  Blame blame_ = Blame::kNone;
+  double blame_since_ = 0.0;  ///< s, the episode's first epoch
+  RepeatCounter repeats_;     ///< of the counts as read (health: frozen; self-calibration's guard)
   std::optional<SelfCalibration> calibration_;
   ArraySample corrected_;  ///< the epoch's counts through calibration_'s correction
 };

@@ -91,7 +91,10 @@ struct SourceTests {
   /// The gyro's calibrated rate omega_g against the array's omega_a:
   /// (omega_a - omega_g)^2 / (Cov_ww + var_g) / q(1 - alpha, 1) (gyro.hpp).
   real gyro = std::numeric_limits<real>::quiet_NaN();
-  bool gyro_fused = false;      ///< the gyro's rate went into the twist
+  bool gyro_fused = false;  ///< the gyro's rate went into the twist
+  /// The gyro is the source blamed for its disagreement with the array
+  /// (consensus.hpp, "the gyro against the array"): its rate is not used.
+  bool gyro_rejected = false;
   bool gyro_saturated = false;  ///< its reading was at its full scale: not used
   SourceTests() { sensor.fill(std::numeric_limits<real>::quiet_NaN()); }
 };
