@@ -178,6 +178,32 @@ TEST(Gyro, ASaturatedOrNonFiniteReadingIsNotARate) {
   EXPECT_FALSE(gyro.rate(std::nan(""), kDt));
 }
 
+TEST(Gyro, AnEpochOfAnotherSourcesRotationGrowsTheHeadingErrorByItsOwnVariance) {
+  // The gyro drives the heading for a while (delta gets a variance and
+  // correlations with the bias and scale), then another source's rotation of
+  // variance v is reported: delta's variance grows by v dt^2 exactly, the
+  // calibration's block is untouched, and the heading error known so far is
+  // not forgotten (drive() would have grown it by the gyro's own noise).
+  GyroOptions o;
+  GyroModel gyro(o, 0.1);
+  for (int k = 0; k < 50; ++k) {
+    gyro.predict(kDt);
+    const auto r = gyro.rate(0.7, kDt);
+    ASSERT_TRUE(r);
+    (void)gyro.drive(*r, kDt);
+  }
+  const Mat<6, 6> before = gyro.covariance();
+  ASSERT_GT(before(5, 5), 0.0);
+  const double v = 4e-4;
+  (void)gyro.hold(v, kDt);
+  const Mat<6, 6> after = gyro.covariance();
+  EXPECT_NEAR(after(5, 5), before(5, 5) + v * kDt * kDt, 1e-12 * before(5, 5));
+  const Mat<5, 5> calibration = after.topLeftCorner<5, 5>() - before.topLeftCorner<5, 5>();
+  const Mat<5, 1> correlation = after.block<5, 1>(0, 5) - before.block<5, 1>(0, 5);
+  EXPECT_EQ(calibration.cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(correlation.cwiseAbs().maxCoeff(), 0.0);
+}
+
 SensorArray compact_array() {
   std::vector<SensorMount> m(4);
   for (int k = 0; k < 4; ++k) {

@@ -307,7 +307,7 @@ RobustEstimate ConsensusEstimator::one_sensor(int i, SensorMask candidates,
   if (rate) {
     take_gyro_rotation(*rate, gyro_.drive(*rate, dt), out);
   } else if (gyro) {
-    gyro_.release();
+    out.estimate.twist.omega += gyro_.hold(out.estimate.covariance(2, 2), dt);
   }
   if (out.source == Source::kWheels) {
     prior_.trust(out.estimate.twist, out.estimate.covariance, sample.t);
@@ -428,7 +428,8 @@ RobustEstimate ConsensusEstimator::estimate_counts(const ArraySample& sample, Se
         (void)gyro_.close(gyro_threshold_);
         gyro_mask_ = 0;
       }
-      gyro_.release();
+      out.estimate.twist.omega +=
+          gyro_.hold(out.estimate.covariance(2, 2), static_cast<real>(sample.dt));
     }
     fallback_.good(out.estimate.twist, out.estimate.covariance, sample.t);
     prior_.trust(out.estimate.twist, out.estimate.covariance, sample.t);
@@ -447,7 +448,8 @@ RobustEstimate ConsensusEstimator::estimate_counts(const ArraySample& sample, Se
   if (rate && !gyro_blamed) {
     take_gyro_rotation(*rate, gyro_.drive(*rate, static_cast<real>(sample.dt)), out);
   } else if (gyro) {
-    gyro_.release();
+    out.estimate.twist.omega +=
+        gyro_.hold(out.estimate.covariance(2, 2), static_cast<real>(sample.dt));
   }
   if (out.source == Source::kWheels) {
     prior_.trust(out.estimate.twist, out.estimate.covariance, sample.t);

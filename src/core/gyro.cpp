@@ -75,6 +75,15 @@ void GyroModel::decouple(Vec3& x_a, Mat3& c_a) const {
   c_a(2, 2) += v.dot(p_.block<2, 2>(2, 2) * v);
 }
 
+real GyroModel::hold(real variance, real dt) {
+  if (!(dt > 0)) return 0;
+  p_(5, 5) += variance * dt * dt;
+  if (p_(5, 5) > real(1)) release();
+  const real correction = x_(5) * std::min(real(1), dt / options_.window_time);
+  x_(5) -= correction;
+  return -correction / dt;
+}
+
 void GyroModel::release() {
   x_(5) = 0;
   p_.row(5).setZero();

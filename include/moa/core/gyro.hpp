@@ -69,8 +69,10 @@
 // smoothness between windows). The correction is reported as rotation,
 // spread over window_time: an epoch reports omega_g - c / dt, c = delta
 // min(1, dt / window_time), and delta's estimate drops by c (the reported
-// heading moved by -c); its variance and correlations stay. An epoch whose rotation is not the
-// gyro's (a saturated reading) forgets delta.
+// heading moved by -c); its variance and correlations stay. An epoch whose
+// rotation is not the gyro's (a saturated reading, a gyro blamed for its
+// disagreement with the array) grows delta by that rotation's own error,
+// dt^2 var, and takes its estimate back the same way.
 #pragma once
 
 #include <cmath>
@@ -131,7 +133,13 @@ class GyroModel {
   /// `r` (from rate()): omega_g less the heading's error estimated so far,
   /// delta / dt; delta propagated and its estimate reset (above).
   real drive(const GyroRate& r, real dt);
-  /// An epoch whose rotation is not the gyro's: delta is forgotten.
+  /// An epoch whose rotation is another source's (the array's, the wheels',
+  /// the hold's; `variance` its variance, rad^2/s^2): delta is not the
+  /// gyro's to grow, but that source's error integrated, variance dt^2 more;
+  /// its estimate is taken back as drive() takes it. Returns the rate to add
+  /// to the rotation reported (rad/s, -correction / dt).
+  real hold(real variance, real dt);
+  /// Forgets delta (its linearisation no longer holds).
   void release();
   /// The array's twist with its rotation's coupling to its velocity removed:
   /// omega_a - a . v_a, the variance grown by v_a^T P_aa v_a (for the gyro's
