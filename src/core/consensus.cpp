@@ -390,7 +390,43 @@ RobustEstimate ConsensusEstimator::estimate_counts(const ArraySample& sample, Se
     while (!contains(screened, i)) ++i;
     return one_sensor(i, candidates, sample, refs, wheels, gyro, rate, out);
   }
-  const auto best = search(screened, refs);
+  std::optional<Candidate> best = search(screened, refs);
+  if (!best && options_.motion_prior && refs.size > 0) {
+    // Step 2b: no subset passes, but the fit of all the candidates is a
+    // twist every reference admits, with its own covariance alone (the
+    // fit's, grown, would admit anything): a model error (latencies,
+    // mounts) rather than a fault, and a better twist than a hold's. Its
+    // covariance is grown by chi2 / dof, the unit variance's estimate.
+    auto fit = solver_.fit(screened, measurements_);
+    bool admitted = fit && fit->dof > 0;
+    if (admitted) {
+      // A model error is small beside the motion: the residuals pass the
+      // gate with each point's covariance grown by (eps |p_i|)^2, eps =
+      // kModelError of its predicted speed (a lost or frozen reading is
+      // all of it).
+      constexpr real kModelError = 0.1;
+      real chi2 = 0;
+      for (int i = 0; i < n_; ++i) {
+        if (!contains(screened, i)) continue;
+        const auto u = static_cast<std::size_t>(i);
+        const Vec2 p = solver_.jacobian(i) * fit->twist.vector();
+        const Vec2 r = measurements_.u[u] - p;
+        const Mat2 c = measurements_.info[u].inverse() +
+                       Mat2::Identity() * (kModelError * kModelError * p.squaredNorm());
+        chi2 += r.dot(c.inverse() * r);
+      }
+      admitted = chi2 <= threshold_[static_cast<std::size_t>(fit->dof)];
+    }
+    for (int k = 0; admitted && k < refs.size; ++k) {
+      const Reference& ref = refs.r[static_cast<std::size_t>(k)];
+      const Vec3 d = fit->twist.vector() - ref.x;
+      admitted = d.dot(ref.covariance.inverse() * d) <= wheel_threshold_;
+    }
+    if (admitted) {
+      fit->covariance *= std::max(real(1), fit->chi2 / static_cast<real>(fit->dof));
+      best = Candidate{*fit, screened, fit->chi2};
+    }
+  }
   if (best) test_references(*best, refs, out.tests);
   if (best && rate) {
     Vec3 x = best->fit.twist.vector();
