@@ -19,6 +19,8 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -38,6 +40,7 @@
 
 #include "commands.hpp"
 #include "live_source.hpp"
+#include "moa/core/wheels.hpp"
 #include "moa/formats/config.hpp"
 #include "moa/formats/diagnostics_csv.hpp"
 #include "moa/formats/error.hpp"
@@ -285,11 +288,15 @@ int run_live(LiveArgs args) {
   io::LiveSource live = io::open_live_source(spec, config, args.config, hooks);
   // Waits for the source to start (a serial board's HELLO): no output exists before.
   io::LiveRunSource input(*live.source, config.array.size(), live.where);
+  const double source_speed = spec.replay.empty() ? 1.0 : spec.replay_options.speed;
   std::unique_ptr<io::StreamLineReader> streams;
   if (!args.streams.empty()) {
-    streams = std::make_unique<io::StreamLineReader>(args.streams, args.streams_clock == "monotonic"
-                                                                       ? io::StreamClock::kMonotonic
-                                                                       : io::StreamClock::kSource);
+    // The source's clock from the first line on: a line far ahead of it is
+    // refused, never taken as its stream's time.
+    streams = std::make_unique<io::StreamLineReader>(
+        args.streams,
+        args.streams_clock == "monotonic" ? io::StreamClock::kMonotonic : io::StreamClock::kSource,
+        io::SourceClock{input.start_time(), std::chrono::steady_clock::now(), source_speed});
   }
 
   // Outputs. The odometry file appears whole at the end; the recording is
@@ -378,13 +385,49 @@ int run_live(LiveArgs args) {
           row);
     }
   };
-  // The robot's streams: bad lines said once per kind, as they come.
+  // The robot's streams: bad lines said once per kind, as they come; rows
+  // beyond a bound (a burst, a flood) dropped and counted, said once.
+  // Rows the pipeline could not hold: wheel rows, gyro rows, fixes.
+  std::array<std::size_t, 3> stream_full{};
+  bool overflow_said = false;
   const auto say_bad_lines = [&] {
     if (!streams) return;
     while (const auto bad = streams->take_new_error()) {
       hooks.warning(fmt::format("--streams: {}: '{}' (more such lines are counted, not shown)",
                                 describe(bad->first), bad->second));
     }
+    if (overflow_said) return;
+    if (const std::size_t queued = streams->stats().overflow; queued != 0) {
+      overflow_said = true;
+      hooks.warning(fmt::format(
+          "--streams: lines dropped: {} good lines were waiting to be fed (lines coming faster "
+          "than the run takes them); further such lines are dropped and counted",
+          io::kMaxQueuedLines));
+    } else if (input.overflow() != 0) {
+      overflow_said = true;
+      hooks.warning(fmt::format(
+          "--streams: rows dropped: {} rows of a stream were waiting for the mice rows of their "
+          "times; further such rows are dropped and counted",
+          io::LiveRunSource::kMaxHeldRows));
+    }
+  };
+  callbacks.on_stream_full = [&](const io::InputRow& row, const std::string&) {
+    const std::size_t kind_index = std::holds_alternative<io::WheelRow>(row) ? 0
+                                   : std::holds_alternative<io::ImuRow>(row) ? 1
+                                                                             : 2;
+    if (stream_full[kind_index]++ != 0 || overflow_said) return;
+    overflow_said = true;
+    const char* kind = std::holds_alternative<io::WheelRow>(row) ? "wheel rows"
+                       : std::holds_alternative<io::ImuRow>(row) ? "gyro rows"
+                                                                 : "camera fixes";
+    hooks.warning(fmt::format(
+        "{}: {} dropped from t = {:.6f} s: a burst came faster than the mice rows take them (at "
+        "most "
+        "{} wait ahead of the mice rows); further such rows are dropped and counted, the run "
+        "goes on",
+        input.where(), kind, io::row_time(row),
+        std::holds_alternative<CameraFix>(row) ? Odometry::kMaxPendingFixes
+                                               : IntervalAverager<3>::kCapacity));
   };
   callbacks.warn = hooks.warn;
   show_status = [&] {
@@ -402,7 +445,7 @@ int run_live(LiveArgs args) {
     status_shown = true;
   };
 
-  if (streams) input.add_streams(*streams, spec.replay.empty() ? 1.0 : spec.replay_options.speed);
+  if (streams) input.add_streams(*streams, source_speed);
   if (live.serial) input.add_gyro(*live.serial);
   if (replay_log.any()) input.add_log(replay_log, replay_files);
   // A live input's bad row (a saturated record, a time out of order) is
@@ -478,11 +521,15 @@ int run_live(LiveArgs args) {
     }
     if (streams) {
       const auto st = streams->stats();
+      // Handed out by the merge, less what the pipeline could not hold.
+      const auto fed = [](std::size_t out, std::size_t full) { return out - std::min(out, full); };
       fmt::print(report,
                  "moa live: streams: {} wheel rows, {} gyro rows and {} camera fixes read, {}, {} "
-                 "and {} fed; {} bad lines, {} out of time order\n",
-                 st.wheels, st.imu, st.fixes, input.streamed().wheels, input.streamed().imu,
-                 input.streamed().fixes, st.bad_total(), input.dropped());
+                 "and {} fed; {} bad lines, {} out of time order, {} dropped past a bound\n",
+                 st.wheels, st.imu, st.fixes, fed(input.streamed().wheels, stream_full[0]),
+                 fed(input.streamed().imu, stream_full[1]),
+                 fed(input.streamed().fixes, stream_full[2]), st.bad_total(), input.dropped(),
+                 st.overflow + input.overflow() + stream_full[0] + stream_full[1] + stream_full[2]);
     }
     if (recording) {
       fmt::print(report, "moa live: recorded to {} (replay: moa odometry --config {} --log {})\n",

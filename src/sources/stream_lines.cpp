@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <fmt/core.h>
 #include <poll.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -34,6 +35,11 @@ const char* describe(StreamLineError e) {
       return "line too long";
     case StreamLineError::kBadJson:
       return "not a flat JSON object of the stream's keys (stream, t and its columns)";
+    case StreamLineError::kTimeOutOfRange:
+      return "t outside -4e9..4e9 s (the bound of every log's times)";
+    case StreamLineError::kTimeAhead:
+      return "t more than 60 s ahead of the source's clock when the line arrived (never taken "
+             "as the stream's time)";
   }
   return "?";
 }
@@ -169,6 +175,7 @@ std::variant<std::monostate, StreamRow, StreamLineError> parse_stream_line(std::
   };
   double t = 0.0;
   if (out.stamped && !numbers(1, 1, &t)) return StreamLineError::kNotANumber;
+  if (!(std::abs(t) <= kMaxTime)) return StreamLineError::kTimeOutOfRange;
   if (f[0] == "wheels") {
     if (f.size() != 5) return StreamLineError::kFieldCount;
     double v[3];
@@ -223,7 +230,22 @@ struct StreamLineReader::Impl {
   std::vector<StreamRow> queue;  ///< under mutex
   Stats stats;                   ///< under mutex
   std::array<bool, kStreamLineErrors> reported{};
+  std::optional<SourceClock> source;  ///< under mutex
+  bool regular_file = false;          ///< a file waits for the run instead of dropping lines
   std::thread thread;
+
+  // s by which a stamped row's t is ahead of the source's clock now (0 when
+  // that clock is not known yet). Under mutex.
+  double lead(double t, std::chrono::steady_clock::time_point now) const {
+    if (!source) return 0.0;
+    const double wall = std::chrono::duration<double>(now - source->arrival).count();
+    if (clock == StreamClock::kMonotonic) {
+      // t maps as an arrival: source->t + speed (t - arrival), against now's.
+      const double now_s = std::chrono::duration<double>(now.time_since_epoch()).count();
+      return source->speed * (t - now_s);
+    }
+    return t - (source->t + source->speed * wall);
+  }
 
   void line(std::string_view text, std::array<std::optional<double>, 3>& last_t) {
     auto parsed = parse_stream_line(text);
@@ -234,7 +256,9 @@ struct StreamLineReader::Impl {
       const std::size_t stream = row->row.index();
       const double t = std::visit([](const auto& r) { return static_cast<double>(r.t); }, row->row);
       if (row->stamped) {
-        if (last_t[stream] && t < *last_t[stream]) {
+        if (lead(t, now) > kMaxStreamLead) {
+          parsed = StreamLineError::kTimeAhead;
+        } else if (last_t[stream] && t < *last_t[stream]) {
           parsed = StreamLineError::kTimeBackwards;
         } else {
           last_t[stream] = t;
@@ -250,6 +274,10 @@ struct StreamLineReader::Impl {
           good->stamped = false;
         }
         ++(stream == 0 ? stats.wheels : stream == 1 ? stats.fixes : stats.imu);
+        if (queue.size() >= kMaxQueuedLines) {
+          ++stats.overflow;
+          return;
+        }
         queue.push_back(std::move(*good));
         return;
       }
@@ -257,6 +285,13 @@ struct StreamLineReader::Impl {
     const auto e = static_cast<std::size_t>(std::get<StreamLineError>(parsed));
     // Shown to a person: at most 200 bytes, control characters escaped.
     if (stats.bad[e]++ == 0) stats.first[e] = printable(text.substr(0, 200));
+  }
+
+  // Room for the good lines of a whole read: a 64 KiB read holds fewer than
+  // kMaxQueuedLines / 2 of them (the shortest, "imu,,0", is 7 bytes).
+  bool room() const {
+    std::lock_guard lock(mutex);
+    return queue.size() <= kMaxQueuedLines / 2;
   }
 
   void run() {
@@ -267,10 +302,17 @@ struct StreamLineReader::Impl {
       close_fd = true;
       fd = opened;
     }
+    struct stat st {};
+    regular_file = ::fstat(fd.load(), &st) == 0 && S_ISREG(st.st_mode);
     std::array<std::optional<double>, 3> last_t;
     std::string pending;
     char buffer[65536];  // a datagram whole
     while (!stopping) {
+      if (regular_file && !room()) {
+        // A file is read as the run takes its lines: none is dropped.
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
+        continue;
+      }
       pollfd p{fd.load(), POLLIN, 0};
       const int ready = ::poll(&p, 1, 100);
       if (ready < 0 && errno != EINTR) return;
@@ -299,10 +341,12 @@ struct StreamLineReader::Impl {
   }
 };
 
-StreamLineReader::StreamLineReader(const std::string& path, StreamClock clock)
+StreamLineReader::StreamLineReader(const std::string& path, StreamClock clock,
+                                   std::optional<SourceClock> source)
     : impl_(std::make_unique<Impl>()) {
   impl_->path = path;
   impl_->clock = clock;
+  impl_->source = source;
   if (const auto address = parse_udp_address(path, "--streams")) {
     impl_->fd = open_udp_socket(*address, /*bind=*/true, "--streams");
     impl_->udp = true;
@@ -337,6 +381,11 @@ void StreamLineReader::take(std::vector<StreamRow>& out) {
   std::lock_guard lock(impl_->mutex);
   out.insert(out.end(), impl_->queue.begin(), impl_->queue.end());
   impl_->queue.clear();
+}
+
+void StreamLineReader::set_source_clock(const SourceClock& clock) {
+  std::lock_guard lock(impl_->mutex);
+  impl_->source = clock;
 }
 
 std::optional<std::pair<StreamLineError, std::string>> StreamLineReader::take_new_error() {
