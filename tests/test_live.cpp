@@ -23,6 +23,7 @@
 
 #include "moa/core/se2.hpp"
 #include "moa/formats/config.hpp"
+#include "moa/sources/replay_reader.hpp"
 #include "moa/sources/serial_protocol.hpp"
 #include "support/pty.hpp"
 #include "support/run.hpp"
@@ -802,6 +803,34 @@ TEST(Live, AStreamLineFarFromTheSourcesClockIsRefusedNotTakenAsItsTime) {
   EXPECT_EQ(counts[7], 0u) << r.out;   // out of time order
   EXPECT_EQ(data_lines(record / "wheels.csv"), 21u);
   expect_replays_to(record, read_text(live), " --estimator sekimori");
+}
+
+// --speed has bounds (0.001 to 10^6): at 1e-20 a replay's waits were about
+// 10^20 s, past what the clock's count of nanoseconds holds (an overflow in
+// the cast, and the whole log came at once; issue #47, item 7). Refused by
+// the flag, as the library's options refuse it by their field.
+TEST(Live, ASpeedBeyondItsBoundsIsRefusedByTheFlag) {
+  Scene scene;
+  const fs::path log = scene.dir / "log";
+  write_log(scene.log, scene.array, kNames, log);
+  for (const std::string speed : {"1e-20", "0.0009", "1e7", "1e300"}) {
+    const auto r = run_moa("live --config " + scene.config.string() + " --replay " + log.string() +
+                           " --speed " + speed + " --out " + (scene.dir / "o.csv").string());
+    EXPECT_EQ(r.exit_code, 2) << speed;
+    EXPECT_EQ(r.err, "--speed: " + speed +
+                         ": must be within [0.001, 1000000]\nRun with --help for more "
+                         "information.\n")
+        << speed;
+  }
+  EXPECT_FALSE(fs::exists(scene.dir / "o.csv"));
+  io::ReplayOptions options;
+  options.speed = 1e-20;
+  ASSERT_TRUE(options.validate());
+  EXPECT_STREQ(options.validate()->message(), "speed: must be in [0.001, 1000000], is 1e-20");
+  options.speed = 1e6;
+  EXPECT_FALSE(options.validate());
+  options.speed = 1e-3;
+  EXPECT_FALSE(options.validate());
 }
 
 // One sensor and a gyro (scenario gyro-one): the replay takes the sensor's
