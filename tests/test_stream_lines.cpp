@@ -270,6 +270,21 @@ TEST(StreamLines, ATimeBeyondTheLogsBoundIsBad) {
   EXPECT_EQ(std::get<ImuRow>(good("imu,-4e9,0").row).t, -4e9);
 }
 
+// A value beyond core/plausible.hpp's bounds is a bad line, as in the logs.
+TEST(StreamLines, AnImplausibleValueIsBad) {
+  EXPECT_EQ(bad("wheels,1,1.7e308,0,0"), E::kImplausible);
+  EXPECT_EQ(bad("wheels,1,0,-100.5,0"), E::kImplausible);
+  EXPECT_EQ(bad("wheels,,0,0,1001"), E::kImplausible);
+  EXPECT_EQ(bad("imu,1,-2000"), E::kImplausible);
+  EXPECT_EQ(bad("camera,1,1e300,0"), E::kImplausible);
+  EXPECT_EQ(bad("camera,1,0,0,1e8"), E::kImplausible);
+  EXPECT_EQ(bad("camera,1,0,0,,0.01,2e6"), E::kImplausible);
+  EXPECT_EQ(bad("{\"stream\":\"imu\",\"gz\":1e300}"), E::kImplausible);
+  EXPECT_EQ(std::get<WheelRow>(good("wheels,1,100,-100,1000").row).twist.omega, 1000.0);
+  EXPECT_EQ(std::get<ImuRow>(good("imu,1,-1000").row).gz, -1000.0);
+  EXPECT_EQ(std::get<CameraFix>(good("camera,1,1e6,-1e6,1e7,1e6,1e6").row).position.x(), 1e6);
+}
+
 // Polls `reader` until `rows` good lines were taken (30 s at most: a
 // failure then, never a pass on what came).
 std::vector<StreamRow> take_all(StreamLineReader& reader, std::size_t rows) {

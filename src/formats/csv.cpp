@@ -500,6 +500,17 @@ double CsvReader::number(std::size_t column) const {
   return std::get<double>(parsed);
 }
 
+double CsvReader::plausible(std::size_t column, double bound, std::string_view unit,
+                            std::string_view what) const {
+  const double value = number(column);
+  if (!(std::abs(value) <= bound)) {
+    fail_field(column,
+               fmt::format("{} {} is beyond the plausible {}..{} {} of {} (a corrupt value?)",
+                           excerpt(fields_[column]), unit, -bound, bound, unit, what));
+  }
+  return value;
+}
+
 std::int64_t CsvReader::integer(std::size_t column, std::int64_t min, std::int64_t max) const {
   const std::string_view text = fields_[column];
   if (text.empty()) fail_field(column, "empty field");

@@ -14,6 +14,7 @@
 #include <mutex>
 #include <thread>
 
+#include "moa/core/plausible.hpp"
 #include "moa/formats/csv.hpp"
 #include "moa/formats/error.hpp"
 #include "moa/sources/udp.hpp"
@@ -37,6 +38,9 @@ const char* describe(StreamLineError e) {
       return "not a flat JSON object of the stream's keys (stream, t and its columns)";
     case StreamLineError::kTimeOutOfRange:
       return "t outside -4e9..4e9 s (the bound of every log's times)";
+    case StreamLineError::kImplausible:
+      return "a value beyond the plausible (|vx|, |vy| <= 100 m/s; |omega|, |gz| <= 1000 rad/s; "
+             "|x|, |y|, sx, sy <= 1e6 m; |theta| <= 1e7 rad)";
     case StreamLineError::kTimeAhead:
       return "t more than 60 s ahead of the source's clock when the line arrived (never taken "
              "as the stream's time)";
@@ -180,6 +184,10 @@ std::variant<std::monostate, StreamRow, StreamLineError> parse_stream_line(std::
     if (f.size() != 5) return StreamLineError::kFieldCount;
     double v[3];
     if (!numbers(2, 3, v)) return StreamLineError::kNotANumber;
+    if (!within_plausible(v[0], kMaxPlausibleSpeed) ||
+        !within_plausible(v[1], kMaxPlausibleSpeed) || !within_plausible(v[2], kMaxPlausibleRate)) {
+      return StreamLineError::kImplausible;
+    }
     out.row = WheelRow{t, Twist2{{v[0], v[1]}, v[2]}};
     return out;
   }
@@ -187,6 +195,7 @@ std::variant<std::monostate, StreamRow, StreamLineError> parse_stream_line(std::
     if (f.size() != 3) return StreamLineError::kFieldCount;
     double gz = 0.0;
     if (!numbers(2, 1, &gz)) return StreamLineError::kNotANumber;
+    if (!within_plausible(gz, kMaxPlausibleRate)) return StreamLineError::kImplausible;
     out.row = ImuRow{t, gz};
     return out;
   }
@@ -194,17 +203,25 @@ std::variant<std::monostate, StreamRow, StreamLineError> parse_stream_line(std::
     if (f.size() != 4 && f.size() != 5 && f.size() != 7) return StreamLineError::kFieldCount;
     double p[2];
     if (!numbers(2, 2, p)) return StreamLineError::kNotANumber;
+    if (!within_plausible(p[0], kMaxPlausiblePosition) ||
+        !within_plausible(p[1], kMaxPlausiblePosition)) {
+      return StreamLineError::kImplausible;
+    }
     CameraFix fix;
     fix.t = t;
     fix.position = {p[0], p[1]};
     if (f.size() >= 5 && !f[4].empty()) {
       double theta = 0.0;
       if (!numbers(4, 1, &theta)) return StreamLineError::kNotANumber;
+      if (!within_plausible(theta, kMaxPlausibleHeading)) return StreamLineError::kImplausible;
       fix.theta = theta;
     }
     if (f.size() == 7) {
       double s[2];
       if (!numbers(5, 2, s) || !(s[0] > 0.0 && s[1] > 0.0)) return StreamLineError::kNotANumber;
+      if (s[0] > kMaxPlausiblePosition || s[1] > kMaxPlausiblePosition) {
+        return StreamLineError::kImplausible;
+      }
       fix.sigma = Vec2{s[0], s[1]};
     }
     out.row = fix;

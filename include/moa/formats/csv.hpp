@@ -174,6 +174,11 @@ class CsvReader {
   bool is_empty(std::size_t column) const { return fields_[column].empty(); }
   /// A finite floating point number.
   double number(std::size_t column) const;
+  /// A number within [-bound, bound] (core/plausible.hpp); beyond: "column
+  /// 'vx': 1.7e308 m/s is beyond the plausible -100..100 m/s of WHAT (a
+  /// corrupt value?)", `unit` naming the column's unit.
+  double plausible(std::size_t column, double bound, std::string_view unit,
+                   std::string_view what) const;
   /// An integer within [min, max] (decimal digits, optional sign, nothing else).
   std::int64_t integer(std::size_t column, std::int64_t min, std::int64_t max) const;
   /// A finite number no earlier than the previous record's time, within

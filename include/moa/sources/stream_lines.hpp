@@ -74,8 +74,9 @@ enum class StreamLineError : std::uint8_t {
   kBadJson,         ///< starts with '{' but is no flat JSON object of known keys
   kTimeOutOfRange,  ///< |t| > kMaxTime (4e9 s), the bound of every log's times
   kTimeAhead,       ///< t more than kMaxStreamLead ahead of the source's clock at its arrival
+  kImplausible,     ///< a value beyond core/plausible.hpp's bounds (a corrupt value)
 };
-inline constexpr std::size_t kStreamLineErrors = 8;
+inline constexpr std::size_t kStreamLineErrors = 9;
 /// "unknown stream (not wheels, imu or camera)", ...
 const char* describe(StreamLineError error);
 
