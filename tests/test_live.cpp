@@ -246,6 +246,36 @@ TEST(Live, SerialRunStopsCleanlyOnCtrlCAndItsRecordingReplaysToTheSameOdometry) 
   expect_ends_at_truth(scene, odometry, 1e-9);
 }
 
+// A lost ssh session (SIGHUP), a reader gone (SIGPIPE) or a file size limit
+// (SIGXFSZ) ends a recording run as Ctrl-C does (issue #47, item 6: SIGHUP
+// killed moa, --out was lost and mice.csv.part left): the recording
+// complete under its final name, the odometry written, exit 0.
+TEST(Live, AHangUpEndsASerialRunAsCtrlCDoes) {
+  for (const int signal : {SIGHUP, SIGPIPE, SIGXFSZ}) {
+    SCOPED_TRACE(signal);
+    Scene scene;
+    PseudoTerminal pty;
+    const fs::path record = scene.dir / "rec";
+    const fs::path odometry = scene.dir / "live.csv";
+    Child moa(
+        {"live", "--config", scene.config.string(), "--serial", pty.device(), "--baud", "230400",
+         "--record", record.string(), "--out", odometry.string(), "--estimator", "ls"},
+        scene.dir);
+    ASSERT_TRUE(moa.started());
+    std::atomic<bool> done{false};
+    std::thread device([&] { play_device(pty, scene.log, record / "mice.csv.part", done); });
+    device.join();
+    ASSERT_TRUE(done.load()) << moa.err();
+    moa.signal(signal);
+    ASSERT_EQ(moa.wait(10s), 0) << moa.err();
+    EXPECT_FALSE(fs::exists(record / "mice.csv.part"));
+    ASSERT_TRUE(fs::exists(record / "mice.csv"));
+    EXPECT_EQ(data_lines(record / "mice.csv"), scene.log.rows.size());
+    ASSERT_TRUE(fs::exists(odometry));
+    expect_replays_identically(record, odometry);
+  }
+}
+
 // A device that misbehaves as real ones do (issue #28): a DATA frame sent
 // twice, a late frame, a restart (a new HELLO, sequence and clock from 0) and
 // a clock step of 4000 s. moa live drops what would count twice, keeps times

@@ -10,8 +10,9 @@
 // then reproduces the live odometry exactly (same rows, same t0, times
 // written as shortest round-trip text).
 //
-// Ctrl-C (SIGINT) or SIGTERM ends the run between rows: the pipeline is
-// flushed and every file committed. Rows reach DIR/mice.csv.part at least
+// Ctrl-C (SIGINT), SIGTERM, SIGHUP (a lost ssh session), SIGPIPE, SIGXFSZ,
+// SIGXCPU or SIGQUIT ends the run between rows: the pipeline is flushed and
+// every file committed. Rows reach DIR/mice.csv.part at least
 // every status tick, so even a killed run leaves its recording there.
 #include <fmt/core.h>
 #include <fmt/format.h>
@@ -88,22 +89,29 @@ class StopSignals {
     g_stop = 0;
     struct sigaction action {};
     action.sa_handler = on_stop_signal;
-    sigemptyset(&action.sa_mask);  // the handler is not re-entered: both blocked in it
-    sigaddset(&action.sa_mask, SIGINT);
-    sigaddset(&action.sa_mask, SIGTERM);
-    sigaction(SIGINT, &action, &old_int_);
-    sigaction(SIGTERM, &action, &old_term_);
+    sigemptyset(&action.sa_mask);  // the handler is not re-entered: all blocked in it
+    for (const int signal : kStopSignals) sigaddset(&action.sa_mask, signal);
+    for (std::size_t i = 0; i < kStopSignals.size(); ++i) {
+      sigaction(kStopSignals[i], nullptr, &old_[i]);
+      // One ignored by whoever started moa (nohup's SIGHUP) stays ignored.
+      if (old_[i].sa_handler != SIG_IGN) sigaction(kStopSignals[i], &action, nullptr);
+    }
   }
   ~StopSignals() {
-    sigaction(SIGINT, &old_int_, nullptr);
-    sigaction(SIGTERM, &old_term_, nullptr);
+    for (std::size_t i = 0; i < kStopSignals.size(); ++i) {
+      sigaction(kStopSignals[i], &old_[i], nullptr);
+    }
   }
   StopSignals(const StopSignals&) = delete;
   StopSignals& operator=(const StopSignals&) = delete;
 
  private:
-  struct sigaction old_int_ {};
-  struct sigaction old_term_ {};
+  // Ctrl-C, SIGTERM, and what else ends a run from outside: a lost ssh
+  // session (SIGHUP), a reader of standard output gone (SIGPIPE), a file
+  // size limit (SIGXFSZ) or a CPU limit (SIGXCPU), SIGQUIT.
+  static constexpr std::array<int, 7> kStopSignals{SIGINT,  SIGTERM, SIGHUP, SIGPIPE,
+                                                   SIGXFSZ, SIGXCPU, SIGQUIT};
+  std::array<struct sigaction, kStopSignals.size()> old_{};
 };
 
 struct LiveArgs {
