@@ -369,6 +369,25 @@ TEST(StreamLines, LinesBeyondTheQueuesBoundAreDroppedFromAFifoAndWaitInAFile) {
   EXPECT_EQ(reader.stats().overflow, 0u);
 }
 
+// An input without line ends (/dev/zero) is no stream of lines: its first
+// line is counted too long as soon as it passes the bound, and after a
+// megabyte without a line end it is read no further (issue #47, item 10:
+// it burnt a core and reported 0 bad lines).
+TEST(StreamLines, AnInputWithoutLineEndsIsCountedAndNotReadForever) {
+  StreamLineReader reader("/dev/zero");
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (!reader.stats().not_lines && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  const auto stats = reader.stats();
+  EXPECT_TRUE(stats.not_lines);
+  EXPECT_EQ(stats.bad[static_cast<std::size_t>(E::kTooLong)], 1u);
+  EXPECT_EQ(stats.bad_total(), 1u);
+  std::string shown;  // the first 200 bytes, escaped
+  for (int k = 0; k < 200; ++k) shown += "\\x00";
+  EXPECT_EQ(stats.first[static_cast<std::size_t>(E::kTooLong)], shown);
+}
+
 TEST(StreamLines, AMissingFileIsRefusedByName) {
   EXPECT_THROW(StreamLineReader("/nonexistent/streams"), IoError);
 }

@@ -398,14 +398,23 @@ int run_live(LiveArgs args) {
   // Rows the pipeline could not hold: wheel rows, gyro rows, fixes.
   std::array<std::size_t, 3> stream_full{};
   bool overflow_said = false;
+  bool not_lines_said = false;
   const auto say_bad_lines = [&] {
     if (!streams) return;
     while (const auto bad = streams->take_new_error()) {
       hooks.warning(fmt::format("--streams: {}: '{}' (more such lines are counted, not shown)",
                                 describe(bad->first), bad->second));
     }
+    const auto stats = streams->stats();
+    if (stats.not_lines && !not_lines_said) {
+      not_lines_said = true;
+      hooks.warning(fmt::format(
+          "--streams {}: {} bytes without a line end: not a stream of lines; no more of it is "
+          "read",
+          args.streams, io::kMaxStreamUnended));
+    }
     if (overflow_said) return;
-    if (const std::size_t queued = streams->stats().overflow; queued != 0) {
+    if (const std::size_t queued = stats.overflow; queued != 0) {
       overflow_said = true;
       hooks.warning(fmt::format(
           "--streams: lines dropped: {} good lines were waiting to be fed (lines coming faster "

@@ -323,7 +323,8 @@ struct StreamLineReader::Impl {
     regular_file = ::fstat(fd.load(), &st) == 0 && S_ISREG(st.st_mode);
     std::array<std::optional<double>, 3> last_t;
     std::string pending;
-    char buffer[65536];  // a datagram whole
+    std::size_t unended = 0;  // bytes since the last line end
+    char buffer[65536];       // a datagram whole
     while (!stopping) {
       if (regular_file && !room()) {
         // A file is read as the run takes its lines: none is dropped.
@@ -341,20 +342,31 @@ struct StreamLineReader::Impl {
       for (ssize_t k = 0; k < n; ++k) {
         const char c = buffer[k];
         if (c == '\n') {
-          line(pending, last_t);
+          if (unended <= kMaxStreamLine) line(pending, last_t);
           pending.clear();
-        } else if (pending.size() <= kMaxStreamLine) {
-          // One byte past the bound is kept: the line is then too long.
+          unended = 0;
+        } else if (++unended <= kMaxStreamLine + 1) {
+          // One byte past the bound is kept: the line is then too long,
+          // counted at once (a line may never end).
           pending.push_back(c);
+          if (unended == kMaxStreamLine + 1) line(pending, last_t);
         }
+      }
+      if (!udp && unended > kMaxStreamUnended) {
+        // No line end in a megabyte (/dev/zero, a binary file): not a
+        // stream of lines. Read no further rather than spin on it.
+        std::lock_guard lock(mutex);
+        stats.not_lines = true;
+        break;
       }
       if (udp && !pending.empty()) {
         // A datagram's end ends its last line.
-        line(pending, last_t);
+        if (unended <= kMaxStreamLine) line(pending, last_t);
         pending.clear();
+        unended = 0;
       }
     }
-    if (!pending.empty() && !stopping) line(pending, last_t);
+    if (!pending.empty() && unended <= kMaxStreamLine && !stopping) line(pending, last_t);
   }
 };
 

@@ -35,8 +35,9 @@ inline constexpr std::size_t kMaxLineBytes = std::size_t{1} << 16;
 /// Bytes of input an error message quotes at most.
 inline constexpr std::size_t kMaxExcerpt = 40;
 
-/// `text` with control characters written as \xNN, so that an error message
-/// quoting input stays on one line.
+/// `text` with control characters and bytes that are not well-formed UTF-8
+/// written as \xNN, so that an error message quoting input stays on one
+/// line and is valid UTF-8 (valid multi-byte characters are kept).
 std::string printable(std::string_view text);
 /// printable() of at most the first kMaxExcerpt bytes of `text`, followed by
 /// "... (N bytes)" when it was cut: how a reader quotes input in an error.

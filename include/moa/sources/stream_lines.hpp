@@ -92,6 +92,10 @@ inline constexpr double kMaxStreamLead = 60.0;
 /// Good lines that may wait for the run to take them (StreamLineReader).
 inline constexpr std::size_t kMaxQueuedLines = 65536;
 
+/// Bytes without a line end after which an input is taken for no stream of
+/// lines (/dev/zero, a binary file) and read no further.
+inline constexpr std::size_t kMaxStreamUnended = std::size_t{1} << 20;
+
 /// The live source's clock as the run last saw it: the time `t` (s) of a
 /// mice row received at `arrival`, running at `speed` seconds of the source
 /// per second of wall time (a replay's --speed; 1 for devices).
@@ -119,6 +123,9 @@ class StreamLineReader {
     /// Good lines dropped: kMaxQueuedLines were waiting for the run (a
     /// burst or a flood faster than the run takes them).
     std::size_t overflow = 0;
+    /// The input sent kMaxStreamUnended bytes without a line end: a line
+    /// too long was counted, and nothing more is read.
+    bool not_lines = false;
     std::size_t bad_total() const;
   };
 
