@@ -353,6 +353,23 @@ class PyOdometry {
     }
     return x;
   }
+  /// A count given as a Python number: a bool is no count (True read as 1).
+  static double count(const py::handle& x, const char* what) {
+    if (py::isinstance<py::bool_>(x)) {
+      throw io::Error(fmt::format("{} {}: a count is a whole number, not a bool", what,
+                                  py::str(x).cast<std::string>()));
+    }
+    return count(x.cast<double>(), what);
+  }
+  /// The counts of push_rows: an array of bools is no counts either.
+  static void no_bools(const py::handle& x, const char* what) {
+    const auto kind = py::module_::import("numpy")
+                          .attr("asarray")(x)
+                          .attr("dtype")
+                          .attr("kind")
+                          .cast<std::string>();
+    if (kind == "b") throw io::Error(fmt::format("{}: counts are whole numbers, not bools", what));
+  }
   /// The flags byte (bit 0 overflow, 1 lift), as mice.csv's 0..255.
   static std::uint8_t flags_value(double flags) {
     if (!(flags >= 0.0 && flags <= 255.0) || std::floor(flags) != flags) {
@@ -379,8 +396,8 @@ class PyOdometry {
     throw io::Error(fmt::format("row at t = {} s: {}", t, detail));
   }
 
-  py::dict push(double t, const py::handle& sensor, double dx, double dy, std::optional<int> squal,
-                long long flags) {
+  py::dict push(double t, const py::handle& sensor, const py::handle& dx, const py::handle& dy,
+                std::optional<int> squal, long long flags) {
     SensorRow row{t,
                   sensor_index(sensor),
                   {count(dx, "dx"), count(dy, "dy")},
@@ -394,6 +411,8 @@ class PyOdometry {
 
   py::dict push_rows(const py::handle& t, const py::handle& sensor, const py::handle& dx,
                      const py::handle& dy, const py::handle& squal, const py::handle& flags) {
+    no_bools(dx, "dx");
+    no_bools(dy, "dy");
     const auto tt = doubles(t), xx = doubles(dx), yy = doubles(dy), qq = doubles(squal),
                ff = doubles(flags);
     std::vector<int> ss;

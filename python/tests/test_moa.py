@@ -298,6 +298,10 @@ def test_odometry_object_checks_its_arguments_as_the_command_line_does():
             o.push(0.01, 0, 1.0, 0.0, flags=flags)
     with pytest.raises(moa.Error, match="dx 0.5: a count is a whole number"):
         o.push(0.01, 0, 0.5, 0.0)
+    with pytest.raises(moa.Error, match="dx True: a count is a whole number, not a bool"):
+        o.push(0.01, 0, True, 0)
+    with pytest.raises(moa.Error, match="dy: counts are whole numbers, not bools"):
+        o.push_rows([0.01], [0], [1], [False])
     with pytest.raises(moa.Error, match="flags 1.5: must be a whole number 0..255"):
         o.push_rows([0.01], [0], [1.0], [0.0], flags=[1.5])
     with pytest.raises(moa.Error, match="wheel twist beyond the plausible"):
