@@ -27,6 +27,7 @@
 #include <csignal>
 #include <cstdio>
 #include <deque>
+#include <exception>
 #include <filesystem>
 #include <limits>
 #include <map>
@@ -378,16 +379,33 @@ int run_live(LiveArgs args) {
     if (dashboard) dashboard->publish(step);
   };
 
+  // A recording that cannot be written (a full disk) stops there, said once;
+  // the run goes on and its other outputs (--out on another disk) are
+  // written; the error is the run's at the end. What was flushed stays in
+  // DIR/mice.csv.part.
+  std::exception_ptr recording_error;
+  const auto record = [&](auto&& write) {
+    if (recording_error) return;
+    try {
+      write();
+    } catch (const io::Error& e) {
+      recording_error = std::current_exception();
+      hooks.warning(fmt::format(
+          "--record {}: {}: the recording stops here (what was flushed stays in {}); the run goes "
+          "on and writes its other outputs",
+          args.record, e.what(), recording ? recording->partial_path().string() : args.record));
+    }
+  };
   RateMeter meter;
   callbacks.on_row = [&](const io::InputRow& row) {
     if (const auto* mice = std::get_if<SensorRow>(&row)) {
-      if (recording) recording->write(*mice);
+      if (recording) record([&] { recording->write(*mice); });
       meter.add(1);
     } else if (stream_recording) {
       std::visit(
           [&](const auto& r) {
             if constexpr (!std::is_same_v<std::decay_t<decltype(r)>, SensorRow>) {
-              stream_recording->write(r);
+              record([&] { stream_recording->write(r); });
             }
           },
           row);
@@ -449,7 +467,7 @@ int run_live(LiveArgs args) {
   callbacks.warn = hooks.warn;
   show_status = [&] {
     say_bad_lines();
-    if (recording) recording->flush();
+    if (recording) record([&] { recording->flush(); });
     if (to_stdout) odometry_out->flush();
     if (!status) return;
     const auto now = std::chrono::steady_clock::now();
@@ -484,8 +502,8 @@ int run_live(LiveArgs args) {
     run = io::run_loop(config, args.config, odometry_options, input, live.where, callbacks);
   } catch (...) {
     // What was recorded is good data even if the run failed.
-    if (recording) recording->commit();
-    if (stream_recording) stream_recording->commit();
+    if (recording) record([&] { recording->commit(); });
+    if (stream_recording) record([&] { stream_recording->commit(); });
     if (status_shown) fmt::print(stderr, "\n");
     if (recording) {
       fmt::print(stderr, "moa live: the recording up to the error is kept in {}\n", args.record);
@@ -499,8 +517,8 @@ int run_live(LiveArgs args) {
   for (const auto& [why, count] : skipped) {
     hooks.warn(fmt::format("{}: {} rows skipped: {}", live.where, count, why));
   }
-  if (recording) recording->commit();
-  if (stream_recording) stream_recording->commit();
+  if (recording) record([&] { recording->commit(); });
+  if (stream_recording) record([&] { stream_recording->commit(); });
   if (odometry_out) odometry_out->commit();
   if (pose_stream) {
     // The lines still buffered for a slow reader get a moment, then are dropped.
@@ -548,7 +566,7 @@ int run_live(LiveArgs args) {
                  fed(input.streamed().fixes, stream_full[2]), st.bad_total(), input.dropped(),
                  st.overflow + input.overflow() + stream_full[0] + stream_full[1] + stream_full[2]);
     }
-    if (recording) {
+    if (recording && !recording_error) {
       fmt::print(report, "moa live: recorded to {} (replay: moa odometry --config {} --log {})\n",
                  (fs::path(args.record) / "mice.csv").string(),
                  (fs::path(args.record) / "robot.yaml").string(), args.record);
@@ -576,6 +594,8 @@ int run_live(LiveArgs args) {
       while (g_stop == 0) std::this_thread::sleep_for(std::chrono::milliseconds(100));
     }
   }
+  // The recording's error, once everything else is written.
+  if (recording_error) std::rethrow_exception(recording_error);
   return 0;
 }
 
