@@ -20,6 +20,7 @@
 
 #include "moa/analysis/evaluate.hpp"
 #include "moa/core/odometry.hpp"
+#include "moa/core/plausible.hpp"
 #include "moa/formats/config.hpp"
 #include "moa/formats/error.hpp"
 #include "moa/formats/log.hpp"
@@ -177,6 +178,12 @@ OdometryOptions odometry_options(const std::string& estimator, const py::kwargs&
   const Options o(kwargs, kOdometryOptions, "odometry");
   OdometryOptions options;
   o.set("rate", options.rate);
+  // The command line's bound of --rate (0.1 to 10000 Hz): 1e6 made 1.36 GB
+  // of epochs of a 3 s log.
+  // (NaN and infinity: the options' own check, "invalid option: rate: ...".)
+  if (std::isfinite(options.rate) && !(options.rate >= 0.1 && options.rate <= 10000.0)) {
+    throw io::Error(fmt::format("rate: {}: must be within [0.1, 10000]", options.rate));
+  }
   o.set("fuse_camera", options.fuse_camera);
   if (const auto latency = o.get<double>("camera_latency")) options.camera_latency = *latency;
   o.set("camera_sigma", options.camera_sigma);
@@ -326,9 +333,50 @@ class PyOdometry {
   PyOdometry(const py::object& config, double t0, const std::string& estimator,
              const py::kwargs& kwargs)
       : config_(load_config(config)),
-        odometry_(io::make_odometry(config_.config, config_.path, t0,
+        odometry_(io::make_odometry(config_.config, config_.path, checked_t0(t0),
                                     odometry_options(estimator, kwargs, config_))),
-        steps_(config_.config.array.size()) {}
+        steps_(config_.config.array.size()),
+        t_last_(t0) {}
+
+  /// t0 as the logs' times are bounded (a NaN t0 made push loop for ever).
+  static double checked_t0(double t0) {
+    if (!(std::abs(t0) <= kMaxTime)) {
+      throw io::Error(fmt::format("t0 = {} s: not a time within -4e9..4e9 s", t0));
+    }
+    return t0;
+  }
+
+  /// A count as mice.csv holds it: an integer (of a double's exact range).
+  static double count(double x, const char* what) {
+    if (!(std::abs(x) <= 9007199254740992.0) || std::floor(x) != x) {
+      throw io::Error(fmt::format("{} {}: a count is a whole number", what, x));
+    }
+    return x;
+  }
+  /// A count given as a Python number: a bool is no count (True read as 1).
+  static double count(const py::handle& x, const char* what) {
+    if (py::isinstance<py::bool_>(x)) {
+      throw io::Error(fmt::format("{} {}: a count is a whole number, not a bool", what,
+                                  py::str(x).cast<std::string>()));
+    }
+    return count(x.cast<double>(), what);
+  }
+  /// The counts of push_rows: an array of bools is no counts either.
+  static void no_bools(const py::handle& x, const char* what) {
+    const auto kind = py::module_::import("numpy")
+                          .attr("asarray")(x)
+                          .attr("dtype")
+                          .attr("kind")
+                          .cast<std::string>();
+    if (kind == "b") throw io::Error(fmt::format("{}: counts are whole numbers, not bools", what));
+  }
+  /// The flags byte (bit 0 overflow, 1 lift), as mice.csv's 0..255.
+  static std::uint8_t flags_value(double flags) {
+    if (!(flags >= 0.0 && flags <= 255.0) || std::floor(flags) != flags) {
+      throw io::Error(fmt::format("flags {}: must be a whole number 0..255", flags));
+    }
+    return static_cast<std::uint8_t>(flags);
+  }
 
   int sensor_index(const py::handle& sensor) const {
     if (py::isinstance<py::str>(sensor)) {
@@ -348,17 +396,23 @@ class PyOdometry {
     throw io::Error(fmt::format("row at t = {} s: {}", t, detail));
   }
 
-  py::dict push(double t, const py::handle& sensor, double dx, double dy, std::optional<int> squal,
-                int flags) {
-    SensorRow row{
-        t, sensor_index(sensor), {dx, dy}, std::nullopt, static_cast<std::uint8_t>(flags)};
+  py::dict push(double t, const py::handle& sensor, const py::handle& dx, const py::handle& dy,
+                std::optional<int> squal, long long flags) {
+    SensorRow row{t,
+                  sensor_index(sensor),
+                  {count(dx, "dx"), count(dy, "dy")},
+                  std::nullopt,
+                  flags_value(static_cast<double>(flags))};
     if (squal && *squal >= 0) row.squal = squal_value(*squal);
     check(odometry_->push(row, sink()), t);
+    t_last_ = std::max(t_last_, t);
     return steps_.take(config_.config.names);
   }
 
   py::dict push_rows(const py::handle& t, const py::handle& sensor, const py::handle& dx,
                      const py::handle& dy, const py::handle& squal, const py::handle& flags) {
+    no_bools(dx, "dx");
+    no_bools(dy, "dy");
     const auto tt = doubles(t), xx = doubles(dx), yy = doubles(dy), qq = doubles(squal),
                ff = doubles(flags);
     std::vector<int> ss;
@@ -369,10 +423,11 @@ class PyOdometry {
       throw py::value_error("push_rows: t, sensor, dx, dy (and squal, flags) must have one length");
     }
     for (std::size_t k = 0; k < n; ++k) {
-      SensorRow row{tt[k], ss[k], {xx[k], yy[k]}, std::nullopt, 0};
+      SensorRow row{tt[k], ss[k], {count(xx[k], "dx"), count(yy[k], "dy")}, std::nullopt, 0};
       if (!qq.empty() && qq[k] >= 0.0) row.squal = squal_value(qq[k]);
-      if (!ff.empty()) row.flags = static_cast<std::uint8_t>(ff[k]);
+      if (!ff.empty()) row.flags = flags_value(ff[k]);
       check(odometry_->push(row, sink()), tt[k]);
+      t_last_ = std::max(t_last_, tt[k]);
     }
     return steps_.take(config_.config.names);
   }
@@ -389,7 +444,16 @@ class PyOdometry {
     check(odometry_->push_fix(fix), t);
   }
 
+  /// Ends the stream at t_end: no earlier than the last mice row, and at
+  /// most max_gap after it (finish(1e6) made a million still epochs).
   py::dict finish(double t_end) {
+    const double max_gap = odometry_->options().max_gap;
+    if (!(std::abs(t_end) <= kMaxTime && t_end >= t_last_ && t_end - t_last_ <= max_gap)) {
+      throw io::Error(fmt::format(
+          "finish: t_end = {} s: must be from the last row's time ({} s) to max_gap ({} s) after "
+          "it",
+          t_end, t_last_, max_gap));
+    }
     odometry_->finish(t_end, sink());
     return steps_.take(config_.config.names);
   }
@@ -405,6 +469,7 @@ class PyOdometry {
   Config config_;
   std::unique_ptr<Odometry> odometry_;
   Steps steps_;
+  double t_last_;  ///< s, the last mice row's time (t0 before any)
 };
 
 // ------------------------------------------------------------ calibration
@@ -690,9 +755,28 @@ std::vector<StampedPose> trajectory(const py::handle& x, const char* what) {
       throw py::value_error(fmt::format("{}: t, x, y, theta must have one length", what));
     }
   }
+  // As the readers of truth.csv and odometry.csv check them: times within
+  // the logs' bound and never going back (decreasing times gave 0 samples
+  // and an error of 0.0, a perfect run), poses within the plausible.
   std::vector<StampedPose> out;
-  for (std::size_t k = 0; k < c[0].size(); ++k)
-    out.push_back({c[0][k], {{c[1][k], c[2][k]}, c[3][k]}});
+  for (std::size_t k = 0; k < c[0].size(); ++k) {
+    const double t = c[0][k];
+    if (!(std::abs(t) <= kMaxTime)) {
+      throw io::Error(fmt::format("{}: t[{}] = {} s is outside -4e9..4e9 s", what, k, t));
+    }
+    if (k > 0 && t < c[0][k - 1]) {
+      throw io::Error(fmt::format("{}: t[{}] = {} s: time goes backwards ({} after {})", what, k, t,
+                                  t, c[0][k - 1]));
+    }
+    if (!within_plausible(c[1][k], kMaxPlausiblePosition) ||
+        !within_plausible(c[2][k], kMaxPlausiblePosition) ||
+        !within_plausible(c[3][k], kMaxPlausibleHeading)) {
+      throw io::Error(fmt::format(
+          "{}: pose {} ({}, {}, {}) beyond the plausible (|x|, |y| <= 1e6 m, |theta| <= 1e7 rad)",
+          what, k, c[1][k], c[2][k], c[3][k]));
+    }
+    out.push_back({t, {{c[1][k], c[2][k]}, c[3][k]}});
+  }
   return out;
 }
 

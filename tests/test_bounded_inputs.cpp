@@ -389,6 +389,47 @@ TEST(BoundedInputs, AFullDiskIsSaidWithTheFileAndLeavesNothing) {
   EXPECT_EQ(test::read_text(dir / "left"), "");  // nothing in the full file system
 }
 
+// A full disk under `moa live --record` stops the recording, said once, and
+// the run goes on: --out on another disk is written, the same odometry as
+// `moa odometry` of the replayed log, and the recording's error ends the
+// run (issue #47, item 10: --out was lost with the recording).
+TEST(BoundedInputs, AFullDiskUnderLiveRecordKeepsTheOtherOutputs) {
+  const fs::path dir = test::scratch_dir("disk-full-live");
+  const fs::path full = dir / "full";
+  fs::create_directory(full);
+  const fs::path out = dir / "live.csv";
+  const std::string script =
+      "mount -t tmpfs -o size=64k tmpfs " + full.string() + " || exit 77; " + MOA_CLI_PATH +
+      " live --config " + kExample.string() + "/robot.yaml --replay " + kExample.string() +
+      " --speed 1000000 --quiet --record " + (full / "rec").string() + " --out " + out.string() +
+      " 2>" + (dir / "err").string() + "; echo $? >" + (dir / "code").string();
+  const std::string command =
+      "unshare -r -m sh -c '" + script + "' 2>" + (dir / "unshare-err").string();
+  const int status = std::system(command.c_str());
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    GTEST_SKIP() << "cannot mount a small tmpfs in a namespace of its own (`unshare -r -m`, "
+                    "then `mount -t tmpfs`): "
+                 << test::read_text(dir / "unshare-err");
+  }
+  EXPECT_EQ(test::read_text(dir / "code"), "1\n");
+  const std::string err = test::read_text(dir / "err");
+  const std::string mice = (full / "rec" / "mice.csv").string();
+  const std::string said = "moa live: warning: --record " + (full / "rec").string() + ": " + mice +
+                           ": cannot write (No space left on device): the recording stops here";
+  const auto first = err.find(said);
+  EXPECT_NE(first, std::string::npos) << err;
+  EXPECT_EQ(err.find(said, first + 1), std::string::npos) << "said once: " << err;
+  EXPECT_NE(err.find("moa live: error: " + mice + ": cannot write (No space left on device)\n"),
+            std::string::npos)
+      << err;
+  ASSERT_TRUE(fs::exists(out)) << err;
+  const fs::path offline = dir / "offline.csv";
+  const auto o = test::run_moa("odometry --config " + kExample.string() + "/robot.yaml --log " +
+                               kExample.string() + " --quiet --out " + offline.string());
+  ASSERT_EQ(o.exit_code, 0) << o.err;
+  EXPECT_EQ(test::read_text(out), test::read_text(offline));
+}
+
 // The firmware runs at 500000 baud (docs/firmware.md): so does --serial
 // unless --baud says otherwise.
 TEST(BoundedInputs, BaudDefaultsToTheFirmwares) {

@@ -316,6 +316,9 @@ TEST(CarelessCalls, InfinityAndOutOfRangeNumbersGetOneShortMessage) {
   const std::vector<std::pair<std::string, std::string>> cases{
       {odometry_args + "--rate inf", "--rate: inf is not a finite number\n"},
       {odometry_args + "--rate 0", "--rate: 0: must be within [0.1, 10000]\n"},
+      // --help says "1e-12 to below 0.5": 0.5 itself is refused by the flag
+      // (exit 2), not by the library's options (exit 1).
+      {odometry_args + "--alpha 0.5", "--alpha: 0.5: must be within [1e-12, 0.5)\n"},
       {odometry_args + "--camera-latency -61", "--camera-latency: -61: must be within [-60, 60]\n"},
       {guided + "--turn-sd inf", "--turn-sd: inf is not a finite number\n"},
       {guided + "--max-row-interval -1", "--max-row-interval: -1: must be > 0\n"},

@@ -88,6 +88,33 @@ TEST(ConfigInit, SensorsOneByOneInDegreesWithMirroring) {
   EXPECT_FALSE(read.array[1].max_speed.has_value());
 }
 
+// A huge --theta-deg is a turn like any other (issue #47, item 10: 1e308
+// wrote four coincident sensors, their angles rounded to one): the polygon
+// is the one of the angle reduced to a turn.
+TEST(ConfigInit, AHugeThetaGivesThePolygonOfTheAngleReducedToATurn) {
+  const auto dir = test::scratch_dir("config_init_huge_theta");
+  for (const std::string theta : {"1e308", "-1e300", "1e20"}) {
+    SCOPED_TRACE(theta);
+    const fs::path config = dir / "robot.yaml";
+    const auto r = test::run_moa(
+        "config init --layout polygon --sensors 4 --radius 0.1 --cpi 800 "
+        "--force --theta-deg " +
+        theta + " --out " + config.string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const io::RobotConfig read = io::read_config(config);
+    ASSERT_EQ(read.array.size(), 4);
+    const double first = std::fmod(std::stod(theta), 360.0) * std::numbers::pi / 180.0;
+    for (int i = 0; i < 4; ++i) {
+      const double angle = first + i * std::numbers::pi / 2.0;
+      EXPECT_NEAR(read.array[i].position.x(), 0.1 * std::cos(angle), 1e-9) << i;
+      EXPECT_NEAR(read.array[i].position.y(), 0.1 * std::sin(angle), 1e-9) << i;
+      for (int j = 0; j < i; ++j) {
+        EXPECT_GT((read.array[i].position - read.array[j].position).norm(), 0.1) << i << j;
+      }
+    }
+  }
+}
+
 // The config reads as a person would write it: the rated speed as the
 // datasheet's decimal, no "-0" where cos and sin of the layout give -0.
 TEST(ConfigInit, NumbersAreWrittenAsAPersonWouldWriteThem) {

@@ -7,7 +7,9 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <netinet/in.h>
+#include <poll.h>
 #include <sys/socket.h>
+#include <sys/time.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -317,6 +319,131 @@ TEST(LiveDashboard, SlowLorisConnectionsDoNotBlockThePage) {
   }
   for (const int fd : sockets) close(fd);
   EXPECT_EQ(served, 4);
+}
+
+// A loopback connection to the dashboard.
+int connect_to(int port) {
+  const int fd = socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_port = htons(static_cast<std::uint16_t>(port));
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  if (connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) {
+    close(fd);
+    return -1;
+  }
+  return fd;
+}
+
+// Sends `head`, then `filler` again and again until the server closes the
+// connection or `limit` bytes were sent in all; the bytes sent. A send that
+// waits 10 s (the server neither reads nor closes) ends it too.
+std::size_t send_until_closed(int fd, const std::string& head, const std::string& filler,
+                              std::size_t limit) {
+  const timeval wait{10, 0};
+  setsockopt(fd, SOL_SOCKET, SO_SNDTIMEO, &wait, sizeof wait);
+  std::size_t sent = 0;
+  const auto send_all = [&](const std::string& bytes) {
+    for (std::size_t at = 0; at < bytes.size();) {
+      const ssize_t n = send(fd, bytes.data() + at, bytes.size() - at, MSG_NOSIGNAL);
+      if (n <= 0) return false;
+      at += static_cast<std::size_t>(n);
+      sent += static_cast<std::size_t>(n);
+    }
+    return true;
+  };
+  if (!send_all(head)) return sent;
+  while (sent < limit && send_all(filler)) {
+  }
+  return sent;
+}
+
+// True when the server has closed `fd` (end of stream or reset) within 10 s;
+// what it sent before is appended to `answer`.
+bool closed_by_server(int fd, std::string& answer) {
+  const auto deadline = Clock::now() + std::chrono::seconds(10);
+  char buffer[4096];
+  while (Clock::now() < deadline) {
+    pollfd p{fd, POLLIN, 0};
+    if (poll(&p, 1, 100) <= 0) continue;
+    const ssize_t n = recv(fd, buffer, sizeof buffer, 0);
+    if (n <= 0) return true;
+    answer.append(buffer, static_cast<std::size_t>(n));
+  }
+  return false;
+}
+
+// The dashboard serves GETs, and every request is bounded (issue #47, item
+// 1: Debian's cpp-httplib 0.11 read a POST's 100 GB Content-Length, a
+// chunked POST and endless header lines into memory until moa aborted). A
+// real client over a socket sends each for up to 64 MiB: the server closes
+// the connection long before (it reads at most 16 KiB of a request), a
+// request other than a GET is answered 405, and the page still comes.
+TEST(LiveDashboard, EveryRequestIsBoundedAndOnlyGetsAreServed) {
+  const io::RobotConfig config = io::read_config(simulated_log() / "robot.yaml");
+  io::DashboardOptions options;
+  options.port = 0;
+  io::Dashboard dashboard(config, options);
+  const int port = dashboard.port();
+  ASSERT_GT(port, 0);
+  constexpr std::size_t kLimit = std::size_t{64} << 20;
+  const std::string mib(std::size_t{1} << 20, 'x');
+  struct Case {
+    const char* what;
+    std::string head, filler;
+  };
+  const std::vector<Case> cases{
+      {"a POST of 100 GB", "POST / HTTP/1.1\r\nHost: x\r\nContent-Length: 100000000000\r\n\r\n",
+       mib},
+      {"a chunked POST to /events",
+       "POST /events HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n\r\n",
+       "100000\r\n" + mib + "\r\n"},
+      {"a GET of endless 8 KB header lines", "GET / HTTP/1.1\r\nHost: x\r\n",
+       "X-Pad: " + std::string(8000, 'y') + "\r\n"},
+      {"a GET with an endless request line", "GET /", std::string(8192, 'z')},
+      {"a GET with a chunked body",
+       "GET / HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n\r\n",
+       "100000\r\n" + mib + "\r\n"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.what);
+    const int fd = connect_to(port);
+    ASSERT_GE(fd, 0);
+    const std::size_t sent = send_until_closed(fd, c.head, c.filler, kLimit);
+    EXPECT_LT(sent, kLimit) << "the server read it all";
+    std::string answer;
+    EXPECT_TRUE(closed_by_server(fd, answer)) << "the connection stayed open";
+    close(fd);
+    EXPECT_EQ(test::http_get(port, "/", 10.0).status, 200) << "the page after it";
+  }
+  // Without a body, the answer comes whole: 405, the methods allowed, closed.
+  for (const std::string method : {"POST", "PUT", "DELETE", "OPTIONS"}) {
+    SCOPED_TRACE(method);
+    const int fd = connect_to(port);
+    ASSERT_GE(fd, 0);
+    const std::string request = method + " /events HTTP/1.1\r\nHost: x\r\n\r\n";
+    ASSERT_EQ(send(fd, request.data(), request.size(), MSG_NOSIGNAL),
+              static_cast<ssize_t>(request.size()));
+    std::string answer;
+    EXPECT_TRUE(closed_by_server(fd, answer));
+    close(fd);
+    EXPECT_THAT(answer, testing::StartsWith("HTTP/1.1 405 "));
+    EXPECT_THAT(answer, HasSubstr("Allow: GET, HEAD\r\n"));
+    EXPECT_THAT(answer, HasSubstr("the dashboard serves GET requests only"));
+  }
+  // GETs as a browser sends them, several on one connection, still served.
+  const int fd = connect_to(port);
+  ASSERT_GE(fd, 0);
+  const std::string two =
+      "GET /status HTTP/1.1\r\nHost: x\r\n\r\nGET / HTTP/1.1\r\nHost: x\r\n"
+      "Connection: close\r\n\r\n";
+  ASSERT_EQ(send(fd, two.data(), two.size(), MSG_NOSIGNAL), static_cast<ssize_t>(two.size()));
+  std::string answer;
+  EXPECT_TRUE(closed_by_server(fd, answer));
+  close(fd);
+  EXPECT_THAT(answer, testing::StartsWith("HTTP/1.1 200 "));
+  EXPECT_THAT(answer, HasSubstr("\"events\""));
+  EXPECT_THAT(answer, HasSubstr("<html"));
 }
 
 TEST(LiveDashboard, ListenAddressIsHostColonPortOrAPort) {

@@ -14,6 +14,7 @@
 
 #include "moa/formats/atomic_file.hpp"
 #include "moa/formats/config.hpp"
+#include "moa/formats/csv.hpp"
 #include "moa/formats/error.hpp"
 #include "moa/formats/log.hpp"
 #include "support/error_of.hpp"
@@ -361,6 +362,19 @@ TEST(LogMiceErrors, BlankLineInTheMiddleIsRejectedWithItsLine) {
 TEST(LogMiceErrors, ControlCharactersInMessagesAreEscaped) {
   EXPECT_EQ(mice_error("t,sensor,dx,dy\n0,m\x01\r9,1,1\n"),
             "mice.csv:2: unknown sensor 'm\\x01\\x0d9' (the config's sensors: m1, m2, m3)");
+}
+
+// Bytes that are not well-formed UTF-8 are escaped too, so that a message
+// is valid UTF-8 whatever the input held; valid characters stay as they are
+// (issue #47, item 10: errors echoed invalid UTF-8 raw).
+TEST(LogMiceErrors, InvalidUtf8InMessagesIsEscapedAndValidUtf8Kept) {
+  EXPECT_EQ(mice_error("t,sensor,dx,dy\n0,m\xff\xc3\xa9,1,1\n"),
+            "mice.csv:2: unknown sensor 'm\\xff\xc3\xa9' (the config's sensors: m1, m2, m3)");
+  // A stray continuation byte, an overlong form, a surrogate, beyond
+  // U+10FFFF, a sequence cut short; then a 3- and a 4-byte character.
+  EXPECT_EQ(io::printable("\x80|\xc0\xaf|\xed\xa0\x80|\xf4\x90\x80\x80|\xe2\x82"),
+            "\\x80|\\xc0\\xaf|\\xed\\xa0\\x80|\\xf4\\x90\\x80\\x80|\\xe2\\x82");
+  EXPECT_EQ(io::printable("\xe2\x82\xac \xf0\x9f\x90\xad"), "\xe2\x82\xac \xf0\x9f\x90\xad");
 }
 
 // ------------------------------------------------ wheels, camera and truth

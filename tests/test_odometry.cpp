@@ -199,5 +199,41 @@ TEST(Odometry, RowsGoingBackwardsAreRefusedWithTheRowError) {
   EXPECT_EQ(odometry->push_wheels(std::nan(""), Twist2{}, out), OdometryError::kWheelsBackwards);
 }
 
+// Finite but absurd values of the other streams (1.7e308 m/s in wheels.csv
+// made odometry.csv's sds inf and theta 1.8e306) and non-finite ones are
+// refused as the mice's impossible counts are, and nothing is fed: the
+// steps after them are those of a run without them (issue #47, item 5).
+TEST(Odometry, ImplausibleWheelGyroAndCameraValuesAreRefusedAndNotFed) {
+  OdometryOptions o;
+  o.fuse_camera = true;
+  auto odometry = make(test::skewed_array(), o);
+  Collected out;
+  const double nan = std::nan("");
+  for (const Twist2& bad : {Twist2{{1.7e308, 0}, 0}, Twist2{{0, -101}, 0}, Twist2{{0, 0}, 1001},
+                            Twist2{{nan, 0}, 0}, Twist2{{0, 0}, nan}}) {
+    EXPECT_EQ(odometry->push_wheels(0.01, bad, out), OdometryError::kImplausibleWheels);
+  }
+  EXPECT_FALSE(odometry->push_wheels(0.01, Twist2{{100, -100}, 1000}, out));
+  for (const double gz : {1e308, -1000.5, nan}) {
+    EXPECT_EQ(odometry->push_gyro(0.01, gz, out), OdometryError::kImplausibleGyro) << gz;
+  }
+  EXPECT_FALSE(odometry->push_gyro(0.01, -1000.0, out));
+  CameraFix fix{0.01, {1e300, 0}, std::nullopt, std::nullopt};
+  EXPECT_EQ(odometry->push_fix(fix), OdometryError::kImplausibleFix);
+  fix.position = {0, 0};
+  fix.theta = 1e8;
+  EXPECT_EQ(odometry->push_fix(fix), OdometryError::kImplausibleFix);
+  fix.theta = 1.0;
+  fix.sigma = Vec2{0.01, 1e7};
+  EXPECT_EQ(odometry->push_fix(fix), OdometryError::kImplausibleFix);
+  fix.sigma = Vec2{0.01, 0.0};
+  EXPECT_EQ(odometry->push_fix(fix), OdometryError::kImplausibleFix);
+  fix.sigma = Vec2{0.01, 0.02};
+  EXPECT_FALSE(odometry->push_fix(fix));
+  EXPECT_STREQ(describe(OdometryError::kImplausibleWheels),
+               "wheel twist beyond the plausible (|vx|, |vy| <= 100 m/s, |omega| <= 1000 rad/s; "
+               "a corrupt value?)");
+}
+
 }  // namespace
 }  // namespace moa

@@ -128,6 +128,45 @@ TEST(RunLoop, RowsReachThePipelineInTheSourcesOrderAndAreCountedByKind) {
   EXPECT_EQ(run.steps, 100u);  // 1 s at 100 Hz
 }
 
+// A burst of 300 wheel rows before one mice row is more than the
+// pipeline's ring keeps ahead of the mice (256 rows, the first only opening
+// the record): a file's run ends saying so; a live run's (on_stream_full
+// set) hands the rows beyond to it, unrecorded, and goes on to its end.
+TEST(RunLoop, ABurstOfStreamRowsIsHandedToOnStreamFullWhenSetAndEndsTheRunElse) {
+  const RobotConfig config = config_of(test::skewed_array());
+  std::vector<InputRow> rows;
+  for (int i = 0; i < 4; ++i) rows.emplace_back(SensorRow{0.0, i, {0, 0}, std::nullopt, 0, 0});
+  for (int k = 1; k <= 300; ++k) rows.emplace_back(WheelRow{1e-6 * k, Twist2{{0.1, 0.0}, 0.0}});
+  for (int k = 1; k <= 10; ++k) {
+    for (int i = 0; i < 4; ++i)
+      rows.emplace_back(SensorRow{0.01 * k, i, {0, 0}, std::nullopt, 0, 0});
+  }
+  OdometryOptions options;
+  options.estimator = EstimatorKind::kSekimori;
+  options.rate = 100.0;
+  {
+    VectorSource source(0.0, rows);
+    EXPECT_THROW(run_loop(config, "robot.yaml", options, source, "rows", {}), Error);
+  }
+  VectorSource source(0.0, rows);
+  std::size_t recorded = 0, full = 0;
+  RunCallbacks callbacks;
+  callbacks.on_row = [&](const InputRow& row) {
+    recorded += std::holds_alternative<WheelRow>(row);
+  };
+  callbacks.on_stream_full = [&](const InputRow& row, const std::string& why) {
+    EXPECT_TRUE(std::holds_alternative<WheelRow>(row));
+    EXPECT_NE(why.find("wheel rows fed too far ahead of the mice rows"), std::string::npos) << why;
+    ++full;
+  };
+  const OdometryRun run = run_loop(config, "robot.yaml", options, source, "rows", callbacks);
+  EXPECT_EQ(run.wheel_rows, 257u);
+  EXPECT_EQ(recorded, 257u);
+  EXPECT_EQ(full, 43u);
+  EXPECT_EQ(run.rows, 44u);
+  EXPECT_EQ(run.steps, 10u);
+}
+
 TEST(RunLoop, ARefusedRowIsNamedByItsSourcesPlaceAndTime) {
   const RobotConfig config = config_of(test::skewed_array());
   std::vector<InputRow> rows;

@@ -530,6 +530,59 @@ TEST(SerialReader, SensorTheConfigLacksIsAnError) {
   device.join();
 }
 
+// A HELLO naming one sensor twice (m1,m1,m1 was taken: a wrong pose, two
+// sensors that never reported, a recording that did not replay) is refused
+// saying which and where (issue #47, item 4).
+TEST(SerialReader, AHelloNamingASensorTwiceIsAnError) {
+  test::PseudoTerminal pty;
+  SerialReader reader(pty.device(), two_sensors(), fast_options(), {});
+  std::thread device([&] {
+    ASSERT_TRUE(pty.wait_for_hello_request(5.0));
+    Hello h = hello_ba();
+    h.names = {"b", "a", "b"};
+    pty.write(serial::encode(h));
+  });
+  EXPECT_EQ(error_of([&] { reader.start_time(); }),
+            pty.device() +
+                ": the device's HELLO names sensor 'b' twice (records 1 and 3 of 3: b,a,b): each "
+                "sensor reports once");
+  device.join();
+}
+
+// A HELLO whose cpi is not the config's (400 against 800) is said, once, with
+// the sensors it differs for; the config's cpi reads the counts.
+TEST(SerialReader, AHelloCpiUnlikeTheConfigsIsWarnedOnce) {
+  test::PseudoTerminal pty;
+  std::vector<std::string> warnings;
+  std::atomic<int> seen{0};
+  SerialReader reader(pty.device(), two_sensors(), fast_options(), collecting(warnings));
+  std::thread device([&] {
+    ASSERT_TRUE(pty.wait_for_hello_request(5.0));
+    Hello h = hello_ba();
+    h.cpi = 400;
+    pty.write(serial::encode(h));
+    for (int k = 0; k < 3; ++k) {
+      pty.write(serial::encode(data(static_cast<std::uint16_t>(k), 10'000u * (k + 1), 1, 2)));
+    }
+    wait_for(seen, 6);
+    pty.close_master();
+  });
+  reader.start_time();
+  const auto rows = read_rows(reader, seen);
+  device.join();
+  EXPECT_EQ(rows.size(), 6u);
+  std::size_t said = 0;
+  for (const auto& w : warnings) {
+    if (w.find("cpi") == std::string::npos) continue;
+    ++said;
+    EXPECT_EQ(w, pty.device() +
+                     ": the device's HELLO says 400 cpi but the robot config has 'b' 800, 'a' "
+                     "800: the config's cpi reads the counts, so a device at 400 cpi reads its "
+                     "motion off by their ratio");
+  }
+  EXPECT_EQ(said, 1u);
+}
+
 TEST(SerialReader, SilentDeviceTimesOutAfterAskingForHello) {
   test::PseudoTerminal pty;
   SerialOptions options = fast_options();

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -166,7 +167,6 @@ void send_datagram(int port, std::string_view text) {
   ::close(fd);
 }
 
-
 std::vector<StreamRow> take_until(StreamLineReader& reader, std::size_t rows, std::size_t bad) {
   std::vector<StreamRow> out;
   for (int k = 0; k < 400 && (out.size() < rows || reader.stats().bad_total() < bad); ++k) {
@@ -260,6 +260,132 @@ TEST(StreamLines, ABadLineIsShownShortAndPrintable) {
   EXPECT_EQ(said[0], (std::pair<E, std::string>{E::kUnknownStream, "gyro\\x01,1"}));
   EXPECT_EQ(said[1].first, E::kTooLong);
   EXPECT_EQ(said[1].second, "wheels,1,2,3," + std::string(200 - 13, '4'));
+}
+
+TEST(StreamLines, ATimeBeyondTheLogsBoundIsBad) {
+  EXPECT_EQ(bad("wheels,1e300,0,0,0"), E::kTimeOutOfRange);
+  EXPECT_EQ(bad("imu,-4.000001e9,0"), E::kTimeOutOfRange);
+  EXPECT_EQ(bad("{\"stream\":\"camera\",\"t\":1e20,\"x\":1,\"y\":2}"), E::kTimeOutOfRange);
+  EXPECT_EQ(std::get<WheelRow>(good("wheels,4e9,0,0,0").row).t, 4e9);
+  EXPECT_EQ(std::get<ImuRow>(good("imu,-4e9,0").row).t, -4e9);
+}
+
+// A value beyond core/plausible.hpp's bounds is a bad line, as in the logs.
+TEST(StreamLines, AnImplausibleValueIsBad) {
+  EXPECT_EQ(bad("wheels,1,1.7e308,0,0"), E::kImplausible);
+  EXPECT_EQ(bad("wheels,1,0,-100.5,0"), E::kImplausible);
+  EXPECT_EQ(bad("wheels,,0,0,1001"), E::kImplausible);
+  EXPECT_EQ(bad("imu,1,-2000"), E::kImplausible);
+  EXPECT_EQ(bad("camera,1,1e300,0"), E::kImplausible);
+  EXPECT_EQ(bad("camera,1,0,0,1e8"), E::kImplausible);
+  EXPECT_EQ(bad("camera,1,0,0,,0.01,2e6"), E::kImplausible);
+  EXPECT_EQ(bad("{\"stream\":\"imu\",\"gz\":1e300}"), E::kImplausible);
+  EXPECT_EQ(std::get<WheelRow>(good("wheels,1,100,-100,1000").row).twist.omega, 1000.0);
+  EXPECT_EQ(std::get<ImuRow>(good("imu,1,-1000").row).gz, -1000.0);
+  EXPECT_EQ(std::get<CameraFix>(good("camera,1,1e6,-1e6,1e7,1e6,1e6").row).position.x(), 1e6);
+}
+
+// Polls `reader` until `rows` good lines were taken (30 s at most: a
+// failure then, never a pass on what came).
+std::vector<StreamRow> take_all(StreamLineReader& reader, std::size_t rows) {
+  std::vector<StreamRow> out;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (out.size() < rows && std::chrono::steady_clock::now() < deadline) {
+    reader.take(out);
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  return out;
+}
+
+// Against the source's clock (at 0 s, running at 1 s per s), a line 3000 s
+// ahead is bad and does not become its stream's time: a later line with a
+// t of the source's clock is taken, not counted as going back in time.
+TEST(StreamLines, ALineFarAheadOfTheSourcesClockIsBadAndNotTheStreamsTime) {
+  const fs::path dir = test::scratch_dir("stream_lines_ahead");
+  const fs::path file = dir / "streams.csv";
+  std::ofstream(file) << "wheels,3000,0,0,0\nwheels,1,0,0,0\nwheels,59,0,0,0\nimu,61000,0\n"
+                         "imu,2,0.5\n";
+  StreamLineReader reader(file.string(), StreamClock::kSource,
+                          SourceClock{0.0, std::chrono::steady_clock::now(), 1.0});
+  const auto rows = take_all(reader, 3);
+  reader.stop();
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(std::get<WheelRow>(rows[0].row).t, 1.0);
+  EXPECT_EQ(std::get<WheelRow>(rows[1].row).t, 59.0);
+  EXPECT_EQ(std::get<ImuRow>(rows[2].row).t, 2.0);
+  const auto stats = reader.stats();
+  EXPECT_EQ(stats.bad[static_cast<std::size_t>(E::kTimeAhead)], 2u);
+  EXPECT_EQ(stats.bad[static_cast<std::size_t>(E::kTimeBackwards)], 0u);
+  EXPECT_EQ(stats.first[static_cast<std::size_t>(E::kTimeAhead)], "wheels,3000,0,0,0");
+}
+
+// On the monotonic clock, a t more than 60 s after this machine's now (at
+// --speed 1) is ahead alike.
+TEST(StreamLines, OnTheMonotonicClockALineFarAheadOfNowIsBad) {
+  const double now =
+      std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+  const fs::path dir = test::scratch_dir("stream_lines_ahead_monotonic");
+  const fs::path file = dir / "streams.csv";
+  std::ofstream(file) << fmt::format("imu,{},0\nimu,{},0.5\n", now + 3000.0, now + 1.0);
+  StreamLineReader reader(file.string(), StreamClock::kMonotonic,
+                          SourceClock{0.0, std::chrono::steady_clock::now(), 1.0});
+  const auto rows = take_all(reader, 1);
+  reader.stop();
+  ASSERT_EQ(rows.size(), 1u);
+  EXPECT_EQ(std::get<ImuRow>(rows[0].row).gz, 0.5);
+  EXPECT_EQ(reader.stats().bad[static_cast<std::size_t>(E::kTimeAhead)], 1u);
+}
+
+// At most kMaxQueuedLines good lines wait for the run: from a FIFO the
+// lines beyond are dropped and counted (the writer is never held up); a
+// file is read as the run takes its lines, and none is dropped.
+TEST(StreamLines, LinesBeyondTheQueuesBoundAreDroppedFromAFifoAndWaitInAFile) {
+  const std::size_t n = kMaxQueuedLines + 4464;
+  std::string text;
+  for (std::size_t k = 0; k < n; ++k) text += "wheels,,0.1,0,0\n";
+  const fs::path dir = test::scratch_dir("stream_lines_bound");
+  const fs::path fifo = dir / "fifo";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  {
+    StreamLineReader reader(fifo.string());
+    std::thread writer([&] { std::ofstream(fifo) << text; });
+    writer.join();
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while (reader.stats().wheels < n && std::chrono::steady_clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    const auto stats = reader.stats();
+    ASSERT_EQ(stats.wheels, n);
+    EXPECT_EQ(stats.overflow, n - kMaxQueuedLines);
+    std::vector<StreamRow> rows;
+    reader.take(rows);
+    EXPECT_EQ(rows.size(), kMaxQueuedLines);
+  }
+  const fs::path file = dir / "streams.csv";
+  std::ofstream(file) << text;
+  StreamLineReader reader(file.string());
+  const auto rows = take_all(reader, n);
+  EXPECT_EQ(rows.size(), n);
+  EXPECT_EQ(reader.stats().overflow, 0u);
+}
+
+// An input without line ends (/dev/zero) is no stream of lines: its first
+// line is counted too long as soon as it passes the bound, and after a
+// megabyte without a line end it is read no further (issue #47, item 10:
+// it burnt a core and reported 0 bad lines).
+TEST(StreamLines, AnInputWithoutLineEndsIsCountedAndNotReadForever) {
+  StreamLineReader reader("/dev/zero");
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (!reader.stats().not_lines && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  const auto stats = reader.stats();
+  EXPECT_TRUE(stats.not_lines);
+  EXPECT_EQ(stats.bad[static_cast<std::size_t>(E::kTooLong)], 1u);
+  EXPECT_EQ(stats.bad_total(), 1u);
+  std::string shown;  // the first 200 bytes, escaped
+  for (int k = 0; k < 200; ++k) shown += "\\x00";
+  EXPECT_EQ(stats.first[static_cast<std::size_t>(E::kTooLong)], shown);
 }
 
 TEST(StreamLines, AMissingFileIsRefusedByName) {

@@ -63,6 +63,7 @@ class Terminal {
     sigemptyset(&action.sa_mask);
     sigaction(SIGINT, &action, &old_int_);
     sigaction(SIGTERM, &action, &old_term_);
+    sigaction(SIGHUP, &action, &old_hup_);  // a lost ssh session: nothing written, as q
     g_quit = 0;
     if (isatty(STDIN_FILENO) && tcgetattr(STDIN_FILENO, &saved_) == 0) {
       termios raw = saved_;
@@ -76,6 +77,7 @@ class Terminal {
     if (restore_) tcsetattr(STDIN_FILENO, TCSANOW, &saved_);
     sigaction(SIGINT, &old_int_, nullptr);
     sigaction(SIGTERM, &old_term_, nullptr);
+    sigaction(SIGHUP, &old_hup_, nullptr);
   }
   Terminal(const Terminal&) = delete;
   Terminal& operator=(const Terminal&) = delete;
@@ -100,6 +102,7 @@ class Terminal {
   bool eof_ = false;
   struct sigaction old_int_ {};
   struct sigaction old_term_ {};
+  struct sigaction old_hup_ {};
 };
 
 template <class... Args>

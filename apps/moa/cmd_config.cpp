@@ -116,7 +116,11 @@ int run_config_init(const ConfigInitArgs& a) {
       throw io::Error(
           fmt::format("--theta-deg {}: must be a finite number of degrees", a.theta_deg));
     }
-    config = io::polygon_config(*a.sensors, *a.radius, to_radians(a.theta_deg), prototype);
+    // Reduced to a turn first (fmod is exact): beyond about 1e16 deg the
+    // sensors' angles, theta + k 360 / N, would round to one value and the
+    // sensors coincide.
+    config = io::polygon_config(*a.sensors, *a.radius, to_radians(std::fmod(a.theta_deg, 360.0)),
+                                prototype);
     title = fmt::format(
         "{} {}sensors at {} cpi on a regular polygon of radius {} m,\n"
         "the first at {} deg from the robot's x axis, all aligned with the robot (yaw 0)",

@@ -10,8 +10,9 @@
 // then reproduces the live odometry exactly (same rows, same t0, times
 // written as shortest round-trip text).
 //
-// Ctrl-C (SIGINT) or SIGTERM ends the run between rows: the pipeline is
-// flushed and every file committed. Rows reach DIR/mice.csv.part at least
+// Ctrl-C (SIGINT), SIGTERM, SIGHUP (a lost ssh session), SIGPIPE, SIGXFSZ,
+// SIGXCPU or SIGQUIT ends the run between rows: the pipeline is flushed and
+// every file committed. Rows reach DIR/mice.csv.part at least
 // every status tick, so even a killed run leaves its recording there.
 #include <fmt/core.h>
 #include <fmt/format.h>
@@ -19,11 +20,14 @@
 #include <time.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <deque>
+#include <exception>
 #include <filesystem>
 #include <limits>
 #include <map>
@@ -38,6 +42,7 @@
 
 #include "commands.hpp"
 #include "live_source.hpp"
+#include "moa/core/wheels.hpp"
 #include "moa/formats/config.hpp"
 #include "moa/formats/diagnostics_csv.hpp"
 #include "moa/formats/error.hpp"
@@ -85,22 +90,29 @@ class StopSignals {
     g_stop = 0;
     struct sigaction action {};
     action.sa_handler = on_stop_signal;
-    sigemptyset(&action.sa_mask);  // the handler is not re-entered: both blocked in it
-    sigaddset(&action.sa_mask, SIGINT);
-    sigaddset(&action.sa_mask, SIGTERM);
-    sigaction(SIGINT, &action, &old_int_);
-    sigaction(SIGTERM, &action, &old_term_);
+    sigemptyset(&action.sa_mask);  // the handler is not re-entered: all blocked in it
+    for (const int signal : kStopSignals) sigaddset(&action.sa_mask, signal);
+    for (std::size_t i = 0; i < kStopSignals.size(); ++i) {
+      sigaction(kStopSignals[i], nullptr, &old_[i]);
+      // One ignored by whoever started moa (nohup's SIGHUP) stays ignored.
+      if (old_[i].sa_handler != SIG_IGN) sigaction(kStopSignals[i], &action, nullptr);
+    }
   }
   ~StopSignals() {
-    sigaction(SIGINT, &old_int_, nullptr);
-    sigaction(SIGTERM, &old_term_, nullptr);
+    for (std::size_t i = 0; i < kStopSignals.size(); ++i) {
+      sigaction(kStopSignals[i], &old_[i], nullptr);
+    }
   }
   StopSignals(const StopSignals&) = delete;
   StopSignals& operator=(const StopSignals&) = delete;
 
  private:
-  struct sigaction old_int_ {};
-  struct sigaction old_term_ {};
+  // Ctrl-C, SIGTERM, and what else ends a run from outside: a lost ssh
+  // session (SIGHUP), a reader of standard output gone (SIGPIPE), a file
+  // size limit (SIGXFSZ) or a CPU limit (SIGXCPU), SIGQUIT.
+  static constexpr std::array<int, 7> kStopSignals{SIGINT,  SIGTERM, SIGHUP, SIGPIPE,
+                                                   SIGXFSZ, SIGXCPU, SIGQUIT};
+  std::array<struct sigaction, kStopSignals.size()> old_{};
 };
 
 struct LiveArgs {
@@ -285,11 +297,15 @@ int run_live(LiveArgs args) {
   io::LiveSource live = io::open_live_source(spec, config, args.config, hooks);
   // Waits for the source to start (a serial board's HELLO): no output exists before.
   io::LiveRunSource input(*live.source, config.array.size(), live.where);
+  const double source_speed = spec.replay.empty() ? 1.0 : spec.replay_options.speed;
   std::unique_ptr<io::StreamLineReader> streams;
   if (!args.streams.empty()) {
-    streams = std::make_unique<io::StreamLineReader>(args.streams, args.streams_clock == "monotonic"
-                                                                       ? io::StreamClock::kMonotonic
-                                                                       : io::StreamClock::kSource);
+    // The source's clock from the first line on: a line far ahead of it is
+    // refused, never taken as its stream's time.
+    streams = std::make_unique<io::StreamLineReader>(
+        args.streams,
+        args.streams_clock == "monotonic" ? io::StreamClock::kMonotonic : io::StreamClock::kSource,
+        io::SourceClock{input.start_time(), std::chrono::steady_clock::now(), source_speed});
   }
 
   // Outputs. The odometry file appears whole at the end; the recording is
@@ -363,33 +379,95 @@ int run_live(LiveArgs args) {
     if (dashboard) dashboard->publish(step);
   };
 
+  // A recording that cannot be written (a full disk) stops there, said once;
+  // the run goes on and its other outputs (--out on another disk) are
+  // written; the error is the run's at the end. What was flushed stays in
+  // DIR/mice.csv.part.
+  std::exception_ptr recording_error;
+  const auto record = [&](auto&& write) {
+    if (recording_error) return;
+    try {
+      write();
+    } catch (const io::Error& e) {
+      recording_error = std::current_exception();
+      hooks.warning(fmt::format(
+          "--record {}: {}: the recording stops here (what was flushed stays in {}); the run goes "
+          "on and writes its other outputs",
+          args.record, e.what(), recording ? recording->partial_path().string() : args.record));
+    }
+  };
   RateMeter meter;
   callbacks.on_row = [&](const io::InputRow& row) {
     if (const auto* mice = std::get_if<SensorRow>(&row)) {
-      if (recording) recording->write(*mice);
+      if (recording) record([&] { recording->write(*mice); });
       meter.add(1);
     } else if (stream_recording) {
       std::visit(
           [&](const auto& r) {
             if constexpr (!std::is_same_v<std::decay_t<decltype(r)>, SensorRow>) {
-              stream_recording->write(r);
+              record([&] { stream_recording->write(r); });
             }
           },
           row);
     }
   };
-  // The robot's streams: bad lines said once per kind, as they come.
+  // The robot's streams: bad lines said once per kind, as they come; rows
+  // beyond a bound (a burst, a flood) dropped and counted, said once.
+  // Rows the pipeline could not hold: wheel rows, gyro rows, fixes.
+  std::array<std::size_t, 3> stream_full{};
+  bool overflow_said = false;
+  bool not_lines_said = false;
   const auto say_bad_lines = [&] {
     if (!streams) return;
     while (const auto bad = streams->take_new_error()) {
       hooks.warning(fmt::format("--streams: {}: '{}' (more such lines are counted, not shown)",
                                 describe(bad->first), bad->second));
     }
+    const auto stats = streams->stats();
+    if (stats.not_lines && !not_lines_said) {
+      not_lines_said = true;
+      hooks.warning(fmt::format(
+          "--streams {}: {} bytes without a line end: not a stream of lines; no more of it is "
+          "read",
+          args.streams, io::kMaxStreamUnended));
+    }
+    if (overflow_said) return;
+    if (const std::size_t queued = stats.overflow; queued != 0) {
+      overflow_said = true;
+      hooks.warning(fmt::format(
+          "--streams: lines dropped: {} good lines were waiting to be fed (lines coming faster "
+          "than the run takes them); further such lines are dropped and counted",
+          io::kMaxQueuedLines));
+    } else if (input.overflow() != 0) {
+      overflow_said = true;
+      hooks.warning(fmt::format(
+          "--streams: rows dropped: {} rows of a stream were waiting for the mice rows of their "
+          "times; further such rows are dropped and counted",
+          io::LiveRunSource::kMaxHeldRows));
+    }
+  };
+  callbacks.on_stream_full = [&](const io::InputRow& row, const std::string&) {
+    const std::size_t kind_index = std::holds_alternative<io::WheelRow>(row) ? 0
+                                   : std::holds_alternative<io::ImuRow>(row) ? 1
+                                                                             : 2;
+    if (stream_full[kind_index]++ != 0 || overflow_said) return;
+    overflow_said = true;
+    const char* kind = std::holds_alternative<io::WheelRow>(row) ? "wheel rows"
+                       : std::holds_alternative<io::ImuRow>(row) ? "gyro rows"
+                                                                 : "camera fixes";
+    hooks.warning(fmt::format(
+        "{}: {} dropped from t = {:.6f} s: a burst came faster than the mice rows take them (at "
+        "most "
+        "{} wait ahead of the mice rows); further such rows are dropped and counted, the run "
+        "goes on",
+        input.where(), kind, io::row_time(row),
+        std::holds_alternative<CameraFix>(row) ? Odometry::kMaxPendingFixes
+                                               : IntervalAverager<3>::kCapacity));
   };
   callbacks.warn = hooks.warn;
   show_status = [&] {
     say_bad_lines();
-    if (recording) recording->flush();
+    if (recording) record([&] { recording->flush(); });
     if (to_stdout) odometry_out->flush();
     if (!status) return;
     const auto now = std::chrono::steady_clock::now();
@@ -402,7 +480,7 @@ int run_live(LiveArgs args) {
     status_shown = true;
   };
 
-  if (streams) input.add_streams(*streams, spec.replay.empty() ? 1.0 : spec.replay_options.speed);
+  if (streams) input.add_streams(*streams, source_speed);
   if (live.serial) input.add_gyro(*live.serial);
   if (replay_log.any()) input.add_log(replay_log, replay_files);
   // A live input's bad row (a saturated record, a time out of order) is
@@ -424,8 +502,8 @@ int run_live(LiveArgs args) {
     run = io::run_loop(config, args.config, odometry_options, input, live.where, callbacks);
   } catch (...) {
     // What was recorded is good data even if the run failed.
-    if (recording) recording->commit();
-    if (stream_recording) stream_recording->commit();
+    if (recording) record([&] { recording->commit(); });
+    if (stream_recording) record([&] { stream_recording->commit(); });
     if (status_shown) fmt::print(stderr, "\n");
     if (recording) {
       fmt::print(stderr, "moa live: the recording up to the error is kept in {}\n", args.record);
@@ -439,8 +517,8 @@ int run_live(LiveArgs args) {
   for (const auto& [why, count] : skipped) {
     hooks.warn(fmt::format("{}: {} rows skipped: {}", live.where, count, why));
   }
-  if (recording) recording->commit();
-  if (stream_recording) stream_recording->commit();
+  if (recording) record([&] { recording->commit(); });
+  if (stream_recording) record([&] { stream_recording->commit(); });
   if (odometry_out) odometry_out->commit();
   if (pose_stream) {
     // The lines still buffered for a slow reader get a moment, then are dropped.
@@ -478,13 +556,17 @@ int run_live(LiveArgs args) {
     }
     if (streams) {
       const auto st = streams->stats();
+      // Handed out by the merge, less what the pipeline could not hold.
+      const auto fed = [](std::size_t out, std::size_t full) { return out - std::min(out, full); };
       fmt::print(report,
                  "moa live: streams: {} wheel rows, {} gyro rows and {} camera fixes read, {}, {} "
-                 "and {} fed; {} bad lines, {} out of time order\n",
-                 st.wheels, st.imu, st.fixes, input.streamed().wheels, input.streamed().imu,
-                 input.streamed().fixes, st.bad_total(), input.dropped());
+                 "and {} fed; {} bad lines, {} out of time order, {} dropped past a bound\n",
+                 st.wheels, st.imu, st.fixes, fed(input.streamed().wheels, stream_full[0]),
+                 fed(input.streamed().imu, stream_full[1]),
+                 fed(input.streamed().fixes, stream_full[2]), st.bad_total(), input.dropped(),
+                 st.overflow + input.overflow() + stream_full[0] + stream_full[1] + stream_full[2]);
     }
-    if (recording) {
+    if (recording && !recording_error) {
       fmt::print(report, "moa live: recorded to {} (replay: moa odometry --config {} --log {})\n",
                  (fs::path(args.record) / "mice.csv").string(),
                  (fs::path(args.record) / "robot.yaml").string(), args.record);
@@ -512,6 +594,8 @@ int run_live(LiveArgs args) {
       while (g_stop == 0) std::this_thread::sleep_for(std::chrono::milliseconds(100));
     }
   }
+  // The recording's error, once everything else is written.
+  if (recording_error) std::rethrow_exception(recording_error);
   return 0;
 }
 

@@ -25,9 +25,11 @@ void add_source_flags(CLI::App* cmd, SourceFlags& f) {
   mouse->excludes(serial)->excludes(replay);
   serial->excludes(replay);
   cmd->add_option("--baud", f.baud, "Baud rate of --serial")->needs(serial)->capture_default_str();
-  cmd->add_option("--speed", f.speed, "Playback speed of --replay (2: twice real time)")
+  cmd->add_option("--speed", f.speed,
+                  "Playback speed of --replay (2: twice real time; 0.001 to 1000000)")
       ->needs(replay)
       ->check(kPositive)
+      ->check(finite_within(io::ReplayOptions::kMinSpeed, io::ReplayOptions::kMaxSpeed))
       ->capture_default_str();
   cmd->add_option("--start-timeout", f.start_timeout,
                   "Seconds to wait for the serial device's HELLO and first DATA")

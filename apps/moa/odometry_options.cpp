@@ -23,17 +23,18 @@ const CLI::Validator kFinite(
     },
     "FINITE", "finite");
 
-CLI::Validator finite_within(double lo, double hi, bool open_low) {
+CLI::Validator finite_within(double lo, double hi, bool open_low, bool open_high) {
   return CLI::Validator(
-      [lo, hi, open_low](std::string& text) -> std::string {
+      [lo, hi, open_low, open_high](std::string& text) -> std::string {
         double x = 0.0;
         if (!CLI::detail::lexical_cast(text, x)) return fmt::format("'{}' is not a number", text);
         if (!std::isfinite(x)) return fmt::format("{} is not a finite number", text);
         if (std::isinf(hi) && (open_low ? !(x > lo) : !(x >= lo))) {
           return fmt::format("{}: must be {} {}", text, open_low ? ">" : ">=", lo);
         }
-        if ((open_low ? !(x > lo) : !(x >= lo)) || !(x <= hi)) {
-          return fmt::format("{}: must be within {}{}, {}]", text, open_low ? "(" : "[", lo, hi);
+        if ((open_low ? !(x > lo) : !(x >= lo)) || (open_high ? !(x < hi) : !(x <= hi))) {
+          return fmt::format("{}: must be within {}{}, {}{}", text, open_low ? "(" : "[", lo, hi,
+                             open_high ? ")" : "]");
         }
         return {};
       },
@@ -107,10 +108,10 @@ void add_odometry_flags(CLI::App* cmd, OdometryFlags& f, bool live) {
                   "sekimori: r_th of eq. (7), agreeing pairs a sensor needs to be reliable "
                   "(default max(1, N - 2))")
       ->check(CLI::Range(1, kMaxSensors));
-  cmd->add_option(
-         "--alpha", o.consensus.alpha,
-         "consensus: false-rejection rate of the chi-square consistency test, 1e-12 to 0.5")
-      ->check(finite_within(1e-12, 0.5))
+  cmd->add_option("--alpha", o.consensus.alpha,
+                  "consensus: false-rejection rate of the chi-square consistency test, 1e-12 to "
+                  "below 0.5")
+      ->check(finite_within(1e-12, 0.5, false, /*open_high=*/true))
       ->capture_default_str();
   cmd->add_flag("--no-motion-prior", f.no_motion_prior,
                 "consensus: no motion prior (the robot's limits, config key limits); a minority "

@@ -19,7 +19,7 @@ extern const CLI::Validator kFinite;
 /// message short and first: "inf is not a finite number", "0: must be > 0",
 /// "20000: must be within [0.1, 10000]" (CLI11's own ranges print
 /// 1.797...e308 in full and add "AND" to kFinite's message).
-CLI::Validator finite_within(double lo, double hi, bool open_low = false);
+CLI::Validator finite_within(double lo, double hi, bool open_low = false, bool open_high = false);
 /// finite_within(0, inf, open): a positive number.
 extern const CLI::Validator kPositive;
 /// finite_within(0, inf): zero or more.

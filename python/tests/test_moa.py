@@ -282,6 +282,53 @@ def test_sparse_rows_are_refused_as_by_the_command_line(tmp_path):
         o.push(7198.0, 0, 0.0, 0.0)
 
 
+def test_odometry_object_checks_its_arguments_as_the_command_line_does():
+    # Issue #47, item 9: t0=nan looped for ever, finish(1e6) grew memory
+    # until MemoryError, rate=1e6 was taken, flags were taken modulo 256,
+    # fractional counts were accepted, a NaN wheel twist gave NaN poses.
+    cfg = pathlib.Path(__file__).resolve().parents[2] / "examples/logs/mixed-motion/robot.yaml"
+    for t0 in [float("nan"), float("inf"), 1e300]:
+        with pytest.raises(moa.Error, match="t0 = .* s: not a time within -4e9..4e9 s"):
+            moa.Odometry(cfg, t0=t0)
+    with pytest.raises(moa.Error, match=r"rate: 1000000(\.0)?: must be within \[0.1, 10000\]"):
+        moa.Odometry(cfg, t0=0.0, rate=1e6)
+    o = moa.Odometry(cfg, t0=0.0)
+    for flags in [256, -1]:
+        with pytest.raises(moa.Error, match="flags .*: must be a whole number 0..255"):
+            o.push(0.01, 0, 1.0, 0.0, flags=flags)
+    with pytest.raises(moa.Error, match="dx 0.5: a count is a whole number"):
+        o.push(0.01, 0, 0.5, 0.0)
+    with pytest.raises(moa.Error, match="dx True: a count is a whole number, not a bool"):
+        o.push(0.01, 0, True, 0)
+    with pytest.raises(moa.Error, match="dy: counts are whole numbers, not bools"):
+        o.push_rows([0.01], [0], [1], [False])
+    with pytest.raises(moa.Error, match="flags 1.5: must be a whole number 0..255"):
+        o.push_rows([0.01], [0], [1.0], [0.0], flags=[1.5])
+    with pytest.raises(moa.Error, match="wheel twist beyond the plausible"):
+        o.push_wheels(0.01, float("nan"), 0.0, 0.0)
+    for sensor in range(4):
+        o.push(0.01, sensor, 1.0, 0.0)
+    for t_end in [float("inf"), 1e300, 1e6, 0.005]:
+        with pytest.raises(moa.Error, match="finish: t_end = .* s: must be from the last row"):
+            o.finish(t_end)
+    o.finish(0.01)
+    assert o.steps >= 1
+    assert all(np.isfinite(o.pose))
+
+
+def test_evaluate_on_arrays_refuses_times_going_back_and_absurd_poses():
+    # Issue #47, item 9: decreasing times gave samples 0 and an error of 0.0.
+    truth = {"t": [0.0, 1.0, 2.0], "x": [0.0, 1.0, 2.0], "y": [0.0] * 3, "theta": [0.0] * 3}
+    back = {"t": [2.0, 1.0, 0.0], "x": [0.0, 1.0, 2.0], "y": [0.0] * 3, "theta": [0.0] * 3}
+    with pytest.raises(moa.Error, match=r"odometry: t\[1\] = 1(\.0)? s: time goes backwards"):
+        moa.evaluate(truth, back)
+    absurd = dict(truth, theta=[0.0, 1.8e306, 0.0])
+    with pytest.raises(moa.Error, match="odometry: pose 1 .* beyond the plausible"):
+        moa.evaluate(truth, absurd)
+    with pytest.raises(moa.Error, match=r"truth: t\[0\] = nan s is outside -4e9..4e9 s"):
+        moa.evaluate(dict(truth, t=[float("nan"), 1.0, 2.0]), truth)
+
+
 def test_calibrate_equals_the_written_config(logs, tmp_path):
     d = logs["calibration"]
     for method in ["exact", "kimlee"]:

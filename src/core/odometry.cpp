@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "moa/core/plausible.hpp"
+
 namespace moa {
 
 const char* describe(OdometryError error) {
@@ -24,6 +26,14 @@ const char* describe(OdometryError error) {
       return "gyro row time not finite or earlier than the previous one";
     case OdometryError::kImpossibleCounts:
       return "counts imply a speed far beyond what the sensor can track (a corrupt value?)";
+    case OdometryError::kImplausibleWheels:
+      return "wheel twist beyond the plausible (|vx|, |vy| <= 100 m/s, |omega| <= 1000 rad/s; a "
+             "corrupt value?)";
+    case OdometryError::kImplausibleGyro:
+      return "gyro rate beyond the plausible (|gz| <= 1000 rad/s; a corrupt value?)";
+    case OdometryError::kImplausibleFix:
+      return "camera fix beyond the plausible (|x|, |y| <= 1e6 m, |theta| <= 1e7 rad, standard "
+             "deviations in (0, 1e6] m; a corrupt value?)";
   }
   return "?";
 }
@@ -181,6 +191,11 @@ std::optional<OdometryError> Odometry::push(const SensorRow& row, StepSink sink)
 
 std::optional<OdometryError> Odometry::push_wheels(double t, const Twist2& twist, StepSink sink) {
   if (!options_.use_wheels) return std::nullopt;
+  if (!within_plausible(twist.v.x(), kMaxPlausibleSpeed) ||
+      !within_plausible(twist.v.y(), kMaxPlausibleSpeed) ||
+      !within_plausible(twist.omega, kMaxPlausibleRate)) {
+    return OdometryError::kImplausibleWheels;
+  }
   const double stamp = t;
   t -= options_.wheels_latency;  // the true end of its interval
   if (!std::isfinite(t) || (wheels_seen_ && t < last_wheel_t_)) {
@@ -205,6 +220,7 @@ std::optional<OdometryError> Odometry::push_wheels(double t, const Twist2& twist
 
 std::optional<OdometryError> Odometry::push_gyro(double t, double gz, StepSink sink, bool faulty) {
   if (!options_.use_imu) return std::nullopt;
+  if (!within_plausible(gz, kMaxPlausibleRate)) return OdometryError::kImplausibleGyro;
   const double at = t - options_.consensus.gyro.latency;  // the true end of its interval
   if (!std::isfinite(at) || (gyro_seen_ && at < last_gyro_t_)) return OdometryError::kImuBackwards;
   if (gyro_.full()) {
@@ -226,6 +242,14 @@ std::optional<OdometryError> Odometry::push_gyro(double t, double gz, StepSink s
 
 std::optional<OdometryError> Odometry::push_fix(const CameraFix& fix) {
   if (!options_.fuse_camera) return std::nullopt;
+  // A standard deviation is positive and at most kMaxPlausiblePosition.
+  const auto sd_ok = [](double sd) { return sd > 0.0 && sd <= kMaxPlausiblePosition; };
+  const bool sigma_ok = !fix.sigma || (sd_ok(fix.sigma->x()) && sd_ok(fix.sigma->y()));
+  if (!within_plausible(fix.position.x(), kMaxPlausiblePosition) ||
+      !within_plausible(fix.position.y(), kMaxPlausiblePosition) ||
+      (fix.theta && !within_plausible(*fix.theta, kMaxPlausibleHeading)) || !sigma_ok) {
+    return OdometryError::kImplausibleFix;
+  }
   if (pending_fixes_.full()) return OdometryError::kFixesFull;
   pending_fixes_.push_back(fix);
   pending_fixes_.back().t -= options_.camera_latency.value_or(0.0);  // the capture time

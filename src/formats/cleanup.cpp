@@ -32,6 +32,44 @@ void write_text(const char* text) {
   (void)ignored;
 }
 
+// Every signal whose default action ends the process, bar the faults of
+// the program itself (SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGTRAP,
+// SIGSYS) and SIGKILL: a lost ssh session (SIGHUP), a reader gone (SIGPIPE),
+// a file size limit (SIGXFSZ), a CPU limit (SIGXCPU), a timer.
+constexpr std::array<int, 12> kSignals{SIGHUP,  SIGINT,  SIGQUIT, SIGPIPE,   SIGALRM, SIGTERM,
+                                       SIGUSR1, SIGUSR2, SIGXCPU, SIGVTALRM, SIGPROF, SIGXFSZ};
+
+const char* signal_name(int signal) {
+  switch (signal) {
+    case SIGHUP:
+      return "SIGHUP";
+    case SIGINT:
+      return "SIGINT";
+    case SIGQUIT:
+      return "SIGQUIT";
+    case SIGPIPE:
+      return "SIGPIPE";
+    case SIGALRM:
+      return "SIGALRM";
+    case SIGTERM:
+      return "SIGTERM";
+    case SIGUSR1:
+      return "SIGUSR1";
+    case SIGUSR2:
+      return "SIGUSR2";
+    case SIGXCPU:
+      return "SIGXCPU";
+    case SIGVTALRM:
+      return "SIGVTALRM";
+    case SIGPROF:
+      return "SIGPROF";
+    case SIGXFSZ:
+      return "SIGXFSZ";
+    default:
+      return "a signal";
+  }
+}
+
 extern "C" void on_signal(int signal) {
   // Newest first: repeatedly the registered path with the largest order.
   unsigned long below = ~0ul;
@@ -52,8 +90,9 @@ extern "C" void on_signal(int signal) {
       ::rmdir(g_slots[best].path);
     }
   }
-  write_text(signal == SIGINT ? "moa: interrupted by SIGINT; temporary files removed\n"
-                              : "moa: interrupted by SIGTERM; temporary files removed\n");
+  write_text("moa: interrupted by ");
+  write_text(signal_name(signal));
+  write_text("; temporary files removed\n");
   ::_exit(128 + signal);
 }
 
@@ -96,11 +135,14 @@ void remove_temporaries_on_signal() {
   struct sigaction action {};
   action.sa_handler = on_signal;
   sigemptyset(&action.sa_mask);
-  // The other signal waits while the handler runs: one clean-up at a time.
-  sigaddset(&action.sa_mask, SIGINT);
-  sigaddset(&action.sa_mask, SIGTERM);
-  sigaction(SIGINT, &action, nullptr);
-  sigaction(SIGTERM, &action, nullptr);
+  // The other signals wait while the handler runs: one clean-up at a time.
+  for (const int signal : kSignals) sigaddset(&action.sa_mask, signal);
+  for (const int signal : kSignals) {
+    // One ignored by whoever started moa (nohup's SIGHUP) stays ignored.
+    struct sigaction old {};
+    if (sigaction(signal, nullptr, &old) == 0 && old.sa_handler == SIG_IGN) continue;
+    sigaction(signal, &action, nullptr);
+  }
 }
 
 }  // namespace moa::io

@@ -66,15 +66,59 @@ std::string_view without_plus(std::string_view text) {
 
 }  // namespace
 
+namespace {
+// Bytes in the well-formed UTF-8 sequence at text[i] (1 to 4), 0 if none
+// starts there (a stray continuation byte, an overlong form, a surrogate,
+// beyond U+10FFFF, or cut short).
+std::size_t utf8_sequence(std::string_view text, std::size_t i) {
+  const auto at = [&](std::size_t k) { return static_cast<unsigned char>(text[k]); };
+  const unsigned char b = at(i);
+  std::size_t n = 0;
+  unsigned char lo = 0x80, hi = 0xbf;  // the second byte's range
+  if (b >= 0xc2 && b <= 0xdf) {
+    n = 2;
+  } else if (b >= 0xe0 && b <= 0xef) {
+    n = 3;
+    if (b == 0xe0) lo = 0xa0;
+    if (b == 0xed) hi = 0x9f;
+  } else if (b >= 0xf0 && b <= 0xf4) {
+    n = 4;
+    if (b == 0xf0) lo = 0x90;
+    if (b == 0xf4) hi = 0x8f;
+  } else {
+    return 0;
+  }
+  if (i + n > text.size()) return 0;
+  if (at(i + 1) < lo || at(i + 1) > hi) return 0;
+  for (std::size_t k = 2; k < n; ++k) {
+    if (at(i + k) < 0x80 || at(i + k) > 0xbf) return 0;
+  }
+  return n;
+}
+}  // namespace
+
 std::string printable(std::string_view text) {
   std::string out;
   out.reserve(text.size());
-  for (const char c : text) {
-    const auto u = static_cast<unsigned char>(c);
-    if (u < 0x20 || u == 0x7f) {
-      out += fmt::format("\\x{:02x}", u);
+  for (std::size_t i = 0; i < text.size();) {
+    const auto u = static_cast<unsigned char>(text[i]);
+    if (u < 0x80) {
+      if (u < 0x20 || u == 0x7f) {
+        out += fmt::format("\\x{:02x}", u);
+      } else {
+        out += text[i];
+      }
+      ++i;
+      continue;
+    }
+    // Valid UTF-8 is kept (a name in any script); any other byte is
+    // written \xNN, so that the message is valid UTF-8 on any terminal.
+    if (const std::size_t n = utf8_sequence(text, i); n != 0) {
+      out.append(text.substr(i, n));
+      i += n;
     } else {
-      out += c;
+      out += fmt::format("\\x{:02x}", u);
+      ++i;
     }
   }
   return out;
@@ -498,6 +542,17 @@ double CsvReader::number(std::size_t column) const {
   const auto parsed = parse_number(text);
   if (const auto* error = std::get_if<std::string>(&parsed)) fail_field(column, *error);
   return std::get<double>(parsed);
+}
+
+double CsvReader::plausible(std::size_t column, double bound, std::string_view unit,
+                            std::string_view what) const {
+  const double value = number(column);
+  if (!(std::abs(value) <= bound)) {
+    fail_field(column,
+               fmt::format("{} {} is beyond the plausible {}..{} {} of {} (a corrupt value?)",
+                           excerpt(fields_[column]), unit, -bound, bound, unit, what));
+  }
+  return value;
 }
 
 std::int64_t CsvReader::integer(std::size_t column, std::int64_t min, std::int64_t max) const {

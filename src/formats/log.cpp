@@ -11,6 +11,7 @@
 #include <iterator>
 #include <string_view>
 
+#include "moa/core/plausible.hpp"
 #include "moa/formats/atomic_file.hpp"
 #include "moa/formats/csv.hpp"
 #include "moa/formats/error.hpp"
@@ -43,8 +44,9 @@ class RowParser<WheelRow> {
   WheelRow parse(CsvReader& csv) const {
     WheelRow row;
     row.t = csv.time(t_);
-    row.twist.v = {csv.number(vx_), csv.number(vy_)};
-    row.twist.omega = csv.number(omega_);
+    row.twist.v = {csv.plausible(vx_, kMaxPlausibleSpeed, "m/s", "a wheel twist"),
+                   csv.plausible(vy_, kMaxPlausibleSpeed, "m/s", "a wheel twist")};
+    row.twist.omega = csv.plausible(omega_, kMaxPlausibleRate, "rad/s", "a wheel twist");
     return row;
   }
 
@@ -61,7 +63,7 @@ class RowParser<ImuRow> {
         faults_(csv.column("faults")) {}
 
   ImuRow parse(CsvReader& csv) const {
-    ImuRow row{csv.time(t_), csv.number(gz_)};
+    ImuRow row{csv.time(t_), csv.plausible(gz_, kMaxPlausibleRate, "rad/s", "a gyro rate")};
     if (faults_) row.faults = static_cast<std::uint8_t>(csv.integer(*faults_, 0, 1));
     return row;
   }
@@ -90,9 +92,12 @@ class RowParser<CameraRow> {
   CameraRow parse(CsvReader& csv) const {
     CameraRow row;
     row.t = csv.time(t_);
-    row.position = {csv.number(x_), csv.number(y_)};
+    row.position = {csv.plausible(x_, kMaxPlausiblePosition, "m", "a camera fix"),
+                    csv.plausible(y_, kMaxPlausiblePosition, "m", "a camera fix")};
     // In optional columns an empty field means "not given for this fix".
-    if (theta_ && !csv.is_empty(*theta_)) row.theta = csv.number(*theta_);
+    if (theta_ && !csv.is_empty(*theta_)) {
+      row.theta = csv.plausible(*theta_, kMaxPlausibleHeading, "rad", "a camera fix");
+    }
     if (sx_) {
       if (csv.is_empty(*sx_) != csv.is_empty(*sy_)) {
         csv.fail("columns 'sx' and 'sy' must be both given or both empty");
@@ -108,7 +113,7 @@ class RowParser<CameraRow> {
  private:
   // A zero standard deviation would give the fix infinite weight.
   static double positive(const CsvReader& csv, std::size_t column) {
-    const double value = csv.number(column);
+    const double value = csv.plausible(column, kMaxPlausiblePosition, "m", "a standard deviation");
     if (value <= 0.0) {
       csv.fail_field(column, fmt::format("must be > 0 (found {})", value));
     }
@@ -131,8 +136,9 @@ class RowParser<TruthRow> {
   TruthRow parse(CsvReader& csv) const {
     TruthRow row;
     row.t = csv.time(t_);
-    row.pose.t = {csv.number(x_), csv.number(y_)};
-    row.pose.theta = csv.number(theta_);
+    row.pose.t = {csv.plausible(x_, kMaxPlausiblePosition, "m", "a pose"),
+                  csv.plausible(y_, kMaxPlausiblePosition, "m", "a pose")};
+    row.pose.theta = csv.plausible(theta_, kMaxPlausibleHeading, "rad", "a pose");
     return row;
   }
 

@@ -1,4 +1,5 @@
 #include "moa/formats/odometry_csv.hpp"
+#include "moa/core/plausible.hpp"
 
 #include <fmt/core.h>
 
@@ -344,8 +345,13 @@ std::optional<OdometryRow> OdometryCsvReader::next() {
   const auto& c = s.columns;
   OdometryRow r;
   r.t = s.csv.time(c[0]);
-  r.pose = Pose2{{s.csv.number(c[1]), s.csv.number(c[2])}, s.csv.number(c[3])};
-  r.twist = Twist2{{s.csv.number(c[4]), s.csv.number(c[5])}, s.csv.number(c[6])};
+  const auto& f = s.csv;
+  r.pose = Pose2{{f.plausible(c[1], kMaxPlausiblePosition, "m", "a pose"),
+                  f.plausible(c[2], kMaxPlausiblePosition, "m", "a pose")},
+                 f.plausible(c[3], kMaxPlausibleHeading, "rad", "a pose")};
+  r.twist = Twist2{{f.plausible(c[4], kMaxPlausibleSpeed, "m/s", "a twist"),
+                    f.plausible(c[5], kMaxPlausibleSpeed, "m/s", "a twist")},
+                   f.plausible(c[6], kMaxPlausibleRate, "rad/s", "a twist")};
   if (s.sd)
     r.sd = Eigen::Vector3d(s.csv.number((*s.sd)[0]), s.csv.number((*s.sd)[1]),
                            s.csv.number((*s.sd)[2]));

@@ -80,6 +80,7 @@ LiveRunSource::LiveRunSource(FrameSource& frames, int sensors, std::string where
 void LiveRunSource::add_streams(StreamLineReader& streams, double speed) {
   streams_ = &streams;
   speed_ = speed;
+  streams.set_source_clock({t0_, std::chrono::steady_clock::now(), speed});
 }
 
 double LiveRunSource::start_time() { return t0_; }
@@ -127,6 +128,10 @@ void LiveRunSource::take_streams() {
       ++dropped_;
       return;
     }
+    if (queue.size() >= kMaxHeldRows) {
+      ++overflow_;
+      return;
+    }
     const double estimate =
         t_ref_ + speed_ * std::chrono::duration<double>(s.arrival - arrival_ref_).count();
     const double own = s.stamped ? row.t : std::max({estimate, after, last.own});
@@ -166,6 +171,7 @@ const InputRow* LiveRunSource::next() {
       pending_ = *row;
       t_ref_ = row->t;
       arrival_ref_ = std::chrono::steady_clock::now();
+      if (streams_ != nullptr) streams_->set_source_clock({t_ref_, arrival_ref_, speed_});
     } else {
       ended_ = true;
     }

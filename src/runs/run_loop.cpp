@@ -108,20 +108,34 @@ OdometryRun run_loop(const RobotConfig& config, const std::string& config_path,
         ++run.rows_per_sensor[static_cast<std::size_t>(row->sensor)];
       }
       if (callbacks.progress && (run.rows & 0xfff) == 0) callbacks.progress(run.rows, row->t);
-    } else if (const auto* wheel = std::get_if<WheelRow>(input)) {
-      if (callbacks.on_row) callbacks.on_row(*input);
-      if (const auto e = odometry->push_wheels(wheel->t, wheel->twist, sink)) fail(wheel->t, *e);
-      ++run.wheel_rows;
-    } else if (const auto* imu = std::get_if<ImuRow>(input)) {
-      if (callbacks.on_row) callbacks.on_row(*input);
-      if (const auto e = odometry->push_gyro(imu->t, imu->gz, sink, imu->faults != 0))
-        fail(imu->t, *e);
-      ++run.imu_rows;
     } else {
-      const auto& fix = std::get<CameraFix>(*input);
+      // A stream's row: recorded once the pipeline has taken it. A burst a
+      // live run cannot hold (the stream's ring of rows ahead of the mice
+      // full) is skipped there, not the run's end.
+      std::optional<OdometryError> e;
+      if (const auto* wheel = std::get_if<WheelRow>(input)) {
+        e = odometry->push_wheels(wheel->t, wheel->twist, sink);
+      } else if (const auto* imu = std::get_if<ImuRow>(input)) {
+        e = odometry->push_gyro(imu->t, imu->gz, sink, imu->faults != 0);
+      } else {
+        e = odometry->push_fix(std::get<CameraFix>(*input));
+      }
+      const double t = row_time(*input);
+      if (e) {
+        const bool full = e == OdometryError::kWheelsFull || e == OdometryError::kImuFull ||
+                          e == OdometryError::kFixesFull;
+        if (!full || !callbacks.on_stream_full) fail(t, *e);
+        callbacks.on_stream_full(*input, detail(t, *e));
+        continue;
+      }
       if (callbacks.on_row) callbacks.on_row(*input);
-      if (const auto e = odometry->push_fix(fix)) fail(fix.t, *e);
-      ++run.fix_rows;
+      if (std::holds_alternative<WheelRow>(*input)) {
+        ++run.wheel_rows;
+      } else if (std::holds_alternative<ImuRow>(*input)) {
+        ++run.imu_rows;
+      } else {
+        ++run.fix_rows;
+      }
     }
   }
   // Sensors of the config that never reported: a silent sensor reads as

@@ -11,7 +11,10 @@
 namespace moa::io {
 
 OptionCheck ReplayOptions::validate() const {
-  return OptionsCheck().positive("speed", speed).result();
+  return OptionsCheck()
+      .positive("speed", speed)
+      .closed("speed", speed, kMinSpeed, kMaxSpeed)
+      .result();
 }
 
 namespace {
@@ -42,8 +45,12 @@ std::optional<SensorRow> ReplayReader::next() {
   if (hooks_.should_stop()) return std::nullopt;
   auto row = reader_.next();
   if (!row) return std::nullopt;
+  // Wall seconds from the start, clamped to 0..1e9 s (32 years) before the
+  // cast to the clock's integer count: its 2^63 ns are 292 years, and a
+  // row's time or the speed beyond their bounds must not overflow it.
+  const double wall = std::clamp((row->t - t0) / options_.speed, 0.0, 1e9);
   auto due = started_ + std::chrono::duration_cast<Clock::duration>(
-                            std::chrono::duration<double>((row->t - t0) / options_.speed));
+                            std::chrono::duration<double>(std::isnan(wall) ? 0.0 : wall));
   const auto tick = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(std::max(hooks_.tick_period, 1e-3)));
   for (;;) {

@@ -114,6 +114,7 @@ struct SerialReader::Impl {
   std::string name;
   int fd = -1;
   std::vector<std::string> config_names;
+  std::vector<double> config_cpi;  ///< each config sensor's cpi
   SerialOptions options;
   LiveHooks hooks;
 
@@ -183,7 +184,35 @@ struct SerialReader::Impl {
                         "not have (config sensors: {})",
                         name, sensor, fmt::join(config_names, ", ")));
       }
-      mapped.push_back(static_cast<int>(it - config_names.begin()));
+      const int sensor_index = static_cast<int>(it - config_names.begin());
+      // Two records of one sensor: its counts would be added twice (or one
+      // lost) and the others never report; the recording would not replay.
+      if (const auto twice = std::find(mapped.begin(), mapped.end(), sensor_index);
+          twice != mapped.end()) {
+        throw Error(fmt::format(
+            "{}: the device's HELLO names sensor '{}' twice (records {} and {} of {}: {}): each "
+            "sensor reports once",
+            name, sensor, twice - mapped.begin() + 1, mapped.size() + 1, h.names.size(),
+            fmt::join(h.names, ",")));
+      }
+      mapped.push_back(sensor_index);
+    }
+    // The counts are read at the config's cpi: a device set to another
+    // reads its motion that many times off. Said once per HELLO that differs.
+    if (h.cpi != 0) {
+      std::vector<std::string> differ;
+      for (const int i : mapped) {
+        const double cpi = config_cpi[static_cast<std::size_t>(i)];
+        if (cpi != static_cast<double>(h.cpi)) {
+          differ.push_back(fmt::format("'{}' {}", config_names[static_cast<std::size_t>(i)], cpi));
+        }
+      }
+      if (!differ.empty() && (!have_hello || h.cpi != hello.cpi)) {
+        hooks.warning(fmt::format(
+            "{}: the device's HELLO says {} cpi but the robot config has {}: the config's cpi "
+            "reads the counts, so a device at {} cpi reads its motion off by their ratio",
+            name, h.cpi, fmt::join(differ, ", "), h.cpi));
+      }
     }
     // A HELLO after the first: the device restarted (its sequence and clock
     // start again) or changed its tick rate; times continue from the last row.
@@ -454,6 +483,9 @@ SerialReader::SerialReader(const std::filesystem::path& device, const RobotConfi
   Impl& impl = *impl_;
   impl.name = device.string();
   impl.config_names = config.names;
+  for (int i = 0; i < config.array.size(); ++i) {
+    impl.config_cpi.push_back(static_cast<double>(config.array[i].cpi));
+  }
   impl.options = options;
   impl.hooks = std::move(hooks);
   const int access = options.configure_port ? O_RDWR : O_RDONLY;

@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <fmt/core.h>
 #include <poll.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -13,6 +14,7 @@
 #include <mutex>
 #include <thread>
 
+#include "moa/core/plausible.hpp"
 #include "moa/formats/csv.hpp"
 #include "moa/formats/error.hpp"
 #include "moa/sources/udp.hpp"
@@ -34,6 +36,14 @@ const char* describe(StreamLineError e) {
       return "line too long";
     case StreamLineError::kBadJson:
       return "not a flat JSON object of the stream's keys (stream, t and its columns)";
+    case StreamLineError::kTimeOutOfRange:
+      return "t outside -4e9..4e9 s (the bound of every log's times)";
+    case StreamLineError::kImplausible:
+      return "a value beyond the plausible (|vx|, |vy| <= 100 m/s; |omega|, |gz| <= 1000 rad/s; "
+             "|x|, |y|, sx, sy <= 1e6 m; |theta| <= 1e7 rad)";
+    case StreamLineError::kTimeAhead:
+      return "t more than 60 s ahead of the source's clock when the line arrived (never taken "
+             "as the stream's time)";
   }
   return "?";
 }
@@ -169,10 +179,15 @@ std::variant<std::monostate, StreamRow, StreamLineError> parse_stream_line(std::
   };
   double t = 0.0;
   if (out.stamped && !numbers(1, 1, &t)) return StreamLineError::kNotANumber;
+  if (!(std::abs(t) <= kMaxTime)) return StreamLineError::kTimeOutOfRange;
   if (f[0] == "wheels") {
     if (f.size() != 5) return StreamLineError::kFieldCount;
     double v[3];
     if (!numbers(2, 3, v)) return StreamLineError::kNotANumber;
+    if (!within_plausible(v[0], kMaxPlausibleSpeed) ||
+        !within_plausible(v[1], kMaxPlausibleSpeed) || !within_plausible(v[2], kMaxPlausibleRate)) {
+      return StreamLineError::kImplausible;
+    }
     out.row = WheelRow{t, Twist2{{v[0], v[1]}, v[2]}};
     return out;
   }
@@ -180,6 +195,7 @@ std::variant<std::monostate, StreamRow, StreamLineError> parse_stream_line(std::
     if (f.size() != 3) return StreamLineError::kFieldCount;
     double gz = 0.0;
     if (!numbers(2, 1, &gz)) return StreamLineError::kNotANumber;
+    if (!within_plausible(gz, kMaxPlausibleRate)) return StreamLineError::kImplausible;
     out.row = ImuRow{t, gz};
     return out;
   }
@@ -187,17 +203,25 @@ std::variant<std::monostate, StreamRow, StreamLineError> parse_stream_line(std::
     if (f.size() != 4 && f.size() != 5 && f.size() != 7) return StreamLineError::kFieldCount;
     double p[2];
     if (!numbers(2, 2, p)) return StreamLineError::kNotANumber;
+    if (!within_plausible(p[0], kMaxPlausiblePosition) ||
+        !within_plausible(p[1], kMaxPlausiblePosition)) {
+      return StreamLineError::kImplausible;
+    }
     CameraFix fix;
     fix.t = t;
     fix.position = {p[0], p[1]};
     if (f.size() >= 5 && !f[4].empty()) {
       double theta = 0.0;
       if (!numbers(4, 1, &theta)) return StreamLineError::kNotANumber;
+      if (!within_plausible(theta, kMaxPlausibleHeading)) return StreamLineError::kImplausible;
       fix.theta = theta;
     }
     if (f.size() == 7) {
       double s[2];
       if (!numbers(5, 2, s) || !(s[0] > 0.0 && s[1] > 0.0)) return StreamLineError::kNotANumber;
+      if (s[0] > kMaxPlausiblePosition || s[1] > kMaxPlausiblePosition) {
+        return StreamLineError::kImplausible;
+      }
       fix.sigma = Vec2{s[0], s[1]};
     }
     out.row = fix;
@@ -223,7 +247,22 @@ struct StreamLineReader::Impl {
   std::vector<StreamRow> queue;  ///< under mutex
   Stats stats;                   ///< under mutex
   std::array<bool, kStreamLineErrors> reported{};
+  std::optional<SourceClock> source;  ///< under mutex
+  bool regular_file = false;          ///< a file waits for the run instead of dropping lines
   std::thread thread;
+
+  // s by which a stamped row's t is ahead of the source's clock now (0 when
+  // that clock is not known yet). Under mutex.
+  double lead(double t, std::chrono::steady_clock::time_point now) const {
+    if (!source) return 0.0;
+    const double wall = std::chrono::duration<double>(now - source->arrival).count();
+    if (clock == StreamClock::kMonotonic) {
+      // t maps as an arrival: source->t + speed (t - arrival), against now's.
+      const double now_s = std::chrono::duration<double>(now.time_since_epoch()).count();
+      return source->speed * (t - now_s);
+    }
+    return t - (source->t + source->speed * wall);
+  }
 
   void line(std::string_view text, std::array<std::optional<double>, 3>& last_t) {
     auto parsed = parse_stream_line(text);
@@ -234,7 +273,9 @@ struct StreamLineReader::Impl {
       const std::size_t stream = row->row.index();
       const double t = std::visit([](const auto& r) { return static_cast<double>(r.t); }, row->row);
       if (row->stamped) {
-        if (last_t[stream] && t < *last_t[stream]) {
+        if (lead(t, now) > kMaxStreamLead) {
+          parsed = StreamLineError::kTimeAhead;
+        } else if (last_t[stream] && t < *last_t[stream]) {
           parsed = StreamLineError::kTimeBackwards;
         } else {
           last_t[stream] = t;
@@ -250,6 +291,10 @@ struct StreamLineReader::Impl {
           good->stamped = false;
         }
         ++(stream == 0 ? stats.wheels : stream == 1 ? stats.fixes : stats.imu);
+        if (queue.size() >= kMaxQueuedLines) {
+          ++stats.overflow;
+          return;
+        }
         queue.push_back(std::move(*good));
         return;
       }
@@ -257,6 +302,13 @@ struct StreamLineReader::Impl {
     const auto e = static_cast<std::size_t>(std::get<StreamLineError>(parsed));
     // Shown to a person: at most 200 bytes, control characters escaped.
     if (stats.bad[e]++ == 0) stats.first[e] = printable(text.substr(0, 200));
+  }
+
+  // Room for the good lines of a whole read: a 64 KiB read holds fewer than
+  // kMaxQueuedLines / 2 of them (the shortest, "imu,,0", is 7 bytes).
+  bool room() const {
+    std::lock_guard lock(mutex);
+    return queue.size() <= kMaxQueuedLines / 2;
   }
 
   void run() {
@@ -267,10 +319,18 @@ struct StreamLineReader::Impl {
       close_fd = true;
       fd = opened;
     }
+    struct stat st {};
+    regular_file = ::fstat(fd.load(), &st) == 0 && S_ISREG(st.st_mode);
     std::array<std::optional<double>, 3> last_t;
     std::string pending;
-    char buffer[65536];  // a datagram whole
+    std::size_t unended = 0;  // bytes since the last line end
+    char buffer[65536];       // a datagram whole
     while (!stopping) {
+      if (regular_file && !room()) {
+        // A file is read as the run takes its lines: none is dropped.
+        std::this_thread::sleep_for(std::chrono::milliseconds(2));
+        continue;
+      }
       pollfd p{fd.load(), POLLIN, 0};
       const int ready = ::poll(&p, 1, 100);
       if (ready < 0 && errno != EINTR) return;
@@ -282,27 +342,40 @@ struct StreamLineReader::Impl {
       for (ssize_t k = 0; k < n; ++k) {
         const char c = buffer[k];
         if (c == '\n') {
-          line(pending, last_t);
+          if (unended <= kMaxStreamLine) line(pending, last_t);
           pending.clear();
-        } else if (pending.size() <= kMaxStreamLine) {
-          // One byte past the bound is kept: the line is then too long.
+          unended = 0;
+        } else if (++unended <= kMaxStreamLine + 1) {
+          // One byte past the bound is kept: the line is then too long,
+          // counted at once (a line may never end).
           pending.push_back(c);
+          if (unended == kMaxStreamLine + 1) line(pending, last_t);
         }
+      }
+      if (!udp && unended > kMaxStreamUnended) {
+        // No line end in a megabyte (/dev/zero, a binary file): not a
+        // stream of lines. Read no further rather than spin on it.
+        std::lock_guard lock(mutex);
+        stats.not_lines = true;
+        break;
       }
       if (udp && !pending.empty()) {
         // A datagram's end ends its last line.
-        line(pending, last_t);
+        if (unended <= kMaxStreamLine) line(pending, last_t);
         pending.clear();
+        unended = 0;
       }
     }
-    if (!pending.empty() && !stopping) line(pending, last_t);
+    if (!pending.empty() && unended <= kMaxStreamLine && !stopping) line(pending, last_t);
   }
 };
 
-StreamLineReader::StreamLineReader(const std::string& path, StreamClock clock)
+StreamLineReader::StreamLineReader(const std::string& path, StreamClock clock,
+                                   std::optional<SourceClock> source)
     : impl_(std::make_unique<Impl>()) {
   impl_->path = path;
   impl_->clock = clock;
+  impl_->source = source;
   if (const auto address = parse_udp_address(path, "--streams")) {
     impl_->fd = open_udp_socket(*address, /*bind=*/true, "--streams");
     impl_->udp = true;
@@ -337,6 +410,11 @@ void StreamLineReader::take(std::vector<StreamRow>& out) {
   std::lock_guard lock(impl_->mutex);
   out.insert(out.end(), impl_->queue.begin(), impl_->queue.end());
   impl_->queue.clear();
+}
+
+void StreamLineReader::set_source_clock(const SourceClock& clock) {
+  std::lock_guard lock(impl_->mutex);
+  impl_->source = clock;
 }
 
 std::optional<std::pair<StreamLineError, std::string>> StreamLineReader::take_new_error() {

@@ -1,10 +1,16 @@
 #include "moa/web/dashboard.hpp"
 #include "moa/web/html.hpp"
 
+#include <arpa/inet.h>
 #include <fmt/core.h>
 #include <httplib.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -29,6 +35,111 @@ namespace {
 constexpr int kSpareWorkers = 32;
 // us, the longest pause within a request's bytes.
 constexpr long kRequestReadTimeoutUs = 500000;
+// The bounds of one request (Debian's cpp-httplib 0.11 has none on the
+// number of header lines nor on a chunked body): a dashboard serves GETs,
+// whose request line and headers a browser sends in a few hundred bytes.
+constexpr std::size_t kMaxRequestBytes = 16384;  // read from a request, all told
+constexpr auto kMaxRequestTime = std::chrono::seconds(5);
+constexpr int kMaxRequestsPerConnection = 16;
+constexpr int kKeepAliveMs = 1000;  // idle between requests on a connection
+constexpr int kWriteTimeoutMs = 2000;
+
+// One connection's bytes as cpp-httplib's Stream, with the bounds above:
+// past kMaxRequestBytes or kMaxRequestTime of one request, or a pause of
+// kRequestReadTimeoutUs, a read fails and the connection is closed. Writes
+// wait at most kWriteTimeoutMs for room (a client that reads nothing is
+// dropped), never raise SIGPIPE.
+class BoundedStream final : public httplib::Stream {
+ public:
+  explicit BoundedStream(int sock) : sock_(sock) {}
+  // A new request: its budget of bytes and time.
+  void begin_request() {
+    left_ = kMaxRequestBytes;
+    deadline_ = std::chrono::steady_clock::now() + kMaxRequestTime;
+  }
+  bool is_readable() const override { return wait(POLLIN, kRequestReadTimeoutUs / 1000); }
+  bool is_writable() const override { return wait(POLLOUT, kWriteTimeoutMs); }
+  ssize_t read(char* ptr, size_t size) override {
+    if (left_ == 0 || std::chrono::steady_clock::now() >= deadline_) return -1;
+    if (!is_readable()) return -1;
+    const ssize_t n = ::recv(sock_, ptr, std::min(size, left_), 0);
+    if (n > 0) left_ -= static_cast<std::size_t>(n);
+    return n;
+  }
+  ssize_t write(const char* ptr, size_t size) override {
+    if (!is_writable()) return -1;
+    return ::send(sock_, ptr, size, MSG_NOSIGNAL);
+  }
+  void get_remote_ip_and_port(std::string& ip, int& port) const override {
+    address(true, ip, port);
+  }
+  void get_local_ip_and_port(std::string& ip, int& port) const override {
+    address(false, ip, port);
+  }
+  socket_t socket() const override { return sock_; }
+
+ private:
+  bool wait(short events, int ms) const {
+    pollfd p{sock_, events, 0};
+    int r = 0;
+    do {
+      r = ::poll(&p, 1, ms);
+    } while (r < 0 && errno == EINTR);
+    return r > 0 && (p.revents & events) != 0;
+  }
+  void address(bool peer, std::string& ip, int& port) const {
+    sockaddr_storage a{};
+    socklen_t length = sizeof a;
+    auto* any = reinterpret_cast<sockaddr*>(&a);
+    ip.clear();
+    port = 0;
+    if ((peer ? ::getpeername(sock_, any, &length) : ::getsockname(sock_, any, &length)) != 0) {
+      return;
+    }
+    char text[INET6_ADDRSTRLEN] = {};
+    if (a.ss_family == AF_INET) {
+      const auto* v4 = reinterpret_cast<const sockaddr_in*>(&a);
+      ::inet_ntop(AF_INET, &v4->sin_addr, text, sizeof text);
+      port = ntohs(v4->sin_port);
+    } else if (a.ss_family == AF_INET6) {
+      const auto* v6 = reinterpret_cast<const sockaddr_in6*>(&a);
+      ::inet_ntop(AF_INET6, &v6->sin6_addr, text, sizeof text);
+      port = ntohs(v6->sin6_port);
+    }
+    ip = text;
+  }
+
+  int sock_;
+  std::size_t left_ = kMaxRequestBytes;
+  std::chrono::steady_clock::time_point deadline_ = std::chrono::steady_clock::now();
+};
+
+// Set by the pre-routing handler of the worker's request when it refused
+// it: the connection is then closed, its unread bytes never read.
+thread_local bool t_refused = false;
+
+// cpp-httplib's server with each connection read through BoundedStream:
+// the keep-alive loop of httplib's own process_and_close_socket, whose
+// reads have no bound. Overrides the library's (private) virtual.
+class BoundedServer final : public httplib::Server {
+ private:
+  bool process_and_close_socket(socket_t sock) override {
+    BoundedStream stream(sock);
+    bool ok = false;
+    for (int k = 0; k < kMaxRequestsPerConnection && svr_sock_ != INVALID_SOCKET; ++k) {
+      pollfd p{sock, POLLIN, 0};
+      if (::poll(&p, 1, kKeepAliveMs) <= 0) break;  // idle, closed or interrupted: done
+      stream.begin_request();
+      t_refused = false;
+      bool closed = false;
+      ok = process_request(stream, k + 1 == kMaxRequestsPerConnection, closed, nullptr);
+      if (!ok || closed || t_refused) break;
+    }
+    ::shutdown(sock, SHUT_RDWR);
+    ::close(sock);
+    return ok;
+  }
+};
 
 }  // namespace
 
@@ -177,7 +288,7 @@ struct Dashboard::Impl {
   RobotConfig config;
   DashboardOptions options;
   std::string page;
-  httplib::Server server;
+  BoundedServer server;
   std::thread listener;
   int port = 0;
 
@@ -374,6 +485,25 @@ Dashboard::Dashboard(const RobotConfig& config, const DashboardOptions& options)
   // long within its headers is dropped.
   s.server.set_read_timeout(std::chrono::microseconds(kRequestReadTimeoutUs));
   s.server.set_write_timeout(2, 0);  // a client that reads nothing for 2 s is dropped
+  // Beyond BoundedStream's bounds: a body is never read. A request other
+  // than a GET (or HEAD) without a body is refused before its body would be
+  // read, and its connection closed.
+  s.server.set_payload_max_length(0);
+  s.server.set_pre_routing_handler([](const httplib::Request& req, httplib::Response& res) {
+    const bool get = req.method == "GET" || req.method == "HEAD";
+    const bool body =
+        req.has_header("Transfer-Encoding") ||
+        (req.has_header("Content-Length") && req.get_header_value("Content-Length") != "0");
+    if (get && !body) return httplib::Server::HandlerResponse::Unhandled;
+    t_refused = true;
+    res.status = get ? 413 : 405;
+    if (!get) res.set_header("Allow", "GET, HEAD");
+    res.set_header("Connection", "close");
+    res.set_content(get ? "a request to the dashboard has no body\n"
+                        : "the dashboard serves GET requests only\n",
+                    "text/plain");
+    return httplib::Server::HandlerResponse::Handled;
+  });
   s.server.Get("/", [this](const httplib::Request&, httplib::Response& res) {
     res.set_header("Cache-Control", "no-store");
     res.set_content(impl_->page, "text/html; charset=utf-8");

@@ -177,14 +177,17 @@ struct OdometryStep {
 };
 
 enum class OdometryError : std::uint8_t {
-  kRow,               ///< the mice row is invalid (row_error says why)
-  kNoInterval,        ///< an epoch with no positive, finite interval
-  kWheelsFull,        ///< wheel rows fed too far ahead of the mice rows
-  kFixesFull,         ///< camera fixes fed too far ahead of the mice rows
-  kWheelsBackwards,   ///< a wheel row earlier than the previous one, or not finite
-  kImuFull,           ///< gyro rows fed too far ahead of the mice rows
-  kImuBackwards,      ///< a gyro row earlier than the previous one, or not finite
-  kImpossibleCounts,  ///< counts implying a speed far beyond what the sensor can track
+  kRow,                ///< the mice row is invalid (row_error says why)
+  kNoInterval,         ///< an epoch with no positive, finite interval
+  kWheelsFull,         ///< wheel rows fed too far ahead of the mice rows
+  kFixesFull,          ///< camera fixes fed too far ahead of the mice rows
+  kWheelsBackwards,    ///< a wheel row earlier than the previous one, or not finite
+  kImuFull,            ///< gyro rows fed too far ahead of the mice rows
+  kImuBackwards,       ///< a gyro row earlier than the previous one, or not finite
+  kImpossibleCounts,   ///< counts implying a speed far beyond what the sensor can track
+  kImplausibleWheels,  ///< a wheel twist beyond core/plausible.hpp's bounds, or not finite
+  kImplausibleGyro,    ///< a gyro rate beyond core/plausible.hpp's bound, or not finite
+  kImplausibleFix,     ///< a camera fix beyond core/plausible.hpp's bounds, or not finite
 };
 
 const char* describe(OdometryError error);

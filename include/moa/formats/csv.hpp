@@ -35,8 +35,9 @@ inline constexpr std::size_t kMaxLineBytes = std::size_t{1} << 16;
 /// Bytes of input an error message quotes at most.
 inline constexpr std::size_t kMaxExcerpt = 40;
 
-/// `text` with control characters written as \xNN, so that an error message
-/// quoting input stays on one line.
+/// `text` with control characters and bytes that are not well-formed UTF-8
+/// written as \xNN, so that an error message quoting input stays on one
+/// line and is valid UTF-8 (valid multi-byte characters are kept).
 std::string printable(std::string_view text);
 /// printable() of at most the first kMaxExcerpt bytes of `text`, followed by
 /// "... (N bytes)" when it was cut: how a reader quotes input in an error.
@@ -174,6 +175,11 @@ class CsvReader {
   bool is_empty(std::size_t column) const { return fields_[column].empty(); }
   /// A finite floating point number.
   double number(std::size_t column) const;
+  /// A number within [-bound, bound] (core/plausible.hpp); beyond: "column
+  /// 'vx': 1.7e308 m/s is beyond the plausible -100..100 m/s of WHAT (a
+  /// corrupt value?)", `unit` naming the column's unit.
+  double plausible(std::size_t column, double bound, std::string_view unit,
+                   std::string_view what) const;
   /// An integer within [min, max] (decimal digits, optional sign, nothing else).
   std::int64_t integer(std::size_t column, std::int64_t min, std::int64_t max) const;
   /// A finite number no earlier than the previous record's time, within

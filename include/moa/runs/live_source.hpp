@@ -74,7 +74,9 @@ LiveSource open_live_source(const LiveSourceSpec& spec, const RobotConfig& confi
 /// without t is stamped at its arrival on the source's clock, estimated from
 /// the last mice row received: t = t_row + speed (arrival - its arrival), and
 /// kept after the last mice row handed out. Rows after the last mice row are
-/// not handed out (a stream ends with its mice).
+/// not handed out (a stream ends with its mice). The reader is told the
+/// source's clock at each mice row (StreamLineReader::set_source_clock), so
+/// that it refuses a t far ahead of it.
 class LiveRunSource final : public RunSource {
  public:
   /// `where` names the source in messages; `stop`, polled before each row,
@@ -104,6 +106,12 @@ class LiveRunSource final : public RunSource {
   /// Stream rows dropped: a t before its stream's previous row's (a line
   /// without t stamped after a line whose t was later).
   std::size_t dropped() const { return dropped_; }
+  /// Rows of one stream that may wait for their mice row (held, not yet
+  /// handed out): a stream line is at most kMaxStreamLead ahead, so this
+  /// holds a minute of a 1 kHz stream.
+  static constexpr std::size_t kMaxHeldRows = 65536;
+  /// Stream rows dropped because kMaxHeldRows of their stream were held.
+  std::size_t overflow() const { return overflow_; }
   /// The streams' rows handed out, per kind.
   struct Streamed {
     std::size_t wheels = 0, imu = 0, fixes = 0;
@@ -146,6 +154,7 @@ class LiveRunSource final : public RunSource {
   };
   StreamOrder wheel_order_, gyro_order_, fix_order_;
   std::size_t dropped_ = 0;
+  std::size_t overflow_ = 0;
   Streamed streamed_;
   SerialReader* gyro_serial_ = nullptr;  ///< the serial device's gyro (add_gyro)
   std::deque<ImuRow> serial_gyro_;       ///< its samples, not yet handed out

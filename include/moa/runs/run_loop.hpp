@@ -53,13 +53,17 @@ struct RunCallbacks {
   /// Every step of the pipeline. The step's pointers are valid during the
   /// call only.
   std::function<void(const OdometryStep&)> on_step;
-  /// Every row the pipeline takes (a recording): wheel rows and fixes before
-  /// the pipeline sees them, mice rows once it has accepted them.
+  /// Every row the pipeline takes (a recording), once it has taken it.
   std::function<void(const InputRow&)> on_row;
   /// Set for a live input: a mice row the pipeline refuses (a saturated
   /// record, a time out of order, impossible counts) is handed here with the
   /// reason and skipped, not recorded, instead of ending the run.
   std::function<void(const SensorRow&, const std::string& why)> on_refused;
+  /// Set for a live input: a wheel row, gyro row or camera fix the pipeline
+  /// cannot hold (a burst: its stream's ring of rows kept ahead of the mice
+  /// rows is full) is handed here with the reason and skipped, not
+  /// recorded, instead of ending the run.
+  std::function<void(const InputRow&, const std::string& why)> on_stream_full;
   /// Every 4096 mice rows: the mice rows so far and the last one's time (s).
   std::function<void(std::size_t rows, double t)> progress;
   /// A condition the run survives, one line without a newline, as it happens

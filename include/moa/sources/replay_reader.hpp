@@ -25,7 +25,12 @@
 namespace moa::io {
 
 struct ReplayOptions {
-  /// Playback speed: 1 is real time, 2 twice as fast. Positive and finite.
+  /// The playback speeds allowed: a day's log (kMaxSpan) at the slowest
+  /// plays in 2.7 years of wall time, still a count of nanoseconds.
+  static constexpr double kMinSpeed = 1e-3;
+  static constexpr double kMaxSpeed = 1e6;
+  /// Playback speed: 1 is real time, 2 twice as fast; within
+  /// [kMinSpeed, kMaxSpeed].
   double speed = 1.0;
   /// nullopt when usable, else "speed: must be ..., is ..." (core/options_check.hpp).
   OptionCheck validate() const;

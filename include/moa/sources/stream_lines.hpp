@@ -25,7 +25,12 @@
 // maps it onto the source's clock as it maps arrivals.
 //
 // A bad line is counted by kind and never stops the run; the first line of
-// each kind is kept for the message.
+// each kind is kept for the message. A given t beyond +-kMaxTime (4e9 s, the
+// logs' bound) is bad, and so is one more than kMaxStreamLead ahead of the
+// source's clock at its arrival (once the run has told the reader that
+// clock): it is never taken as the stream's time. At most kMaxQueuedLines
+// good lines wait for the run; beyond that, lines are dropped and counted
+// (a file waits instead: it is read as the run takes its lines).
 #pragma once
 
 #include <array>
@@ -61,19 +66,44 @@ struct StreamRow {
 };
 
 enum class StreamLineError : std::uint8_t {
-  kUnknownStream,  ///< the stream is not "wheels", "imu" or "camera"
-  kFieldCount,     ///< too few or too many fields for the stream
-  kNotANumber,     ///< a field that is not a finite number (or empty where it may not be)
-  kTimeBackwards,  ///< t earlier than the stream's previous line's
-  kTooLong,        ///< longer than kMaxStreamLine bytes
-  kBadJson,        ///< starts with '{' but is no flat JSON object of known keys
+  kUnknownStream,   ///< the stream is not "wheels", "imu" or "camera"
+  kFieldCount,      ///< too few or too many fields for the stream
+  kNotANumber,      ///< a field that is not a finite number (or empty where it may not be)
+  kTimeBackwards,   ///< t earlier than the stream's previous line's
+  kTooLong,         ///< longer than kMaxStreamLine bytes
+  kBadJson,         ///< starts with '{' but is no flat JSON object of known keys
+  kTimeOutOfRange,  ///< |t| > kMaxTime (4e9 s), the bound of every log's times
+  kTimeAhead,       ///< t more than kMaxStreamLead ahead of the source's clock at its arrival
+  kImplausible,     ///< a value beyond core/plausible.hpp's bounds (a corrupt value)
 };
-inline constexpr std::size_t kStreamLineErrors = 6;
+inline constexpr std::size_t kStreamLineErrors = 9;
 /// "unknown stream (not wheels, imu or camera)", ...
 const char* describe(StreamLineError error);
 
 /// Longest line taken (bytes, without the newline); longer ones are bad.
 inline constexpr std::size_t kMaxStreamLine = 1024;
+
+/// s of the source's clock: how far ahead of it a line's t may be when the
+/// line arrives. A robot's program stamps its lines at most a latency
+/// ahead; a line further ahead (a clock of its own, a typo) would be held
+/// for a mice row that never comes and take every later line with it.
+inline constexpr double kMaxStreamLead = 60.0;
+
+/// Good lines that may wait for the run to take them (StreamLineReader).
+inline constexpr std::size_t kMaxQueuedLines = 65536;
+
+/// Bytes without a line end after which an input is taken for no stream of
+/// lines (/dev/zero, a binary file) and read no further.
+inline constexpr std::size_t kMaxStreamUnended = std::size_t{1} << 20;
+
+/// The live source's clock as the run last saw it: the time `t` (s) of a
+/// mice row received at `arrival`, running at `speed` seconds of the source
+/// per second of wall time (a replay's --speed; 1 for devices).
+struct SourceClock {
+  double t = 0.0;
+  std::chrono::steady_clock::time_point arrival;
+  double speed = 1.0;
+};
 
 /// Parses one line (without its newline): the row; std::monostate for a
 /// blank or comment line; the error for a bad one. Times are not checked for
@@ -90,20 +120,32 @@ class StreamLineReader {
     std::size_t wheels = 0, fixes = 0, imu = 0;          ///< good lines
     std::array<std::size_t, kStreamLineErrors> bad{};    ///< bad lines by kind
     std::array<std::string, kStreamLineErrors> first{};  ///< the first bad line of each kind
+    /// Good lines dropped: kMaxQueuedLines were waiting for the run (a
+    /// burst or a flood faster than the run takes them).
+    std::size_t overflow = 0;
+    /// The input sent kMaxStreamUnended bytes without a line end: a line
+    /// too long was counted, and nothing more is read.
+    bool not_lines = false;
     std::size_t bad_total() const;
   };
 
   /// `path`: a file or FIFO, "-" for standard input, or "udp:[HOST:]PORT"
   /// (HOST defaults to 127.0.0.1) to listen on. Throws io::Error when it
   /// cannot be opened (a FIFO is opened on the thread: the run does not
-  /// wait for its writer) or the port cannot be bound.
-  explicit StreamLineReader(const std::string& path, StreamClock clock = StreamClock::kSource);
+  /// wait for its writer) or the port cannot be bound. `source`: the
+  /// source's clock from the start (set_source_clock), so that no line is
+  /// read before it is known.
+  explicit StreamLineReader(const std::string& path, StreamClock clock = StreamClock::kSource,
+                            std::optional<SourceClock> source = std::nullopt);
   ~StreamLineReader();
   StreamLineReader(const StreamLineReader&) = delete;
   StreamLineReader& operator=(const StreamLineReader&) = delete;
 
   /// The good lines arrived since the last call, in arrival order.
   void take(std::vector<StreamRow>& out);
+  /// The source's clock, against which a line's t is checked from now on
+  /// (kTimeAhead); until the first call, no t is too far ahead.
+  void set_source_clock(const SourceClock& clock);
   /// A bad line of a kind not seen before, once each: (kind, the line).
   std::optional<std::pair<StreamLineError, std::string>> take_new_error();
   Stats stats() const;
