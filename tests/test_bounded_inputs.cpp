@@ -414,14 +414,15 @@ TEST(BoundedInputs, AFullDiskUnderLiveRecordKeepsTheOtherOutputs) {
   EXPECT_EQ(test::read_text(dir / "code"), "1\n");
   const std::string err = test::read_text(dir / "err");
   const std::string mice = (full / "rec" / "mice.csv").string();
-  const std::string said = "moa live: warning: --record " + (full / "rec").string() + ": " + mice +
-                           ": cannot write (No space left on device): the recording stops here";
+  // The reason is the system's (ENOSPC, or EIO where the failed write is
+  // reported at the flush): the message names the file and stops there.
+  const std::string said =
+      "moa live: warning: --record " + (full / "rec").string() + ": " + mice + ": cannot write (";
   const auto first = err.find(said);
-  EXPECT_NE(first, std::string::npos) << err;
+  ASSERT_NE(first, std::string::npos) << err;
+  EXPECT_NE(err.find("): the recording stops here", first), std::string::npos) << err;
   EXPECT_EQ(err.find(said, first + 1), std::string::npos) << "said once: " << err;
-  EXPECT_NE(err.find("moa live: error: " + mice + ": cannot write (No space left on device)\n"),
-            std::string::npos)
-      << err;
+  EXPECT_NE(err.find("moa live: error: " + mice + ": cannot write ("), std::string::npos) << err;
   ASSERT_TRUE(fs::exists(out)) << err;
   const fs::path offline = dir / "offline.csv";
   const auto o = test::run_moa("odometry --config " + kExample.string() + "/robot.yaml --log " +
