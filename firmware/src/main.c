@@ -262,7 +262,6 @@ static void flush_window(void) {
   if (frames_in_window > 0) {
     close_window();
     send_ready();
-    if (status_changed) send_status();
   }
 }
 
