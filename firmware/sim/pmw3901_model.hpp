@@ -23,6 +23,15 @@ struct Pmw3901Timing {
   double t_power_up = 1000.0;  ///< Power_Up_Reset to the first access
 };
 
+/// What the chip answers for registers 0x67, 0x70, 0x71, 0x73 of bank
+/// 0x0E (the reads of the init sequence).
+struct Pmw3901Trim {
+  std::uint8_t r67 = 0x80;
+  std::uint8_t r70 = 20;
+  std::uint8_t r71 = 100;
+  std::uint8_t r73 = 0x00;
+};
+
 class Pmw3901Model : public SpiChip {
  public:
   static constexpr std::uint8_t kProductId = 0x49;
@@ -34,14 +43,7 @@ class Pmw3901Model : public SpiChip {
     double t_us;
   };
 
-  /// `trim`: what the chip answers for registers 0x67, 0x70, 0x71, 0x73 of
-  /// bank 0x0E (the reads of the init sequence).
-  struct Trim {
-    std::uint8_t r67 = 0x80;
-    std::uint8_t r70 = 20;
-    std::uint8_t r71 = 100;
-    std::uint8_t r73 = 0x00;
-  };
+  using Trim = Pmw3901Trim;
 
   explicit Pmw3901Model(std::vector<MotionFrame> script, Trim trim = {},
                         std::uint8_t product_id = kProductId, std::uint8_t idle_squal = 100);
