@@ -117,7 +117,8 @@ void expect_sensor_matches_script(PixartSession& s, std::size_t i,
   const auto shutters = s.payloads(kTypeShutter);
   std::size_t previous = 0;
   std::size_t d = 0;
-  for (const serial::Data& data : s.data()) {
+  const std::vector<serial::Data> frames = s.data();
+  for (const serial::Data& data : frames) {
     SCOPED_TRACE("sequence " + std::to_string(data.sequence) + ", sensor " + std::to_string(i));
     const std::size_t now = s.reads_through(i, data.timestamp);
     const Expected want = expected_record(script, previous, now, flow);
@@ -126,7 +127,9 @@ void expect_sensor_matches_script(PixartSession& s, std::size_t i,
     EXPECT_EQ(data.sensors[i].dy, want.counts.dy);
     EXPECT_EQ(data.sensors[i].squal, want.counts.squal);
     EXPECT_EQ(data.sensors[i].flags, want.counts.flags);
-    // SHUTTER: type, u16 sequence, N, then N x u16 (docs/serial-protocol.md).
+    // SHUTTER: type, u16 sequence, N, then N x u16 (docs/serial-protocol.md);
+    // the last DATA frame's may still be on its way.
+    if (d == shutters.size() && &data == &frames.back()) break;
     ASSERT_LT(d, shutters.size());
     const auto& p = shutters[d++];
     ASSERT_EQ(p.size(), 4u + 2u * static_cast<std::size_t>(s.build().sensors));
@@ -497,7 +500,9 @@ TEST_P(FirmwareFlow, InitSequenceIsPixArtsAndBurstsFollowTheQualityRule) {
   s.send(serial::SetCpi{1600});
   ASSERT_TRUE(s.run_until([&] { return s.hellos().size() >= 2; }, 50000.0));
   EXPECT_EQ(s.hellos()[1].cpi, 0);
-  for (const SensorState& st : s.statuses()[0]) EXPECT_EQ(st.state, kOk);
+  const auto statuses = s.statuses();
+  ASSERT_FALSE(statuses.empty());
+  for (const SensorState& st : statuses[0]) EXPECT_EQ(st.state, kOk);
   EXPECT_EQ(s.stats().corrupt, 0u);
   expect_no_violations(s);
 }
