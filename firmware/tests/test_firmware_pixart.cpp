@@ -200,6 +200,11 @@ TEST(FirmwarePmw3360, UploadsTheSromChecksItAndStreamsSixteenBitCounts) {
   const auto statuses = s.statuses();
   ASSERT_FALSE(statuses.empty());
   for (const SensorState& st : statuses[0]) EXPECT_EQ(st.state, kOk);
+  // All reads of a frame within config.h's budget for the PMW33xx: 89 us
+  // of bus and 1000 cycles of code a sensor (151.5 us at 16 MHz), so within
+  // the 1 ms frame.
+  EXPECT_LT(s.bench().longest_frame_read_us(), 4 * (89.0 + 1000.0 / 16.0));
+  RecordProperty("longest_frame_read_us", std::to_string(s.bench().longest_frame_read_us()));
   // The host decoder skipped the new types as unknown, none as corrupt.
   EXPECT_EQ(s.stats().corrupt, 0u);
   EXPECT_EQ(s.stats().unknown, statuses.size() + s.payloads(kTypeShutter).size());
@@ -491,6 +496,9 @@ TEST_P(FirmwareFlow, InitSequenceIsPixArtsAndBurstsFollowTheQualityRule) {
     expect_sequence(*s.bench().model<Pmw3901Model>(i), expected_sequence(paa5100, trims[i]));
     expect_sensor_matches_script(s, i, scripts[i], true);
   }
+  // Reads within config.h's budget: 104 us of bus and 900 cycles a sensor.
+  EXPECT_LT(s.bench().longest_frame_read_us(), 4 * (104.0 + 900.0 / 16.0));
+  RecordProperty("longest_frame_read_us", std::to_string(s.bench().longest_frame_read_us()));
   const auto data = s.data();
   EXPECT_EQ(data[12].sensors[0].flags, kFlagRejected);
   EXPECT_EQ(data[22].sensors[0].flags, 0);
