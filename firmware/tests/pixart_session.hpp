@@ -1,7 +1,7 @@
 // The firmware in simavr with PixArt chip models on its bus, its UART
 // decoded two ways: by moa's host decoder (which skips the frame types it
-// does not know, as an old reader would) and by a small COBS + CRC splitter
-// of the test's own, which gives the STATUS and SHUTTER payloads.
+// does not know, SHUTTER, as an old reader would) and by a small COBS + CRC
+// splitter of the test's own, which gives the STATUS and SHUTTER payloads.
 #pragma once
 
 #include <algorithm>
@@ -88,6 +88,7 @@ class PixartSession {
 
   std::vector<serial::Data> data() const { return of_type<serial::Data>(); }
   std::vector<serial::Hello> hellos() const { return of_type<serial::Hello>(); }
+  std::vector<serial::Status> host_statuses() const { return of_type<serial::Status>(); }
   const serial::Decoder::Stats& stats() const { return decoder_.stats(); }
   AvrBench& bench() { return bench_; }
   const FirmwareBuild& build() const { return build_; }
