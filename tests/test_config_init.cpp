@@ -146,7 +146,7 @@ TEST(ConfigInit, PixArtPresetsCarryTheirDataSheetFigures) {
   std::string text = contents(config);
   EXPECT_THAT(text, HasSubstr("# PMW3360, from its data sheet:"));
   EXPECT_THAT(text, HasSubstr("resolution 100 to 12000 cpi in steps of 100"));
-  EXPECT_THAT(text, HasSubstr("rated acceleration 50 g = 490.333 m/s^2"));  // 50 x 9.80665
+  EXPECT_THAT(text, HasSubstr("rated acceleration 50 g = 490.3 m/s^2"));  // 50 x 9.80665
   EXPECT_THAT(text, HasSubstr("frame rate up to 12000 /s"));
   EXPECT_THAT(text, HasSubstr("resolution error 1 % typical"));
   EXPECT_THAT(text, HasSubstr("stops tracking when lifted 2 mm"));

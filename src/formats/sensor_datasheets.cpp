@@ -82,7 +82,7 @@ std::string datasheet_lines(const SensorDatasheet& s) {
                      s.max_flow_rate));
   }
   if (s.max_acceleration > 0.0) {
-    line(fmt::format("rated acceleration {:g} g = {:g} m/s^2", s.max_acceleration / kG,
+    line(fmt::format("rated acceleration {:g} g = {:.4g} m/s^2", s.max_acceleration / kG,
                      s.max_acceleration));
   }
   if (s.preset.frame_rate > 0.0) line(fmt::format("frame rate up to {:g} /s", s.preset.frame_rate));
