@@ -2,7 +2,8 @@
  * PMW3360, PMW3389, PMW3901 or PAA5100, one kind per build) (and the z rate of
  * an MPU-6050 gyro, if one answers) once per frame tick, sums K frames per
  * sensor (Kim & Lee's downsampler, their Section V) and streams one DATA
- * frame per window, followed by a GYRO frame for the same window, over the
+ * frame per window, followed by the window's SHUTTER frame (PixArt chips)
+ * and GYRO frame, and a STATUS frame after each HELLO, over the
  * UART in moa serial protocol v1 (docs/serial-protocol.md).
  *
  * Two contexts share the work. The frame interrupt (clock.h) reads the
