@@ -130,6 +130,69 @@ TEST(ConfigInit, NumbersAreWrittenAsAPersonWouldWriteThem) {
   EXPECT_NEAR(io::read_config(config).array[0].max_speed.value(), 14 * 0.0254, 1e-15);
 }
 
+// The PixArt presets: the config takes the data sheet's default cpi and
+// rated speed, and its comments carry the figures a person needs; a cpi the
+// part cannot be set to, and a flow chip without --cpi, are refused.
+TEST(ConfigInit, PixArtPresetsCarryTheirDataSheetFigures) {
+  const auto dir = test::scratch_dir("config_init_pixart");
+  const fs::path config = dir / "robot.yaml";
+  const std::string polygon = "config init --layout polygon --sensors 4 --radius 0.1 --force --out " +
+                              config.string();
+  auto r = test::run_moa(polygon + " --preset PMW3360");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  io::RobotConfig read = io::read_config(config);
+  EXPECT_EQ(read.array[0].cpi, 1600.0);
+  EXPECT_NEAR(*read.array[0].max_speed, 250 * 0.0254, 1e-12);  // 250 in/s
+  std::string text = contents(config);
+  EXPECT_THAT(text, HasSubstr("# PMW3360, from its data sheet:"));
+  EXPECT_THAT(text, HasSubstr("resolution 100 to 12000 cpi in steps of 100"));
+  EXPECT_THAT(text, HasSubstr("rated acceleration 50 g = 490.3 m/s^2"));  // 50 x 9.80665
+  EXPECT_THAT(text, HasSubstr("frame rate up to 12000 /s"));
+  EXPECT_THAT(text, HasSubstr("resolution error 1 % typical"));
+  EXPECT_THAT(text, HasSubstr("stops tracking when lifted 2 mm"));
+
+  r = test::run_moa(polygon + " --preset PMW3389 --cpi 16000");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  read = io::read_config(config);
+  EXPECT_EQ(read.array[0].cpi, 16000.0);
+  EXPECT_NEAR(*read.array[0].max_speed, 400 * 0.0254, 1e-12);  // 400 in/s
+  EXPECT_THAT(contents(config), HasSubstr("resolution 50 to 16000 cpi in steps of 50"));
+
+  r = test::run_moa(polygon + " --preset PAA5100 --cpi 2500");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  read = io::read_config(config);
+  EXPECT_EQ(read.array[0].cpi, 2500.0);
+  EXPECT_FALSE(read.array[0].max_speed.has_value());  // not rated as a speed
+  text = contents(config);
+  EXPECT_THAT(text, HasSubstr("working height 15 mm to 35 mm"));
+  EXPECT_THAT(text, HasSubstr("resolution: none to set"));
+
+  r = test::run_moa(polygon + " --preset PMW3901 --cpi 1000");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  text = contents(config);
+  EXPECT_THAT(text, HasSubstr("working height 80 mm and up"));
+  EXPECT_THAT(text, HasSubstr("rated flow 7.4 rad/s"));
+
+  const struct {
+    std::string args;
+    std::string message;
+  } bad[] = {
+      {polygon + " --preset PMW3360 --cpi 150",
+       "--cpi 150: the PMW3360 is set from 100 to 12000 cpi in steps of 100"},
+      {polygon + " --preset PMW3360 --cpi 12100", "--cpi 12100: the PMW3360"},
+      {polygon + " --preset PMW3389 --cpi 16025", "--cpi 16025: the PMW3389"},
+      {polygon + " --preset ADNS-3080 --cpi 800", "--cpi 800: the ADNS-3080 is set from 400"},
+      {polygon + " --preset PAA5100", "--preset PAA5100: a flow chip has no resolution to set"},
+  };
+  for (const auto& c : bad) {
+    fs::remove(config);
+    r = test::run_moa(c.args);
+    EXPECT_NE(r.exit_code, 0) << c.args;
+    EXPECT_THAT(r.err, HasSubstr(c.message)) << c.args;
+    EXPECT_FALSE(fs::exists(config)) << c.args;
+  }
+}
+
 TEST(ConfigInit, RefusesToOverwriteWithoutForce) {
   const auto dir = test::scratch_dir("config_init_force");
   const fs::path config = dir / "robot.yaml";

@@ -325,6 +325,40 @@ TEST(Decoder, GyroFrameRoundTripsItsFieldsAndRate) {
   EXPECT_NEAR(got.rate(), -123456.789 / 65.5 * 3.14159265358979 / 180.0, 1e-9);
 }
 
+// STATUS (0x04): type, N, then N x (state, detail), as documented.
+TEST(Decoder, StatusFrameHasTheDocumentedLayoutAndRoundTrips) {
+  Status st;
+  st.n = 3;
+  st.sensors[0] = {0, 0};
+  st.sensors[1] = {2, 0x17};
+  st.sensors[2] = {5, 0};
+  const Bytes payload{0x04, 3, 0, 0, 2, 0x17, 5, 0};
+  Bytes want = payload;
+  const std::uint16_t crc = crc16(payload);
+  want.push_back(static_cast<std::uint8_t>(crc & 0xFF));
+  want.push_back(static_cast<std::uint8_t>(crc >> 8));
+  Bytes wire = cobs_encode(want);
+  wire.push_back(0);
+  EXPECT_EQ(encode(st), wire);
+  Decoder decoder;
+  const Fed fed = feed(decoder, concat({wire, frame_of({0x04, 2, 0, 0, 1}),
+                                        frame_of({0x04, 0}), frame_of({0x04, 17})}));
+  ASSERT_EQ(fed.messages.size(), 1u);
+  const auto& got = std::get<Status>(fed.messages[0]);
+  ASSERT_EQ(got.n, 3);
+  EXPECT_EQ(got.sensors[1].state, 2);
+  EXPECT_EQ(got.sensors[1].detail, 0x17);
+  EXPECT_EQ(got.sensors[2].state, 5);
+  // A record cut short, and N of 0 or past 16: dropped with their reason.
+  ASSERT_EQ(fed.errors.size(), 3u);
+  EXPECT_EQ(fed.errors[0], FrameError::kBadLength);
+  EXPECT_EQ(fed.errors[1], FrameError::kBadField);
+  EXPECT_EQ(fed.errors[2], FrameError::kBadField);
+  EXPECT_EQ(describe_sensor_state(got.sensors[1]), "another part (product ID 0x17), left alone");
+  EXPECT_EQ(describe_sensor_state(SensorStatus{4, 0}),
+            "SROM refused (SROM_ID 0x00): the wrong image for this chip, or the CRC test failed");
+}
+
 TEST(Decoder, OldReaderSkipsAFrameOfANewTypeBetweenDataFrames) {
   // What a reader that does not know a type sees: a good frame it skips,
   // the DATA frames around it whole, nothing counted corrupt.

@@ -583,6 +583,45 @@ TEST(SerialReader, AHelloCpiUnlikeTheConfigsIsWarnedOnce) {
   EXPECT_EQ(said, 1u);
 }
 
+// STATUS frames: each sensor that is not ok is said once, by its name and
+// chip select, with the reason; the rows of the others go on.
+TEST(SerialReader, SensorStatesOtherThanOkAreWarnedOncePerChange) {
+  test::PseudoTerminal pty;
+  std::vector<std::string> warnings;
+  std::atomic<int> seen{0};
+  SerialReader reader(pty.device(), two_sensors(), fast_options(), collecting(warnings));
+  std::thread device([&] {
+    ASSERT_TRUE(pty.wait_for_hello_request(5.0));
+    pty.write(serial::encode(hello_ba()));
+    serial::Status st;
+    st.n = 2;
+    st.sensors[1] = {2, 0x47};
+    pty.write(serial::encode(st));
+    pty.write(serial::encode(st));  // the same again: nothing new to say
+    pty.write(serial::encode(data(0, 10'000u, 1, 1)));
+    st.sensors[1] = {5, 0};
+    pty.write(serial::encode(st));
+    pty.write(serial::encode(data(1, 20'000u, 1, 1)));
+    wait_for(seen, 4);
+    pty.close_master();
+  });
+  reader.start_time();
+  const auto rows = read_rows(reader, seen);
+  device.join();
+  EXPECT_EQ(rows.size(), 4u);
+  std::vector<std::string> said;
+  for (const auto& w : warnings) {
+    if (w.find("chip select") != std::string::npos) said.push_back(w);
+  }
+  ASSERT_EQ(said.size(), 2u);
+  EXPECT_EQ(said[0], pty.device() +
+                         ": sensor 'a' (chip select 2): another part (product ID 0x47), left alone");
+  EXPECT_EQ(said[1], pty.device() +
+                         ": sensor 'a' (chip select 2): stopped answering; not read until the "
+                         "device restarts");
+  EXPECT_EQ(reader.stats().unknown, 0u);
+}
+
 TEST(SerialReader, SilentDeviceTimesOutAfterAskingForHello) {
   test::PseudoTerminal pty;
   SerialOptions options = fast_options();

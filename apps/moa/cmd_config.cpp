@@ -15,6 +15,7 @@
 #include "moa/formats/config_init.hpp"
 #include "moa/formats/csv.hpp"
 #include "moa/formats/error.hpp"
+#include "moa/formats/sensor_datasheets.hpp"
 
 namespace moa::cli {
 namespace {
@@ -71,24 +72,36 @@ void add_sensor(const std::string& spec, const SensorMount& prototype, io::Robot
 int run_config_init(const ConfigInitArgs& a) {
   SensorMount prototype;
   std::string sensor_kind;
+  const io::SensorDatasheet* sheet = nullptr;
   if (!a.preset.empty()) {
-    const auto preset = io::find_sensor_preset(a.preset);
-    if (!preset) {
+    sheet = io::find_sensor_datasheet(a.preset);
+    if (sheet == nullptr) {
       throw io::Error(
           fmt::format("--preset {}: unknown (known: {})", a.preset, io::sensor_preset_names()));
     }
-    prototype.cpi = preset->cpi;
-    prototype.max_speed = preset->max_speed;
-    sensor_kind = fmt::format("{} ", preset->name);
+    prototype.cpi = sheet->preset.cpi;
+    if (sheet->preset.max_speed > 0.0) prototype.max_speed = sheet->preset.max_speed;
+    sensor_kind = fmt::format("{} ", sheet->preset.name);
   }
   if (a.cpi) {
     if (!(std::isfinite(*a.cpi) && *a.cpi > 0.0)) {
       throw io::Error(
           fmt::format("--cpi {}: must be a positive number of counts per inch", *a.cpi));
     }
+    if (sheet != nullptr && sheet->cpi_step > 0.0 && !io::cpi_settable(*sheet, *a.cpi)) {
+      throw io::Error(fmt::format("--cpi {}: the {} is set from {:g} to {:g} cpi in steps of {:g}",
+                                  *a.cpi, sheet->preset.name, sheet->cpi_min, sheet->cpi_max,
+                                  sheet->cpi_step));
+    }
     prototype.cpi = *a.cpi;
   } else if (a.preset.empty()) {
     throw io::Error("give --cpi (the sensors' counts per inch) or --preset");
+  } else if (sheet->cpi_step <= 0.0) {
+    throw io::Error(fmt::format(
+        "--preset {}: a flow chip has no resolution to set, its counts per inch depend on its "
+        "height over the floor: push the robot a measured distance, divide the counts by it "
+        "(docs/hardware.md) and give --cpi",
+        sheet->preset.name));
   }
 
   io::RobotConfig config;
@@ -134,6 +147,7 @@ int run_config_init(const ConfigInitArgs& a) {
   }
   if (std::filesystem::is_directory(out, ec))
     throw io::Error(fmt::format("{}: is a directory", a.out));
+  if (sheet != nullptr) title += "\n" + io::datasheet_lines(*sheet);
   io::write_commented_config(config, "robot.yaml written by moa config init:\n" + title, out);
   fmt::print(
       "moa config init: {} sensors written to {}; edit it, then calibrate "

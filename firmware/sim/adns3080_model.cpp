@@ -16,23 +16,11 @@ constexpr std::uint8_t kMotionOvf = 0x10;
 constexpr std::uint8_t kMotionRes = 0x01;
 constexpr std::uint8_t kConfigRes1600 = 0x10;
 
-std::string hex(std::uint8_t value) {
-  char text[8];
-  std::snprintf(text, sizeof text, "0x%02x", value);
-  return text;
-}
-
 }  // namespace
 
 Adns3080Model::Adns3080Model(std::vector<MotionFrame> script, std::uint8_t product_id,
                              std::uint8_t idle_squal)
     : script_(std::move(script)), product_id_(product_id), idle_squal_(idle_squal) {}
-
-void Adns3080Model::violation(double t_us, const std::string& what) {
-  char at[32];
-  std::snprintf(at, sizeof at, "t=%.2f us: ", t_us);
-  violations_.push_back(at + what);
-}
 
 void Adns3080Model::reset_pin(bool high, double t_us) {
   if (high == reset_high_) return;

@@ -8,15 +8,9 @@
 #include <string>
 #include <vector>
 
-namespace moa::firmware_sim {
+#include "spi_chip.hpp"
 
-/// What one motion burst reports (one sensor frame).
-struct MotionFrame {
-  std::int8_t dx = 0;
-  std::int8_t dy = 0;
-  std::uint8_t squal = 100;
-  bool overflow = false;  ///< Motion register bit 4 (OVF)
-};
+namespace moa::firmware_sim {
 
 /// ADNS-3080 serial port timing (Avago data sheet), microseconds.
 struct Adns3080Timing {
@@ -27,7 +21,8 @@ struct Adns3080Timing {
   double t_reset = 10.0;     ///< shortest RESET pulse
 };
 
-class Adns3080Model {
+/// Its MotionFrame counts must fit 8 bits (Delta_X, Delta_Y).
+class Adns3080Model : public SpiChip {
  public:
   static constexpr std::uint8_t kProductId = 0x17;
   static constexpr std::uint8_t kConfigurationReset = 0x09;
@@ -38,26 +33,16 @@ class Adns3080Model {
 
   /// RESET pin level (active high); a falling edge after a long enough
   /// pulse resets the registers.
-  void reset_pin(bool high, double t_us);
-  /// NCS pin level (active low).
-  void ncs_pin(bool high, double t_us);
-  /// One SPI byte while selected, clocked from `start_us` to `end_us`:
-  /// `mosi` from the master; returns what the sensor shifted out meanwhile.
-  std::uint8_t exchange(std::uint8_t mosi, double start_us, double end_us);
+  void reset_pin(bool high, double t_us) override;
+  void ncs_pin(bool high, double t_us) override;
+  std::uint8_t exchange(std::uint8_t mosi, double start_us, double end_us) override;
 
-  std::size_t bursts() const { return burst_times_.size(); }
-  /// Start of the address byte of each burst, microseconds.
-  const std::vector<double>& burst_times() const { return burst_times_; }
   std::uint8_t configuration() const { return configuration_; }
-  std::size_t accesses() const { return accesses_; }
-  /// Data-sheet rules the master broke, one line each (empty when none).
-  const std::vector<std::string>& violations() const { return violations_; }
 
  private:
   enum class State { kAddress, kReadData, kWriteData, kBurst };
 
   std::uint8_t read_register(std::uint8_t address) const;
-  void violation(double t_us, const std::string& what);
 
   std::vector<MotionFrame> script_;
   std::uint8_t product_id_;
@@ -78,9 +63,6 @@ class Adns3080Model {
   std::uint8_t configuration_ = kConfigurationReset;
   std::vector<std::uint8_t> burst_;
   std::size_t burst_at_ = 0;
-  std::vector<double> burst_times_;
-  std::size_t accesses_ = 0;
-  std::vector<std::string> violations_;
 };
 
 }  // namespace moa::firmware_sim

@@ -53,7 +53,7 @@ constexpr std::uint8_t kMstr = 1u << 4;
 constexpr std::uint8_t kCpol = 1u << 3;
 constexpr std::uint8_t kCpha = 1u << 2;
 constexpr std::uint8_t kSpi2x = 1u << 0;
-constexpr double kMaxSclkHz = 2e6;  // ADNS-3080 f_SCLK
+constexpr double kMaxSclkHz = 2e6;  // f_SCLK of the ADNS-3080, PMW3360/3389, PMW3901/PAA5100
 // Chip-select gaps inside one frame's reads are t_BEXIT plus the summing
 // of one sensor (about 20 us at 8 MHz); frames are hundreds of
 // microseconds apart.
@@ -77,7 +77,7 @@ avr_irq_t* get_irq(avr_t* avr, std::uint32_t ioctl, int index, const char* what)
 
 }  // namespace
 
-AvrBench::AvrBench(const FirmwareBuild& build, std::vector<std::unique_ptr<Adns3080Model>> sensors)
+AvrBench::AvrBench(const FirmwareBuild& build, std::vector<std::unique_ptr<SpiChip>> sensors)
     : build_(build), sensors_(std::move(sensors)) {
   if (sensors_.size() > kMaxChipSelects) throw std::runtime_error("more sensors than chip selects");
   for (const McuRegisters& r : kMcuRegisters) {
@@ -341,7 +341,7 @@ void AvrBench::pin_changed(int index, bool high) {
   }
   if (cs_high_[index] == high) return;
   cs_high_[index] = high;
-  Adns3080Model* model = sensor(static_cast<std::size_t>(index));
+  SpiChip* model = sensor(static_cast<std::size_t>(index));
   if (!high) {
     if (t - last_deselect_us_ > kFrameGapUs) span_start_us_ = t;
     bursts_at_select_ = model != nullptr ? model->bursts() : 0;

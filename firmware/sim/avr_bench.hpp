@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "adns3080_model.hpp"
+#include "spi_chip.hpp"
 #include "mpu6050_model.hpp"
 
 struct avr_t;
@@ -30,6 +30,7 @@ struct FirmwareBuild {
   int frame_hz = 0;
   int cpi = 0;
   std::uint32_t baud = 0;
+  std::string sensor;  ///< ADNS3080, PMW3360, PMW3389, PMW3901 or PAA5100
 };
 
 /// The documented pinout (docs/firmware.md): chip select of sensor i.
@@ -54,7 +55,7 @@ class AvrBench {
   /// select unconnected (MISO then reads 0xFF, as an undriven line with a
   /// pull-up would).
   /// Throws std::runtime_error if the ELF or the MCU cannot be loaded.
-  AvrBench(const FirmwareBuild& build, std::vector<std::unique_ptr<Adns3080Model>> sensors);
+  AvrBench(const FirmwareBuild& build, std::vector<std::unique_ptr<SpiChip>> sensors);
   ~AvrBench();
   AvrBench(const AvrBench&) = delete;
   AvrBench& operator=(const AvrBench&) = delete;
@@ -68,7 +69,12 @@ class AvrBench {
   /// Everything the firmware sent on TXD so far.
   const std::vector<UartByte>& uart() const { return uart_; }
 
-  Adns3080Model* sensor(std::size_t i) { return i < sensors_.size() ? sensors_[i].get() : nullptr; }
+  SpiChip* sensor(std::size_t i) { return i < sensors_.size() ? sensors_[i].get() : nullptr; }
+  /// The chip on select i as the model it is, or null.
+  template <class Model>
+  Model* model(std::size_t i) {
+    return dynamic_cast<Model*>(sensor(i));
+  }
   /// Puts `gyro` on the TWI bus (SDA PC4, SCL PC5); before the first
   /// run_until_us, so that the firmware finds it at start. Without one the
   /// bus has no device: every address goes unacknowledged.
@@ -114,7 +120,7 @@ class AvrBench {
   std::uint8_t spi_mosi_ = 0;
   double spi_start_us_ = 0.0;
   avr_irq_t* uart_in_ = nullptr;
-  std::vector<std::unique_ptr<Adns3080Model>> sensors_;
+  std::vector<std::unique_ptr<SpiChip>> sensors_;
   std::unique_ptr<Mpu6050Model> gyro_;
   avr_irq_t* twi_in_ = nullptr;
   bool twi_after_address_write_ = false;  ///< the last TWI step sent SLA+W

@@ -1,7 +1,9 @@
-/* moa acquisition firmware: reads N ADNS-3080 sensors (and the z rate of
+/* moa acquisition firmware: reads N motion sensors (sensor.h: ADNS-3080,
+ * PMW3360, PMW3389, PMW3901 or PAA5100, one kind per build) (and the z rate of
  * an MPU-6050 gyro, if one answers) once per frame tick, sums K frames per
  * sensor (Kim & Lee's downsampler, their Section V) and streams one DATA
- * frame per window, followed by a GYRO frame for the same window, over the
+ * frame per window, followed by the window's SHUTTER frame (PixArt chips)
+ * and GYRO frame, and a STATUS frame after each HELLO, over the
  * UART in moa serial protocol v1 (docs/serial-protocol.md).
  *
  * Two contexts share the work. The frame interrupt (clock.h) reads the
@@ -17,12 +19,12 @@
 #include <util/atomic.h>
 #include <util/delay.h>
 
-#include "adns3080.h"
 #include "board.h"
 #include "clock.h"
 #include "config.h"
 #include "gyro.h"
 #include "protocol.h"
+#include "sensor.h"
 #include "spi.h"
 #include "uart.h"
 #include "window.h"
@@ -33,9 +35,13 @@
 #define HELLO_MAX (13u + 4u * N)
 #define DATA_LENGTH (8u + 6u * N)
 #define GYRO_LENGTH 12u
+#define STATUS_LENGTH (2u + 2u * N)
+#define SHUTTER_LENGTH (4u + 2u * N)
 /* Both payloads plus the CRC appended in place (GYRO's is shorter). */
 #define PAYLOAD_MAX ((HELLO_MAX > DATA_LENGTH ? HELLO_MAX : DATA_LENGTH) + 2u)
-_Static_assert(GYRO_LENGTH + 2u <= PAYLOAD_MAX, "the GYRO payload must fit the buffer");
+_Static_assert(GYRO_LENGTH + 2u <= PAYLOAD_MAX && STATUS_LENGTH + 2u <= PAYLOAD_MAX &&
+                   SHUTTER_LENGTH + 2u <= PAYLOAD_MAX,
+               "the GYRO, STATUS and SHUTTER payloads must fit the buffer");
 _Static_assert(HELLO_MAX <= MOA_PAYLOAD_MAX && DATA_LENGTH <= MOA_PAYLOAD_MAX,
                "payload longer than protocol.h allows for");
 _Static_assert(MOA_FRAME_MAX < MOA_UART_TX_SIZE, "a whole frame must fit the transmit ring");
@@ -59,7 +65,11 @@ typedef struct {
 /* Settings; written by the main loop only while reads are paused. */
 static uint16_t k = MOA_FW_K;
 static uint16_t cpi = MOA_FW_CPI;
-static bool present[N];
+/* What each chip select holds (sensor.h); only MOA_SENSOR_OK ones are read.
+ * The frame interrupt may turn OK into STOPPED (then status_changed). */
+static moa_sensor_status_t status[N];
+static volatile bool status_changed;
+static uint8_t silent_reads[N];
 /* The gyro answered at start and has not failed since: a failed read (a
  * NACK or a bus timeout) turns it off until reset, so that a broken bus
  * costs one timeout, not one per frame. */
@@ -129,10 +139,16 @@ static void close_window(void) {
 void frame_tick(uint32_t tick_time) {
   if (paused) return;
   for (uint8_t i = 0; i < N; ++i) {
-    if (!present[i]) continue;
-    adns3080_motion_t m;
-    adns3080_motion_burst(i, &m);
-    window_add(&windows[i], m.motion, m.dx, m.dy, m.squal, MOA_FW_SQUAL_FLOOR);
+    if (status[i].state != MOA_SENSOR_OK) continue;
+    moa_sample_t sample;
+    sensor_read(i, &sample);
+    window_add(&windows[i], &sample, MOA_FW_SQUAL_FLOOR);
+    if (!(sample.flags & MOA_SAMPLE_SILENT)) {
+      silent_reads[i] = 0;
+    } else if (++silent_reads[i] >= MOA_FW_SILENT_READS) {
+      status[i].state = MOA_SENSOR_STOPPED;
+      status_changed = true;
+    }
   }
 #if MOA_FW_GYRO
   /* After the mice, so that their reads keep to the clock. */
@@ -157,7 +173,7 @@ static void send_hello(void) {
   payload[2] = N;
   put_u16(payload + 3, k);
   put_u16(payload + 5, (uint16_t)MOA_FW_FRAME_HZ);
-  put_u16(payload + 7, cpi);
+  put_u16(payload + 7, cpi); /* 0 for the flow chips: not given */
   put_u32(payload + 9, MOA_FW_TICK_HZ);
   uint8_t at = 13;
   for (uint8_t i = 0; i < N; ++i) {
@@ -187,9 +203,21 @@ static void send_ready(void) {
   put_u32(payload + 3, w->time);
   payload[7] = N;
   uint8_t* record = payload + 8;
+#if MOA_FW_HAS_SHUTTER
+  uint16_t shutters[N];
+#endif
   for (uint8_t i = 0; i < N; ++i, record += 6) {
-    moa_record_t r = {0, 0, 0, MOA_FLAG_NO_SURFACE};
-    if (present[i]) r = window_record(&w->windows[i]);
+    /* A sensor that stopped keeps the records of its last windows (their
+     * reads happened), then reports no surface and the fault. */
+    moa_record_t r = {0, 0, 0, MOA_FLAG_NO_SURFACE, 0};
+    if (status[i].state == MOA_SENSOR_STOPPED) r.flags |= MOA_FLAG_FAULT;
+    if (status[i].state == MOA_SENSOR_OK || w->windows[i].min_squal != 0xFF ||
+        w->windows[i].flags != 0) {
+      r = window_record(&w->windows[i]);
+    }
+#if MOA_FW_HAS_SHUTTER
+    shutters[i] = r.shutter;
+#endif
     put_u16(record, (uint16_t)r.dx);
     put_u16(record + 2, (uint16_t)r.dy);
     record[4] = r.squal;
@@ -199,6 +227,13 @@ static void send_ready(void) {
   const uint16_t sequence = w->sequence;
   slot_state[slot] = SLOT_EMPTY;
   protocol_send(payload, DATA_LENGTH);
+#if MOA_FW_HAS_SHUTTER
+  payload[0] = MOA_TYPE_SHUTTER;
+  put_u16(payload + 1, sequence);
+  payload[3] = N;
+  for (uint8_t i = 0; i < N; ++i) put_u16(payload + 4 + 2 * i, shutters[i]);
+  protocol_send(payload, SHUTTER_LENGTH);
+#endif
   /* The rate over the same window, if the gyro gave any sample in it. */
   if (gyro.n == 0) return;
   payload[0] = MOA_TYPE_GYRO;
@@ -231,9 +266,25 @@ static void flush_window(void) {
   }
 }
 
+/* STATUS: what every chip select holds; after each HELLO and whenever a
+ * sensor's state changes. */
+static void send_status(void) {
+  status_changed = false;
+  payload[0] = MOA_TYPE_STATUS;
+  payload[1] = N;
+  for (uint8_t i = 0; i < N; ++i) {
+    payload[2 + 2 * i] = status[i].state;
+    payload[3 + 2 * i] = status[i].detail;
+  }
+  protocol_send(payload, STATUS_LENGTH);
+}
+
 static void apply_cpi(uint16_t value) {
   for (uint8_t i = 0; i < N; ++i) {
-    if (present[i]) present[i] = adns3080_set_cpi(i, value);
+    if (status[i].state == MOA_SENSOR_OK && !sensor_set_cpi(i, value)) {
+      status[i].state = MOA_SENSOR_CPI_REFUSED;
+      status_changed = true;
+    }
   }
   cpi = value;
 }
@@ -250,7 +301,7 @@ static void handle(const moa_command_t* command) {
       }
       break;
     case MOA_TYPE_SET_CPI:
-      if ((value == 400 || value == 1600) && value != cpi) {
+      if (sensor_cpi_valid(value) && value != cpi) {
         pause_reads();
         flush_window();
         apply_cpi(value);
@@ -260,9 +311,10 @@ static void handle(const moa_command_t* command) {
     default:
       break;
   }
-  /* Every command is answered with HELLO; a refused value shows as the
-   * setting left unchanged. */
+  /* Every command is answered with HELLO (and STATUS); a refused value
+   * shows as the setting left unchanged. */
   send_hello();
+  send_status();
 }
 
 /* Sleeps (idle mode: timers and UART keep running) until a closed window
@@ -270,7 +322,8 @@ static void handle(const moa_command_t* command) {
 static void wait_for_work(void) {
   /* The sleep mode bits are left at their reset value, which is idle. */
   cli();
-  while (slot_state[0] != SLOT_READY && slot_state[1] != SLOT_READY && !uart_rx_available()) {
+  while (slot_state[0] != SLOT_READY && slot_state[1] != SLOT_READY && !uart_rx_available() &&
+         !status_changed) {
     sleep_enable();
     sei();
     sleep_cpu();
@@ -283,8 +336,8 @@ static void wait_for_work(void) {
 int main(void) {
   uart_init();
   spi_init();
-  adns3080_init_bus(N);
-  for (uint8_t i = 0; i < N; ++i) present[i] = adns3080_present(i);
+  sensor_init_bus(N);
+  for (uint8_t i = 0; i < N; ++i) status[i] = sensor_start(i);
 #if MOA_FW_GYRO
   gyro_on = gyro_init();
 #endif
@@ -297,6 +350,7 @@ int main(void) {
   static const uint8_t delimiter = 0;
   uart_tx_write(&delimiter, 1);
   send_hello();
+  send_status();
   clock_start();
   resume_reads();
 
@@ -307,5 +361,6 @@ int main(void) {
       if (command_reader_push(&command_reader, uart_rx_get(), &command)) handle(&command);
     }
     send_ready();
+    if (status_changed) send_status();
   }
 }

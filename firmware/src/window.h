@@ -6,13 +6,18 @@
 
 #include <stdint.h>
 
+#include "sensor.h"
+
 #define MOA_FLAG_OVERFLOW 0x01   /* OVF seen in the window, or the sum saturated */
-#define MOA_FLAG_NO_SURFACE 0x02 /* SQUAL fell below the floor (lift) */
+#define MOA_FLAG_NO_SURFACE 0x02 /* SQUAL fell below the floor, or the chip said lift */
+#define MOA_FLAG_REJECTED 0x04   /* the sensor's quality rule refused some reads' counts */
+#define MOA_FLAG_FAULT 0x08      /* the sensor did not answer some reads (sensor.h) */
 
 typedef struct {
-  /* K <= 1000 frames of |d| <= 128 counts: |sum| <= 128000, needs 18 bits. */
+  /* K <= 1000 frames of |d| <= 32768 counts: |sum| <= 2^25, fits 32 bits. */
   int32_t sum_x;
   int32_t sum_y;
+  uint16_t max_shutter;
   uint8_t min_squal;
   uint8_t flags;
 } moa_window_t;
@@ -22,12 +27,13 @@ typedef struct {
   int16_t dy;
   uint8_t squal;
   uint8_t flags;
+  uint16_t shutter; /* the longest exposure of the window */
 } moa_record_t;
 
 void window_reset(moa_window_t* w);
-/* Adds one motion burst: motion register, Delta_X, Delta_Y, SQUAL. */
-void window_add(moa_window_t* w, uint8_t motion, int8_t dx, int8_t dy, uint8_t squal,
-                uint8_t squal_floor);
+/* Adds one read. Counts of a read that is silent, lifted or rejected are
+ * left out (the chip's counts mean nothing then); its flags are kept. */
+void window_add(moa_window_t* w, const moa_sample_t* s, uint8_t squal_floor);
 /* Adds window `from` to `into`, as if its frames had been added one by one
  * (sums in 32 bits: a few windows of K <= 1000 frames stay far inside). */
 void window_merge(moa_window_t* into, const moa_window_t* from);

@@ -8,11 +8,11 @@
 #include "moa/core/array.hpp"
 #include "moa/formats/atomic_file.hpp"
 #include "moa/formats/error.hpp"
+#include "moa/formats/sensor_datasheets.hpp"
 
 namespace moa::io {
 namespace {
 
-constexpr std::array<const SensorPreset*, 2> kPresets{&kHdns2051, &kAdns3080};
 
 constexpr std::string_view kExplanation = R"(#
 # Frames: the robot frame has x forward and y to the left, its origin at the
@@ -39,15 +39,15 @@ constexpr std::string_view kExplanation = R"(#
 }  // namespace
 
 std::optional<SensorPreset> find_sensor_preset(std::string_view name) {
-  for (const SensorPreset* p : kPresets) {
-    if (name == p->name) return *p;
-  }
+  if (const SensorDatasheet* sheet = find_sensor_datasheet(name)) return sheet->preset;
   return std::nullopt;
 }
 
 std::string sensor_preset_names() {
   std::string out;
-  for (const SensorPreset* p : kPresets) out += (out.empty() ? "" : ", ") + std::string(p->name);
+  for (const SensorDatasheet& s : sensor_datasheets()) {
+    out += (out.empty() ? "" : ", ") + std::string(s.preset.name);
+  }
   return out;
 }
 

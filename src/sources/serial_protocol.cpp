@@ -1,8 +1,10 @@
 #include "moa/sources/serial_protocol.hpp"
 
 #include <cassert>
+#include <cstdio>
 #include <limits>
 #include <numbers>
+#include <string>
 #include <type_traits>
 
 #include "moa/formats/error.hpp"
@@ -102,6 +104,14 @@ std::vector<std::uint8_t> payload_of(const Message& message) {
           put_u16(out, m.n);
           put_u16(out, m.lsb_per_dps_x10);
           out.push_back(m.flags);
+        } else if constexpr (std::is_same_v<T, Status>) {
+          if (m.n > kMaxSensors) throw Error("serial: STATUS with more than 16 sensors");
+          out.push_back(static_cast<std::uint8_t>(Type::kStatus));
+          out.push_back(m.n);
+          for (std::size_t i = 0; i < m.n; ++i) {
+            out.push_back(m.sensors[i].state);
+            out.push_back(m.sensors[i].detail);
+          }
         } else if constexpr (std::is_same_v<T, SetK>) {
           out.push_back(static_cast<std::uint8_t>(Type::kSetK));
           put_u16(out, m.k);
@@ -181,6 +191,19 @@ std::variant<Message, FrameError> parse_gyro(std::span<const std::uint8_t> p) {
   return Message{gyro};
 }
 
+std::variant<Message, FrameError> parse_status(std::span<const std::uint8_t> p) {
+  if (p.size() < 2) return FrameError::kBadLength;
+  Status status;
+  status.n = p[1];
+  if (status.n < 1 || status.n > kMaxSensors) return FrameError::kBadField;
+  if (p.size() != 2 + 2 * static_cast<std::size_t>(status.n)) return FrameError::kBadLength;
+  for (std::size_t i = 0; i < status.n; ++i) {
+    status.sensors[i].state = p[2 + 2 * i];
+    status.sensors[i].detail = p[3 + 2 * i];
+  }
+  return Message{status};
+}
+
 std::variant<Message, FrameError> parse_payload(std::span<const std::uint8_t> p) {
   switch (p[0]) {
     case static_cast<std::uint8_t>(Type::kHello):
@@ -189,6 +212,8 @@ std::variant<Message, FrameError> parse_payload(std::span<const std::uint8_t> p)
       return parse_data(p);
     case static_cast<std::uint8_t>(Type::kGyro):
       return parse_gyro(p);
+    case static_cast<std::uint8_t>(Type::kStatus):
+      return parse_status(p);
     case static_cast<std::uint8_t>(Type::kSetK): {
       if (p.size() != 3) return FrameError::kBadLength;
       const SetK set{get_u16(p, 1)};
@@ -210,6 +235,30 @@ std::variant<Message, FrameError> parse_payload(std::span<const std::uint8_t> p)
 }
 
 }  // namespace
+
+std::string describe_sensor_state(const SensorStatus& status) {
+  char id[8];
+  std::snprintf(id, sizeof id, "0x%02x", status.detail);
+  switch (status.state) {
+    case 0:
+      return "ok";
+    case 1:
+      return "no answer (product ID read 0x00 or 0xff: check its wiring, power and logic level)";
+    case 2:
+      return std::string("another part (product ID ") + id + "), left alone";
+    case 3:
+      return "no SROM: the firmware was built without PixArt's image (docs/firmware.md)";
+    case 4:
+      return std::string("SROM refused (SROM_ID ") + id +
+             "): the wrong image for this chip, or the CRC test failed";
+    case 5:
+      return "stopped answering; not read until the device restarts";
+    case 6:
+      return "its resolution did not read back; not read until the device restarts";
+    default:
+      return "state " + std::to_string(status.state);
+  }
+}
 
 double Gyro::rate() const {
   // mean LSB / (LSB per deg/s) = deg/s; times pi/180 = rad/s.

@@ -227,6 +227,24 @@ struct SerialReader::Impl {
     }
   }
 
+  // STATUS: each sensor that is not ok, said once per state it enters.
+  std::vector<serial::SensorStatus> sensor_states;
+  void on_status(const serial::Status& st) {
+    sensor_states.resize(std::max<std::size_t>(sensor_states.size(), st.n));
+    for (std::size_t i = 0; i < st.n; ++i) {
+      const serial::SensorStatus& now = st.sensors[i];
+      serial::SensorStatus& was = sensor_states[i];
+      if (now.state == was.state && now.detail == was.detail) continue;
+      was = now;
+      if (now.state == serial::kSensorOk) continue;
+      const std::string who = have_hello && i < hello.names.size()
+                                  ? fmt::format("sensor '{}'", hello.names[i])
+                                  : fmt::format("sensor {}", i + 1);
+      hooks.warning(fmt::format("{}: {} (chip select {}): {}", name, who, i + 1,
+                                serial::describe_sensor_state(now)));
+    }
+  }
+
   bool rebase_next = false;
 
   void restart() {
@@ -347,6 +365,8 @@ struct SerialReader::Impl {
           on_data(*d);
         } else if (const auto* g = std::get_if<serial::Gyro>(message)) {
           on_gyro(*g);
+        } else if (const auto* st = std::get_if<serial::Status>(message)) {
+          on_status(*st);
         }
         // Host commands echoed back are not for us.
       }

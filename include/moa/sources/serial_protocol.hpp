@@ -22,6 +22,7 @@ enum class Type : std::uint8_t {
   kHello = 0x01,
   kData = 0x02,
   kGyro = 0x03,
+  kStatus = 0x04,
   kSetK = 0x10,
   kSetCpi = 0x11,
   kHelloRequest = 0x12,
@@ -75,6 +76,20 @@ struct Gyro {
 };
 inline constexpr std::uint8_t kGyroSaturated = 0x01;
 
+/// What each chip select of the device holds (firmware/src/sensor.h): sent
+/// after every HELLO and when a sensor's state changes.
+struct SensorStatus {
+  std::uint8_t state = 0;   ///< 0 ok; the others: describe_sensor_state()
+  std::uint8_t detail = 0;  ///< the product ID of another part, the SROM_ID read
+};
+struct Status {
+  std::uint8_t n = 0;
+  std::array<SensorStatus, kMaxSensors> sensors{};
+};
+inline constexpr std::uint8_t kSensorOk = 0;
+/// What a STATUS state means, for a person ("another part (product ID 0x17)").
+std::string describe_sensor_state(const SensorStatus& status);
+
 struct SetK {
   std::uint16_t k = 1;
 };
@@ -83,7 +98,7 @@ struct SetCpi {
 };
 struct HelloRequest {};
 
-using Message = std::variant<Hello, Data, Gyro, SetK, SetCpi, HelloRequest>;
+using Message = std::variant<Hello, Data, Gyro, SetK, SetCpi, HelloRequest, Status>;
 
 /// A whole wire frame: COBS(payload || crc16) || 0x00. Fields are written
 /// as given, even out of range (so tests can make invalid frames); throws
