@@ -77,6 +77,7 @@ class Builder {
     draw_wheels();
     draw_reference();
     draw_faults();
+    draw_gyro_timing();
     judge_observability();
     RandomWorld w;
     w.family = std::string(kFamilyNames[static_cast<std::size_t>(family_)]);
@@ -173,6 +174,16 @@ class Builder {
     g_noise_ = d_.log_uniform(5e-5, 5e-4);
     g_max_ = d_.log_uniform(250.0, 2000.0) * kPi / 180.0;
     g_latency_ = d_.chance(0.6) ? d_.uniform(0.0, 0.01) : 0.0;
+  }
+
+  // Drawn after everything else, so the worlds drawn before it existed are
+  // the same but for it.
+  void draw_gyro_timing() {
+    // A robot program's stamps are off by milliseconds: the latency the
+    // config states is wrong, in the families that test the gyro and the
+    // calibration.
+    if (!gyro_ || (family_ != Family::kGyro && family_ != Family::kCalibration)) return;
+    if (d_.chance(0.5)) g_latency_error_ = d_.uniform(-0.01, 0.01);
   }
 
   void draw_path() {
@@ -500,6 +511,9 @@ class Builder {
     if (gyro_) {
       s += fmt::format("; gyro scale {:+.1f} %, bias {:+.3f} rad/s, full scale {:.0f} deg/s",
                        100 * (g_scale_ - 1), g_bias_, g_max_ * 180 / kPi);
+      if (g_latency_error_ != 0.0) {
+        s += fmt::format(", stamps {:+.1f} ms later than the config says", 1e3 * g_latency_error_);
+      }
     } else {
       s += "; no gyro";
     }
@@ -589,6 +603,7 @@ class Builder {
                      "  noise_density: {}\n  max_rate: {}\n  latency: {}\n",
                      num(g_rate_), num(g_scale_), num(g_bias_), num(g_walk_), num(g_noise_),
                      num(g_max_), num(g_latency_));
+      if (g_latency_error_ != 0.0) fmt::format_to(out, "  latency_error: {}\n", num(g_latency_error_));
       if (!gyro_faults_.empty()) {
         y += "  faults:\n";
         for (const auto& g : gyro_faults_) y += "    - " + g + "\n";
@@ -619,7 +634,7 @@ class Builder {
   std::vector<Build> build_;
   bool gyro_ = false;
   double g_rate_ = 100.0, g_scale_ = 1.0, g_bias_ = 0.0, g_walk_ = 0.0, g_noise_ = 1.5e-4,
-         g_max_ = 8.7, g_latency_ = 0.0;
+         g_max_ = 8.7, g_latency_ = 0.0, g_latency_error_ = 0.0;
   double v_max_ = 0.5, w_max_ = 2.0, accel_ = 1.0, angular_accel_ = 10.0, duration_ = 0.0;
   std::vector<Segment> segments_;
   const char* wheels_ = "none";

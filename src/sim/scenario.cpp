@@ -618,14 +618,16 @@ CameraModel parse_camera(const Source& source, const YAML::Node& node, double fr
   return c;
 }
 
-// `imu: {rate, scale, bias, bias_walk, noise_density, max_rate, latency}`:
-// the gyro as built. robot.yaml gets what its user knows (the noise, the
-// full scale and the latency, from the part's datasheet and the firmware;
-// scale 1 and bias 0), robot.true.yaml the true scale and bias.
+// `imu: {rate, scale, bias, bias_walk, noise_density, max_rate, latency,
+// latency_error}`: the gyro as built. robot.yaml gets what its user knows
+// (the noise, the full scale and the latency less latency_error, from the
+// part's datasheet and the firmware; scale 1 and bias 0), robot.true.yaml
+// the true scale, bias and latency.
 GyroSpec parse_imu(const Source& source, const YAML::Node& node) {
   const Fields f(
       source, node, "imu",
-      {"rate", "scale", "bias", "bias_walk", "noise_density", "max_rate", "latency", "faults"});
+      {"rate", "scale", "bias", "bias_walk", "noise_density", "max_rate", "latency",
+       "latency_error", "faults"});
   GyroSpec g;
   g.enabled = true;
   g.rate = f.bounded("rate", kMinRate, kMaxFrameRate, g.rate);
@@ -635,6 +637,7 @@ GyroSpec parse_imu(const Source& source, const YAML::Node& node) {
   g.noise_density = f.positive("noise_density", g.noise_density);
   g.max_rate = f.positive("max_rate", g.max_rate);
   g.latency = f.bounded("latency", 0.0, 1.0, g.latency);
+  g.latency_error = f.bounded("latency_error", -0.1, 0.1, g.latency_error);
   if (const auto faults = f.get("faults")) {
     if (!faults->IsSequence()) {
       f.fail("faults",
@@ -670,7 +673,7 @@ GyroOptions believed_gyro(const GyroSpec& g) {
   GyroOptions o;
   o.noise_density = static_cast<real>(g.noise_density);
   o.max_rate = static_cast<real>(g.max_rate);
-  o.latency = g.latency;
+  o.latency = g.latency - g.latency_error;
   if (g.bias_walk > 0.0) o.bias_random_walk = static_cast<real>(g.bias_walk);
   return o;
 }
@@ -767,6 +770,7 @@ Scenario parse_scenario(std::string_view yaml, std::string_view source_name) {
     s.truth.imu = s.nominal.imu;
     s.truth.imu->scale = static_cast<real>(s.imu.scale);
     s.truth.imu->bias = static_cast<real>(s.imu.bias);
+    s.truth.imu->latency = s.imu.latency;
   }
   s.motion = parse_motion(source, top.required("motion"), s.drive.type == DriveType::kDifferential);
   s.truth_rate = top.bounded("truth_rate", kMinRate, kMaxFrameRate, 100.0);

@@ -44,6 +44,9 @@ struct GyroSpec {
   double noise_density = 1.5e-4;  ///< rad/s/sqrt(Hz)
   double max_rate = 8.7;          ///< rad/s, full scale
   double latency = 0.0;           ///< s, a row's stamp after its interval's end
+  /// s, the true latency minus the one robot.yaml states (a robot program's
+  /// stamps off by milliseconds); robot.true.yaml states the true one
+  double latency_error = 0.0;
   std::vector<GyroFault> faults;
 };
 
