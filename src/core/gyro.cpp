@@ -44,6 +44,7 @@ real GyroModel::change(real a, real b, real dt) const {
 void GyroModel::predict(real dt, real g) {
   p_(0, 0) += options_.bias_random_walk * options_.bias_random_walk * dt;
   const bool read = std::isfinite(g) && std::abs(g) < kSaturation * options_.max_rate;
+  previous_change_ = change_;
   previous_g_ = last_g_;
   last_g_ = read ? g : std::numeric_limits<real>::quiet_NaN();
   change_ = change(last_g_, previous_g_, dt);
@@ -120,13 +121,17 @@ std::optional<AidStatus> GyroModel::teach(real g, real dt, const Vec3& x_a, real
                                           real gate) {
   if (!rate(g, dt)) return close(gate);
   if (!(window_.t > 0)) {
-    window_.g0 = previous_g_;
+    // The reading before the window, or with none its own first (the
+    // change over that one epoch is then missed).
+    window_.g0 = std::isfinite(previous_g_) ? previous_g_ : g;
+    window_.c0 = std::isfinite(previous_g_) ? previous_change_ : change_;
     window_.still = true;
   }
   // At rest (the rotation known to be zero: no array twist, no noise) the
   // readings' true change is zero, whatever the latency.
   window_.still = window_.still && x_a.isZero(0) && n == 0 && q == 0;
   window_.g1 = g;
+  window_.c1 = change_;
   window_.dt = dt;
   window_.t += dt;
   window_.gyro += g * dt;
@@ -145,12 +150,6 @@ std::optional<AidStatus> GyroModel::close(real gate, bool chain) {
   }
   const Window w = window_;
   window_ = Window{};
-  if (!w.still && !std::isfinite(w.g0)) {
-    // No reading before the window: its change of rate, which the latency
-    // turns into angle, is unknown. Not fused; a new chain begins.
-    chained_ = false;
-    return std::nullopt;
-  }
   if (!chained_) {  // a new chain: the residual at the start is unknown
     x_(4) = 0;
     p_.row(4).setZero();
@@ -168,7 +167,12 @@ std::optional<AidStatus> GyroModel::close(real gate, bool chain) {
   const Vec2& d = w.displacement;
   const real angle = w.array - coupling().dot(d);  // the array's, decoupled
   // The readings' change over the window, k (1 + s) (omega_1 - omega_0).
-  const real dg = w.still ? real(0) : change(w.g1, w.g0, w.dt);
+  // The latency's regressor is the change of rate between the window's
+  // edges less tau / 2, k (1 + s) (omega(t_1 - tau/2) - omega(t_0 - tau/2));
+  // a reading is its epoch's mean, tau + dt / 2 before those instants: each
+  // edge's reading is taken forward by that much along its epoch's change.
+  const real lead = (w.dt / 2 + x_(kLatency) / 2) / w.dt;
+  const real dg = w.still ? real(0) : change(w.g1, w.g0, w.dt) + lead * (w.c1 - w.c0);
   const Mat<1, 1> y(w.gyro - (k * angle + bias() * w.t - x_(kLatency) * dg));
   Mat<1, kStates + 1> h;
   h << w.t, options_.scale * angle, -k * d.x(), -k * d.y(), k, 0, -dg, -k;
