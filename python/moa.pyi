@@ -45,7 +45,7 @@ class RunSummary:
     fixes: dict[str, int]  # applied, rejected, too_old, invalid
     gyro_epochs: int  # epochs with a gyro reading (imu rows of diagnostics.csv)
     heading_from_gyro: int  # epochs whose heading (rotation) was the gyro's
-    gyro: dict[str, float] | None  # bias, bias_sd (rad/s), scale, scale_sd after the last epoch
+    gyro: dict[str, float] | None  # bias, bias_sd (rad/s), scale, scale_sd, latency, latency_sd (s) after the last epoch
     warnings: list[str]
     usable: bool  # at least one epoch, at most 1 % of them held
     def verdict(self) -> str: ...

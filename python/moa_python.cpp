@@ -953,10 +953,12 @@ a dict of arrays like moa.odometry's (possibly empty).)")
             d["bias_sd"] = s.gyro->bias_sd;
             d["scale"] = s.gyro->scale;
             d["scale_sd"] = s.gyro->scale_sd;
+            d["latency"] = s.gyro->latency;
+            d["latency_sd"] = s.gyro->latency_sd;
             return d;
           },
-          "The gyro's calibration after the last epoch: bias, bias_sd (rad/s), scale, scale_sd; "
-          "None without a gyro.")
+          "The gyro's calibration after the last epoch: bias, bias_sd (rad/s), scale, scale_sd, "
+          "latency, latency_sd (s); None without a gyro.")
       .def_readonly("warnings", &io::RunSummary::warnings)
       .def_property_readonly("usable", &io::RunSummary::usable,
                              "At least one epoch, at most 1 % of them held.")

@@ -93,7 +93,7 @@ TEST(Gyro, AtRestTheBiasIsTheMeanReadingWithItsClosedFormVariance) {
   for (int k = 0; k < n; ++k) {
     const double g = bias + noise(rng);
     sum += g;
-    gyro.predict(kDt);
+    gyro.predict(kDt, g);
     gyro.teach(g, kDt, Vec3::Zero(), 0.0, 0.0, gate);
   }
   (void)gyro.close(gate);  // the last window, whole or not
@@ -117,8 +117,9 @@ TEST(Gyro, TurningInPlaceTeachesTheScale) {
   const double k = 1.021, c = -0.02;
   for (int i = 0; i < 3000; ++i) {
     const double w = 2.0 * std::sin(0.01 * i);
-    gyro.predict(kDt);
-    gyro.teach(k * w + c + noise(rng), kDt, Vec3(0, 0, w), 0.0, 0.0, gate);
+    const double g = k * w + c + noise(rng);
+    gyro.predict(kDt, g);
+    gyro.teach(g, kDt, Vec3(0, 0, w), 0.0, 0.0, gate);
   }
   EXPECT_NEAR(gyro.scale(), k, 4.0 * std::sqrt(gyro.covariance()(1, 1)));
   EXPECT_NEAR(gyro.bias(), c, 4.0 * std::sqrt(gyro.covariance()(0, 0)));
@@ -140,8 +141,9 @@ TEST(Gyro, DrivingTeachesTheArraysRotationCouplingToItsVelocity) {
   const double ax = 0.05;  // rad/m
   for (int i = 0; i < 2000; ++i) {
     const double vx = 0.3 * (1.0 + std::sin(0.003 * i)), w = 0.2 * std::sin(0.02 * i);
-    gyro.predict(kDt);
-    gyro.teach(w + noise(rng), kDt, Vec3(vx, 0, w + ax * vx), 1e-8, 1e-6, gate);
+    const double g = w + noise(rng);
+    gyro.predict(kDt, g);
+    gyro.teach(g, kDt, Vec3(vx, 0, w + ax * vx), 1e-8, 1e-6, gate);
   }
   EXPECT_NEAR(gyro.coupling().x(), ax, 4.0 * std::sqrt(gyro.covariance()(2, 2)));
   Vec3 x(0.4, 0.0, 0.1 + ax * 0.4);
@@ -187,21 +189,126 @@ TEST(Gyro, AnEpochOfAnotherSourcesRotationGrowsTheHeadingErrorByItsOwnVariance) 
   GyroOptions o;
   GyroModel gyro(o, 0.1);
   for (int k = 0; k < 50; ++k) {
-    gyro.predict(kDt);
+    gyro.predict(kDt, 0.7);
     const auto r = gyro.rate(0.7, kDt);
     ASSERT_TRUE(r);
     (void)gyro.drive(*r, kDt);
   }
-  const Mat<6, 6> before = gyro.covariance();
+  const Mat<GyroModel::kStates, GyroModel::kStates> before = gyro.covariance();
   ASSERT_GT(before(5, 5), 0.0);
   const double v = 4e-4;
   (void)gyro.hold(v, kDt);
-  const Mat<6, 6> after = gyro.covariance();
+  const Mat<GyroModel::kStates, GyroModel::kStates> after = gyro.covariance();
   EXPECT_NEAR(after(5, 5), before(5, 5) + v * kDt * kDt, 1e-12 * before(5, 5));
   const Mat<5, 5> calibration = after.topLeftCorner<5, 5>() - before.topLeftCorner<5, 5>();
   const Mat<5, 1> correlation = after.block<5, 1>(0, 5) - before.block<5, 1>(0, 5);
   EXPECT_EQ(calibration.cwiseAbs().maxCoeff(), 0.0);
   EXPECT_EQ(correlation.cwiseAbs().maxCoeff(), 0.0);
+}
+
+// The mean over (t - dt, t] of omega(u - tau) = w sin(f u): a gyro whose
+// rows cover an interval ending tau s before their stamp's.
+double late_rate(double w, double f, double t, double dt, double tau) {
+  return w * (std::cos(f * (t - dt - tau)) - std::cos(f * (t - tau))) / (f * dt);
+}
+
+TEST(Gyro, ALatencyLeftIsLearntFromTheTurnsAccelerations) {
+  // Turning at w sin(f t) (up to 3.1 rad/s^2) with a good array, the
+  // gyro's rows 6 ms later than the config says: the latency is learnt to
+  // within its sd, which falls well under the 5 ms prior, and the scale and
+  // bias learnt beside it are the true ones (a latency taken for scale
+  // would bias it).
+  GyroOptions o;
+  o.bias_random_walk = 0.0;
+  o.latency = 0.002;
+  GyroModel gyro(o, 0.1);
+  const real gate = static_cast<real>(chi2_quantile(1.0 - 1e-3, 1));
+  std::mt19937 rng(15);
+  std::normal_distribution<double> noise(0.0, o.noise_density / std::sqrt(kDt));
+  // The array's rotation: noise of variance n = 1e-6 rad^2/s^2 an epoch (as
+  // taught), its quantisation q = 1e-8 rad^2 not drawn (the chain's
+  // residual, bounded).
+  std::normal_distribution<double> array_noise(0.0, 1e-3);
+  const double k = 1.012, c = 0.01, tau = 0.006, w = 2.5, f = 1.25;
+  for (int i = 1; i <= 3000; ++i) {
+    const double t = i * kDt;
+    const double g = k * late_rate(w, f, t, kDt, tau) + c + noise(rng);
+    gyro.predict(kDt, g);
+    gyro.teach(g, kDt, Vec3(0, 0, late_rate(w, f, t, kDt, 0.0) + array_noise(rng)), 1e-8, 1e-6,
+               gate);
+  }
+  EXPECT_NEAR(gyro.latency(), o.latency + tau, 4.0 * gyro.latency_sd());
+  EXPECT_LT(gyro.latency_sd(), 0.1 * o.latency_sigma);
+  EXPECT_NEAR(gyro.scale(), k, 4.0 * gyro.scale_sd());
+  EXPECT_NEAR(gyro.bias(), c, 4.0 * gyro.bias_sd());
+  // The rate is taken forward by the latency: at the last epoch's end the
+  // corrected rate is within 4 sd of the true mean rate over it.
+  const double t = 3001 * kDt;
+  const double g = k * late_rate(w, f, t, kDt, tau) + c;
+  gyro.predict(kDt, g);
+  const auto r = gyro.rate(g, kDt);
+  ASSERT_TRUE(r);
+  const double truth = late_rate(w, f, t, kDt, 0.0);
+  const double uncorrected = (g - gyro.bias()) / gyro.scale();
+  EXPECT_NEAR(r->omega, truth, 4.0 * std::sqrt(r->variance));
+  EXPECT_LT(std::abs(r->omega - truth), 0.2 * std::abs(uncorrected - truth));
+}
+
+TEST(Gyro, AtRestAndAtASteadyRateTheLatencyDoesNotMove) {
+  // Readings that do not change beyond their noise carry nothing about the
+  // latency: its estimate and sd stay at the prior, exactly.
+  GyroOptions o;
+  o.bias_random_walk = 0.0;
+  GyroModel gyro(o, 0.1);
+  const real gate = static_cast<real>(chi2_quantile(1.0 - 1e-3, 1));
+  std::mt19937 rng(16);
+  std::normal_distribution<double> noise(0.0, o.noise_density / std::sqrt(kDt));
+  for (int i = 0; i < 4000; ++i) {
+    const double w = i < 2000 ? 0.0 : 1.3;
+    const double g = w + noise(rng);
+    gyro.predict(kDt, g);
+    if (i != 2000) gyro.teach(g, kDt, Vec3(0, 0, w), 0.0, 0.0, gate);  // the step is no window
+    else (void)gyro.close(gate);
+  }
+  EXPECT_EQ(gyro.latency(), o.latency);
+  EXPECT_EQ(gyro.latency_sd(), o.latency_sigma);
+  EXPECT_LT(gyro.bias_sd(), 0.1 * o.bias_sigma);  // the other states did learn
+}
+
+// A gyro turning at w sin(f t) against an exact array for n epochs, its
+// bias c plus `step` from epoch `at` on (noise from rng).
+void turn(GyroModel& gyro, int n, int at, double c, double step, std::mt19937& rng) {
+  const real gate = static_cast<real>(chi2_quantile(1.0 - 1e-3, 1));
+  std::normal_distribution<double> noise(0.0, gyro.options().noise_density / std::sqrt(kDt));
+  for (int i = 1; i <= n; ++i) {
+    const double w = 0.8 * std::sin(0.5 * i * kDt);
+    const double g = w + c + (i >= at ? step : 0.0) + noise(rng);
+    gyro.predict(kDt, g);
+    gyro.teach(g, kDt, Vec3(0, 0, w), 1e-8, 1e-6, gate);
+  }
+}
+
+TEST(Gyro, ABiasStepIsFoundAndTheBiasLearntAfresh) {
+  // 20 s with the bias learnt, then a step of 0.02 rad/s (a knock): without
+  // the step's test the bias walks at 1e-4 rad/s/sqrt(s) and would need
+  // minutes; with it, 3 s after the step the bias is the new one to within
+  // 4 sd, and the step was counted once.
+  GyroOptions o;
+  const double c = 0.01, step = 0.02;
+  GyroModel gyro(o, 0.1);
+  std::mt19937 rng(17);
+  turn(gyro, 2000, 1 << 30, c, 0.0, rng);
+  ASSERT_EQ(gyro.bias_resets(), 0);
+  ASSERT_LT(gyro.bias_sd(), 0.002);  // learnt, and far narrower than the step
+  turn(gyro, 300, 1, c, step, rng);
+  EXPECT_EQ(gyro.bias_resets(), 1);
+  EXPECT_NEAR(gyro.bias(), c + step, 4.0 * gyro.bias_sd());
+  // A run of the same length with no step raises no alarm (one an hour
+  // under the model).
+  GyroModel steady(o, 0.1);
+  std::mt19937 rng2(18);
+  turn(steady, 2300, 1 << 30, c, 0.0, rng2);
+  EXPECT_EQ(steady.bias_resets(), 0);
 }
 
 SensorArray compact_array() {

@@ -107,10 +107,18 @@ TEST(GyroSummary, MoaOdometryPrintsTheHeadingFromTheGyroAsDiagnosticsCsvCountsIt
   EXPECT_EQ(d.epochs, rows_of(out));
   std::smatch m;
   const std::regex line(
-      R"(gyro: bias (-?[0-9.]+) rad/s \(sd ([0-9.e+-]+)\), scale ([0-9.]+) \(sd ([0-9.e+-]+)\), heading from the gyro in ([0-9]+) of ([0-9]+) epochs \(([0-9.]+) %\)\n)");
+      R"(gyro: bias (-?[0-9.]+) rad/s \(sd ([0-9.e+-]+)\), scale ([0-9.]+) \(sd ([0-9.e+-]+)\), latency (-?[0-9.]+) ms \(sd ([0-9.e+-]+)\), heading from the gyro in ([0-9]+) of ([0-9]+) epochs \(([0-9.]+) %\)\n)");
   ASSERT_TRUE(std::regex_search(r.out, m, line)) << r.out;
-  EXPECT_EQ(std::stoul(m[5]), d.fused);
-  EXPECT_EQ(std::stoul(m[6]), d.epochs);
+  EXPECT_EQ(std::stoul(m[7]), d.fused);
+  EXPECT_EQ(std::stoul(m[8]), d.epochs);
+  // The latency learnt: the scenario's rows are stamped as robot.yaml says
+  // (gyro-bump.yaml: 5 ms), so within 4 sd of it, the sd at most the
+  // prior's 5 ms, and no line saying the config is off.
+  const double latency_ms = std::stod(m[5]), latency_sd_ms = std::stod(m[6]);
+  EXPECT_GT(latency_sd_ms, 0.0);
+  EXPECT_LE(latency_sd_ms, 5.0);
+  EXPECT_NEAR(latency_ms, 5.0, 4 * latency_sd_ms + 0.05);
+  EXPECT_EQ(r.out.find("the config says"), std::string::npos) << r.out;
   // The calibration learnt: the simulated gyro's (examples/scenarios/
   // gyro-bump.yaml: bias 0.01 rad/s walking by 3e-5 rad/s/sqrt(s), scale
   // 1.02; robot.yaml says 0 and 1) within a few sd, each sd positive and

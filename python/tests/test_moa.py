@@ -156,7 +156,7 @@ def test_odometry_gyro_summary_and_heading_are_those_of_diagnostics_csv(tmp_path
     # The calibration: the simulated gyro's (bias 0.01 rad/s, scale 1.02)
     # within a few sd, as `moa odometry` printed it.
     g = s.gyro
-    assert set(g) == {"bias", "bias_sd", "scale", "scale_sd"}
+    assert set(g) == {"bias", "bias_sd", "scale", "scale_sd", "latency", "latency_sd"}
     assert abs(g["bias"] - 0.01) < 4 * g["bias_sd"] + 1e-3
     assert abs(g["scale"] - 1.02) < 4 * g["scale_sd"] + 5e-3
     assert f"gyro: bias {g['bias']:.5f} rad/s" in out

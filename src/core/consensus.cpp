@@ -154,10 +154,11 @@ void ConsensusEstimator::blame(const Candidate& best, const References& refs,
   }
   if (!(tests.gyro > real(1))) return;  // not tested: the episode goes on
   if (blame_ == Blame::kNone) {
-    // The onset: the wheels or the prior (fresh) against the array.
+    // The onset: the wheels against the array where there are wheels (the
+    // prior's rotation was the gyro's: no judge of the gyro), else the prior
+    // (fresh).
     bool array_wrong = tests.wheels > real(1);
-    for (int k = 0; k < refs.size; ++k) {
-      if (k == refs.wheels) continue;
+    for (int k = 0; k < refs.size && refs.wheels < 0; ++k) {
       const Reference& ref = refs.r[static_cast<std::size_t>(k)];
       const real d = best.fit.twist.omega - ref.x(2);
       array_wrong = array_wrong ||
@@ -169,6 +170,22 @@ void ConsensusEstimator::blame(const Candidate& best, const References& refs,
              t - blame_since_ > static_cast<double>(options_.max_bridge)) {
     blame_ = Blame::kGyro;  // wrong for longer than a lost floor lasts
   }
+}
+
+void ConsensusEstimator::drift_test(real z, real dt, const SourceTests& tests) {
+  if (gyro_drift_h_ == 0) {
+    // Two statistics, an epoch every dt s (cusum.hpp).
+    gyro_drift_h_ = cusum_threshold(kDriftShift, 2 * kDriftFalseAlarmTime / dt);
+  }
+  const real clip = std::sqrt(gyro_threshold_);
+  if (!std::isfinite(z)) return;
+  const bool alarm = gyro_drift_.feed(std::clamp(z, -clip, clip), kDriftShift, gyro_drift_h_);
+  const real cap = 2 * gyro_drift_h_;
+  gyro_drift_.up = std::min(gyro_drift_.up, cap);
+  gyro_drift_.down = std::min(gyro_drift_.down, cap);
+  // The wheels, where there are, may still blame the array.
+  if (alarm && !(tests.wheels > real(1))) gyro_drifting_ = true;
+  if (gyro_drift_.up == 0 && gyro_drift_.down == 0) gyro_drifting_ = false;
 }
 
 bool ConsensusEstimator::common_mode(const Candidate& best, const References& refs,
@@ -349,7 +366,7 @@ RobustEstimate ConsensusEstimator::estimate_counts(const ArraySample& sample, Se
   RobustEstimate out;
   std::optional<GyroRate> rate;
   if (gyro) {
-    gyro_.predict(sample.dt);
+    gyro_.predict(sample.dt, *gyro);
     rate = gyro_.rate(*gyro, sample.dt);
     out.tests.gyro_saturated = !rate;
   }
@@ -433,10 +450,17 @@ RobustEstimate ConsensusEstimator::estimate_counts(const ArraySample& sample, Se
     Mat3 c = best->fit.covariance;
     gyro_.decouple(x, c);
     const real d = x(2) - rate->omega;
-    out.tests.gyro = d * d / (c(2, 2) + rate->variance) / gyro_threshold_;
+    const real v = c(2, 2) + rate->variance;
+    out.tests.gyro = d * d / v / gyro_threshold_;
+    blame(*best, refs, out.tests, sample.t);
+    // Not while the array is blamed (its readings are the fault).
+    if (blame_ != Blame::kArray) {
+      drift_test(d / std::sqrt(v), static_cast<real>(sample.dt), out.tests);
+    }
+  } else if (best) {
+    blame(*best, refs, out.tests, sample.t);
   }
-  if (best) blame(*best, refs, out.tests, sample.t);
-  const bool gyro_blamed = rate && blame_ == Blame::kGyro;
+  const bool gyro_blamed = rate && (blame_ == Blame::kGyro || gyro_drifting_);
   out.tests.gyro_rejected = gyro_blamed;
   const bool common = best && common_mode(*best, refs, out.tests, sample.t);
   if (best && !common) {

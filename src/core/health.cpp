@@ -6,6 +6,7 @@
 #include <optional>
 
 #include "moa/core/chi2.hpp"
+#include "moa/core/cusum.hpp"
 
 namespace moa {
 
@@ -26,20 +27,8 @@ HealthMonitor::HealthMonitor(int sensors, HealthOptions options, real alpha)
       n_(sensors) {}
 
 void HealthMonitor::set_threshold(real dt) {
-  // Siegmund: ARL0 = (exp(2 k h') - 2 k h' - 1) / (2 k^2), h' = h + 1.166,
-  // increasing in h': solved by bisection for ARL0 = 4 T / dt.
-  const real k = options_.drift_shift;
-  const real arl = 4.0 * options_.drift_false_alarm_time / dt;
-  const auto run_length = [k](real hp) {
-    return (std::exp(2.0 * k * hp) - 2.0 * k * hp - 1.0) / (2.0 * k * k);
-  };
-  real lo = 0.0, hi = 1.0;
-  while (run_length(hi) < arl && hi < 1e6) hi *= 2.0;
-  for (int it = 0; it < 100; ++it) {
-    const real mid = 0.5 * (lo + hi);
-    (run_length(mid) < arl ? lo : hi) = mid;
-  }
-  h_ = std::max<real>(hi - 1.166, 0.0);
+  // Four statistics per sensor: ARL0 = 4 T / dt samples (cusum.hpp).
+  h_ = cusum_threshold(options_.drift_shift, 4.0 * options_.drift_false_alarm_time / dt);
 }
 
 real HealthMonitor::drift(const SensorState& s) const {

@@ -98,6 +98,8 @@ struct SeedResult {
   /// The gyro's calibration at the end against the truth, ((x - x_true) / sd)^2:
   /// its scale, and its bias where the bias neither walks nor steps.
   double scale_nees = std::nan(""), bias_nees = std::nan("");
+  /// The gyro's latency learnt at the end against the truth, the same way.
+  double latency_nees = std::nan("");
   std::string failure;  ///< of the estimators under test, "" if none
 };
 
@@ -161,7 +163,8 @@ void consistency(const sim::RandomWorld& world, const fs::path& dir,
   std::optional<double> scale0, sd0;
   double rest = 0.0;
   const GyroModel* last_gyro = nullptr;
-  double scale_end = 0.0, scale_sd = 0.0, bias_end = 0.0, bias_sd = 0.0;
+  double scale_end = 0.0, scale_sd = 0.0, bias_end = 0.0, bias_sd = 0.0, latency_end = 0.0,
+         latency_sd = 0.0;
   const double dt = 1.0 / options.rate;
   io::run_odometry(config, (dir / "robot.yaml").string(), io::resolve_log(dir), options,
                    [&](const OdometryStep& step) {
@@ -171,6 +174,8 @@ void consistency(const sim::RandomWorld& world, const fs::path& dir,
                        scale_sd = step.gyro->scale_sd();
                        bias_end = step.gyro->bias();
                        bias_sd = step.gyro->bias_sd();
+                       latency_end = step.gyro->latency();
+                       latency_sd = step.gyro->latency_sd();
                      }
                      if (step.gyro != nullptr && step.t() <= moved) {
                        if (!scale0) {
@@ -196,6 +201,7 @@ void consistency(const sim::RandomWorld& world, const fs::path& dir,
   const sim::GyroSpec& g = world.scenario.imu;
   if (last_gyro != nullptr && scale_sd > 0.0) {
     r.scale_nees = std::pow((scale_end - g.scale) / scale_sd, 2);
+    if (latency_sd > 0.0) r.latency_nees = std::pow((latency_end - g.latency) / latency_sd, 2);
     const bool steps = std::any_of(g.faults.begin(), g.faults.end(), [](const auto& f) {
       return f.kind == sim::GyroFault::kBiasStep;
     });
@@ -421,15 +427,17 @@ Result random_worlds(const Options& options) {
   const std::size_t worst = std::min<std::size_t>(5, order.size());
   std::size_t without = 0;  // worlds with no ratio to selection: one sensor
   for (const auto& r : results) without += r.m[kSelection].run ? 0 : 1;
-  std::vector<double> nees, rest, scale_nees, bias_nees;
+  std::vector<double> nees, rest, scale_nees, bias_nees, latency_nees;
   for (const auto& r : results) {
     if (std::isfinite(r.nees)) nees.push_back(r.nees);
     if (std::isfinite(r.rest_scale)) rest.push_back(r.rest_scale);
     if (std::isfinite(r.scale_nees)) scale_nees.push_back(r.scale_nees);
     if (std::isfinite(r.bias_nees)) bias_nees.push_back(r.bias_nees);
+    if (std::isfinite(r.latency_nees)) latency_nees.push_back(r.latency_nees);
   }
   const Quantiles nees_q = quantiles(nees), rest_q = quantiles(rest);
-  const Quantiles scale_q = quantiles(scale_nees), bias_q = quantiles(bias_nees);
+  const Quantiles scale_q = quantiles(scale_nees), bias_q = quantiles(bias_nees),
+                  latency_q = quantiles(latency_nees);
   const auto mean = [](const std::vector<double>& v) {
     double sum = 0.0;
     for (const double x : v) sum += x;
@@ -468,9 +476,10 @@ Result random_worlds(const Options& options) {
       out,
       "The gyro's calibration at the end against the truth, ((x - x_true) / sd)^2 "
       "(mean 1 if consistent): scale mean {:.2f}, median {:.2f}, max {:.1f} over {} "
-      "worlds; bias (no walk, no step) mean {:.2f}, median {:.2f}, max {:.1f} over {}.\n",
+      "worlds; bias (no walk, no step) mean {:.2f}, median {:.2f}, max {:.1f} over {}; "
+      "latency mean {:.2f}, median {:.2f}, max {:.1f} over {}.\n",
       mean(scale_nees), scale_q.median, scale_q.max, scale_q.n, mean(bias_nees), bias_q.median,
-      bias_q.max, bias_q.n);
+      bias_q.max, bias_q.n, mean(latency_nees), latency_q.median, latency_q.max, latency_q.n);
   t += "\nFailures (an error, a non-finite figure, or over 5x selection):\n";
   std::size_t listed = 0;
   for (const auto& r : results) {
@@ -531,6 +540,8 @@ Result random_worlds(const Options& options) {
   write_quantiles(j, scale_q);
   j.key("gyro_bias_nees");
   write_quantiles(j, bias_q);
+  j.key("gyro_latency_nees");
+  write_quantiles(j, latency_q);
   j.end_object();
   j.key("worst").begin_array();
   for (std::size_t i = 0; i < worst; ++i) {

@@ -223,7 +223,7 @@ double parse_latency(const YamlSource& source, const YAML::Node& node, const cha
 GyroOptions parse_imu(const YamlSource& source, const YAML::Node& node) {
   const YamlFields f(source, node, "imu",
                      {"scale", "bias", "noise_density", "bias_random_walk", "bias_sigma",
-                      "scale_sigma", "mount_yaw_sigma", "max_rate", "latency"});
+                      "scale_sigma", "mount_yaw_sigma", "max_rate", "latency", "latency_sigma"});
   GyroOptions imu;
   imu.scale = static_cast<real>(f.positive("scale", imu.scale));
   imu.bias = static_cast<real>(f.number("bias", imu.bias));
@@ -235,6 +235,7 @@ GyroOptions parse_imu(const YamlSource& source, const YAML::Node& node) {
   imu.mount_yaw_sigma = static_cast<real>(f.positive("mount_yaw_sigma", imu.mount_yaw_sigma));
   imu.max_rate = static_cast<real>(f.positive("max_rate", imu.max_rate));
   imu.latency = f.bounded("latency", -1.0, 1.0, imu.latency);
+  imu.latency_sigma = static_cast<real>(f.positive("latency_sigma", imu.latency_sigma));
   if (auto e = imu.validate()) {
     e->prefix("imu");
     source.fail(node, e->message());

@@ -16,8 +16,7 @@ void RunSummary::add(const OdometryStep& step, int sensors) {
   if (!std::isnan(tests.gyro) || tests.gyro_fused || tests.gyro_saturated) ++gyro_epochs;
   if (tests.gyro_fused) ++heading_from_gyro;
   if (step.gyro != nullptr) {
-    gyro = GyroCalibration{step.gyro->bias(), step.gyro->bias_sd(), step.gyro->scale(),
-                           step.gyro->scale_sd()};
+    gyro = GyroCalibration::of(*step.gyro);
   }
 }
 
@@ -81,14 +80,31 @@ std::string RunSummary::gyro_line() const {
   if (gyro_epochs == 0) return {};
   std::string out = "gyro: ";
   if (gyro) {
-    out += fmt::format("bias {:.5f} rad/s (sd {:.2g}), scale {:.4f} (sd {:.2g}), ", gyro->bias,
-                       gyro->bias_sd, gyro->scale, gyro->scale_sd);
+    out += fmt::format(
+        "bias {:.5f} rad/s (sd {:.2g}), scale {:.4f} (sd {:.2g}), latency {:.1f} ms (sd {:.2g}), ",
+        gyro->bias, gyro->bias_sd, gyro->scale, gyro->scale_sd, 1e3 * gyro->latency,
+        1e3 * gyro->latency_sd);
   }
   const double percent =
       epochs > 0 ? 100.0 * static_cast<double>(heading_from_gyro) / static_cast<double>(epochs)
                  : 0.0;
-  return out + fmt::format("heading from the gyro in {} of {} epochs ({:.1f} %)\n",
-                           heading_from_gyro, epochs, percent);
+  out += fmt::format("heading from the gyro in {} of {} epochs ({:.1f} %)\n", heading_from_gyro,
+                     epochs, percent);
+  if (gyro && gyro->bias_resets > 0) {
+    out += fmt::format("gyro: its bias stepped {} time{} (learnt afresh each time)\n",
+                       gyro->bias_resets, gyro->bias_resets == 1 ? "" : "s");
+  }
+  // More than kLatencySds of its sd from the config's: a false alarm at
+  // about 0.3 % of runs while the config is right (a normal's two tails).
+  if (gyro && std::abs(gyro->latency - gyro->configured_latency) >
+                  kLatencySds * gyro->latency_sd) {
+    out += fmt::format(
+        "gyro: its rows' latency is {:.1f} ms (sd {:.2g}), the config says {:.1f} ms: set "
+        "imu.latency: {:.4f}\n",
+        1e3 * gyro->latency, 1e3 * gyro->latency_sd, 1e3 * gyro->configured_latency,
+        gyro->latency);
+  }
+  return out;
 }
 
 }  // namespace moa::io

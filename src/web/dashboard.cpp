@@ -369,7 +369,9 @@ std::string Dashboard::Impl::event_json() const {
         .member("bias", g->bias)
         .member("bias_sd", g->bias_sd)
         .member("scale", g->scale)
-        .member("scale_sd", g->scale_sd);
+        .member("scale_sd", g->scale_sd)
+        .member("latency", g->latency)
+        .member("latency_sd", g->latency_sd);
     if (std::isnan(pending.gyro_test)) {
       j.key("test").null();
     } else {
@@ -622,8 +624,7 @@ void Dashboard::publish(const OdometryStep& step, std::span<const Eigen::Vector2
   p.heading = heading_source(e);
   if (e.tests.gyro_fused) ++p.heading_gyro;
   if (step.gyro != nullptr) {
-    p.gyro = RunSummary::GyroCalibration{step.gyro->bias(), step.gyro->bias_sd(),
-                                         step.gyro->scale(), step.gyro->scale_sd()};
+    p.gyro = RunSummary::GyroCalibration::of(*step.gyro);
     p.gyro_test = e.tests.gyro;
   } else {
     p.gyro.reset();

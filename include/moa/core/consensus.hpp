@@ -52,6 +52,15 @@
 // blamed from then on. An array blamed is common-mode wrong (step 3); a gyro
 // blamed is not used (`gyro_rejected`): the rotation is the array's, the
 // gyro learns nothing and its heading's error is forgotten.
+// Over time: a gyro stuck within the array's noise (on a fast robot a
+// compact array's rotation is noisy: a stuck reading passes each epoch's
+// test and turns the heading for seconds) shows as a disagreement of one
+// sign epoch after epoch. Its normalised value z = (omega_a - omega_g) /
+// sqrt(C_ww + var_g), clipped at the gate, feeds two one-sided CUSUMs
+// (cusum.hpp, reference 0.5 sd, one false alarm an hour at the epoch
+// rate); each is capped at twice its alarm level, so a gyro that recovers
+// is back within about 4 h epochs. An alarm, unless the wheels reject the
+// array's twist, blames the gyro until both statistics are back at zero.
 // Otherwise, whenever the gyro reads (not saturated) the rotation reported is
 // the gyro's, with the heading's error its calibration leaves taken back as
 // the array teaches it (gyro.hpp): an accepted array twist teaches the
@@ -81,6 +90,7 @@
 #include <cstdint>
 #include <optional>
 
+#include "moa/core/cusum.hpp"
 #include "moa/core/fallback.hpp"
 #include "moa/core/gyro.hpp"
 #include "moa/core/health.hpp"
@@ -173,6 +183,9 @@ class ConsensusEstimator {
   void test_references(const Candidate& best, const References& refs, SourceTests& tests) const;
   /// The gyro against the array (above): updates the episode's blame.
   void blame(const Candidate& best, const References& refs, const SourceTests& tests, double t);
+  /// The gyro against the array over time (above): z the epoch's
+  /// normalised disagreement; sets gyro_drifting_.
+  void drift_test(real z, real dt, const SourceTests& tests);
   /// Step 3: every reference rejects the majority candidate's twist.
   bool common_mode(const Candidate& best, const References& refs, const SourceTests& tests,
                    double t) const;
@@ -224,6 +237,15 @@ class ConsensusEstimator {
   enum class Blame : std::uint8_t { kNone, kArray, kGyro };
   Blame blame_ = Blame::kNone;
   double blame_since_ = 0.0;  ///< s, the episode's first epoch
+  /// The gyro against the array over time: CUSUMs of the normalised
+  /// disagreement (a stuck gyro within the array's noise, epoch after
+  /// epoch), their alarm level (sd; 0 until the first epoch), and the
+  /// hypothesis they raised: the gyro drifting, until both are back at 0.
+  static constexpr real kDriftShift = real(0.5);
+  static constexpr real kDriftFalseAlarmTime = real(3600);
+  TwoSidedCusum gyro_drift_;
+  real gyro_drift_h_ = 0;
+  bool gyro_drifting_ = false;
   RepeatCounter repeats_;     ///< of the counts as read (health: frozen; self-calibration's guard)
   std::optional<SelfCalibration> calibration_;
   ArraySample corrected_;  ///< the epoch's counts through calibration_'s correction

@@ -73,11 +73,43 @@
 // rotation is not the gyro's (a saturated reading, a gyro blamed for its
 // disagreement with the array) grows delta by that rotation's own error,
 // dt^2 var, and takes its estimate back the same way.
+//
+// The latency. A robot program's stamps are off by milliseconds: the gyro's
+// rows cover the interval ending tau s before the one the config's latency
+// says, tau unknown (prior sd latency_sigma). Then g(t) reads the rate of
+// t - tau, omega(t - tau) ~ omega(t) - tau omegadot(t): harmless at a steady
+// rate, but in a turn's acceleration a few milliseconds read tens of mrad/s
+// off the array's rotation, which the tests blame and the windows would
+// learn as bias and scale. tau is a seventh state, x = (b, s, a_x, a_y, e,
+// delta, tau). Over a window of readings g_0 .. g_1 (the epoch before it and
+// its last), the angle read is k (1 + s) (A - tau (omega_1 - omega_0)), so
+// the window's H gains -(g_1 - g_0) for tau (the readings' own difference,
+// which k (1 + s) multiplies already). An epoch's rate is corrected to
+// omega_g + tau omegadot, omegadot = (g - g_prev) / (k dt), its variance
+// grown by omegadot^2 P_tautau, and delta grows by -dt omegadot tau.
+// The difference of two readings is noisy (variance 2 d^2 / dt): below
+// kSlopeNoise of its sd it is taken as zero, so at rest and at a steady rate
+// tau neither moves nor is learnt from noise (a state the data cannot see).
+// latency() is the config's latency plus tau, the rows' true latency.
+//
+// A bias step. A part's bias that jumps (a knock, a temperature step) is
+// no random walk: a window's gate rejects it, or passes it at a fraction of
+// the step, and the bias would be learnt over minutes. The windows'
+// normalised innovations, z = y / sqrt(H P H^T + R) (N(0, 1) while the model
+// holds; clipped at the gate, so one gross window moves the test by a
+// bounded step), feed two one-sided CUSUMs (cusum.hpp) with reference
+// kStepShift = 0.5 sd and an alarm level from kStepFalseAlarmTime, one false
+// alarm an hour in windows of window_time while the model holds. An alarm is
+// a bias step: the bias is learnt afresh (P_bb back to bias_sigma^2, its
+// correlations dropped), the statistics restart, and bias_resets() counts
+// it. The heading the step turned before the alarm is not taken back.
 #pragma once
 
 #include <cmath>
+#include <limits>
 #include <optional>
 
+#include "moa/core/cusum.hpp"
 #include "moa/core/kalman.hpp"
 #include "moa/core/options_check.hpp"
 #include "moa/core/real.hpp"
@@ -95,6 +127,7 @@ struct GyroOptions {
   real mount_yaw_sigma = 0.0035;  ///< rad, sd of a sensor's yaw mount error (0.2 deg)
   real max_rate = 8.7;            ///< rad/s, the full scale (500 deg/s)
   double latency = 0.0;           ///< s: a row's t minus the true end of its interval
+  real latency_sigma = 0.005;     ///< s, sd of latency (stamps off by milliseconds)
   real window_time = 0.1;         ///< s, longest calibration window
   /// nullopt when usable, else the first field out of its bounds.
   OptionCheck validate() const;
@@ -110,12 +143,24 @@ class GyroModel {
  public:
   /// Readings within this fraction of max_rate are saturated.
   static constexpr real kSaturation = real(0.98);
+  /// A difference of two readings under this many of its sds is no change
+  /// of rate (the latency's regressor, above).
+  static constexpr real kSlopeNoise = real(5);
+  /// The states' count and indices.
+  static constexpr int kStates = 7;
+  static constexpr int kDelta = 5, kLatency = 6;
+  /// The bias step's CUSUM: reference (sd) and mean time between false
+  /// alarms (s) while the model holds.
+  static constexpr real kStepShift = real(0.5);
+  static constexpr real kStepFalseAlarmTime = real(3600);
 
   /// `r_rms`: the sensors' rms distance from the robot's centre (m).
   explicit GyroModel(const GyroOptions& options = {}, real r_rms = 0.1);
 
-  /// Grows the bias uncertainty over dt s.
-  void predict(real dt);
+  /// An epoch of dt s whose reading is g (rad/s): grows the bias
+  /// uncertainty and takes the change of rate since the reading before
+  /// (the latency's regressor; none across a saturated or missing reading).
+  void predict(real dt, real g);
   /// The calibrated rate of reading g over dt; nullopt when saturated or not
   /// finite.
   std::optional<GyroRate> rate(real g, real dt) const;
@@ -146,22 +191,45 @@ class GyroModel {
   /// test of the array's rotation).
   void decouple(Vec3& x_a, Mat3& c_a) const;
 
+  const GyroOptions& options() const { return options_; }
   real bias() const { return options_.bias + x_(0); }                ///< c + b, rad/s
   real scale() const { return options_.scale * (real(1) + x_(1)); }  ///< k (1 + s)
   Vec2 coupling() const { return x_.segment<2>(2); }                 ///< a, rad/m
-  const Mat<6, 6>& covariance() const { return p_; }    ///< of (b, s, a_x, a_y, e, delta)
+  /// s, the rows' latency: the config's plus tau
+  double latency() const { return options_.latency + static_cast<double>(x_(kLatency)); }
+  real latency_sd() const { return std::sqrt(p_(kLatency, kLatency)); }  ///< s, sd of latency()
+  /// of (b, s, a_x, a_y, e, delta, tau)
+  const Mat<kStates, kStates>& covariance() const { return p_; }
   real bias_sd() const { return std::sqrt(p_(0, 0)); }  ///< rad/s, sd of bias()
+  long bias_resets() const { return bias_resets_; }     ///< bias steps found so far
   real scale_sd() const { return options_.scale * std::sqrt(p_(1, 1)); }  ///< sd of scale()
 
  private:
   GyroOptions options_;
-  Mat<6, 1> x_ = Mat<6, 1>::Zero();
-  Mat<6, 6> p_ = Mat<6, 6>::Zero();
+  Mat<kStates, 1> x_ = Mat<kStates, 1>::Zero();
+  Mat<kStates, kStates> p_ = Mat<kStates, kStates>::Zero();
   bool chained_ = false;  ///< e is the residual at the open window's start
+  TwoSidedCusum step_;    ///< of the windows' normalised innovations
+  real step_h_ = 0;       ///< its alarm level, sd
+  long bias_resets_ = 0;
+  /// rad/s, the readings predict() took last and the one before (NaN: none,
+  /// or saturated)
+  real last_g_ = std::numeric_limits<real>::quiet_NaN();
+  real previous_g_ = std::numeric_limits<real>::quiet_NaN();
+  real change_ = 0;  ///< rad/s, last_g_ - previous_g_ beyond its noise, else 0
+  real previous_change_ = 0;  ///< rad/s, change_ an epoch before
   struct Window {
     real t = 0, gyro = 0, array = 0, noise = 0, q = 0;  ///< s, rad, rad, rad^2, rad^2
     Vec2 displacement = Vec2::Zero();                   ///< m, robot frame
+    /// rad/s, the reading before the window's first epoch (NaN: none) and
+    /// its last epoch's; s, that epoch's length
+    real g0 = std::numeric_limits<real>::quiet_NaN(), g1 = 0, dt = 0;
+    real c0 = 0, c1 = 0;  ///< rad/s, each edge reading's change over its epoch
+    bool still = true;  ///< every epoch at rest (zero twist, no noise)
   } window_;
+  /// The change of reading a - b (rad/s) over readings of epochs of dt s:
+  /// 0 within kSlopeNoise sds of its noise, or when either is missing.
+  real change(real a, real b, real dt) const;
   /// Fuses the window; `chain`: the next window begins where it ends.
   std::optional<AidStatus> close(real gate, bool chain);
 };

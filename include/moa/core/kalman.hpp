@@ -30,16 +30,28 @@ real test_ratio(const Mat<M, 1>& y, const Mat<M, M>& s, real gate) {
   return y.dot(s.inverse() * y) / gate;
 }
 
+/// S = H P H^T + R. The products here are coefficient-based (lazyProduct):
+/// Eigen's blocked product, which it picks for the larger fixed sizes, may
+/// take its temporaries from the heap, and the core is heap-free.
+template <int N, int M>
+Mat<M, M> innovation_covariance(const Mat<N, N>& p, const Mat<M, N>& h, const Mat<M, M>& r) {
+  const Mat<M, N> hp = h.lazyProduct(p);
+  return hp.lazyProduct(h.transpose()) + r;
+}
+
 /// The Joseph-form update above, without a test (a measurement that is to be
 /// taken whatever it says, such as the bridge's rotation).
 template <int N, int M>
 void joseph_update(Mat<N, 1>& x, Mat<N, N>& p, const Mat<M, 1>& y, const Mat<M, N>& h,
                    const Mat<M, M>& r) {
-  const Mat<M, M> s = h * p * h.transpose() + r;
-  const Mat<N, M> k = p * h.transpose() * s.inverse();
-  const Mat<N, N> a = Mat<N, N>::Identity() - k * h;
-  x += k * y;
-  p = a * p * a.transpose() + k * r * k.transpose();
+  const Mat<M, M> s = innovation_covariance<N, M>(p, h, r);
+  const Mat<N, M> pht = p.lazyProduct(h.transpose());
+  const Mat<N, M> k = pht.lazyProduct(s.inverse());
+  const Mat<N, N> a = Mat<N, N>::Identity() - k.lazyProduct(h);
+  x += k.lazyProduct(y);
+  const Mat<N, N> ap = a.lazyProduct(p);
+  const Mat<N, M> kr = k.lazyProduct(r);
+  p = ap.lazyProduct(a.transpose()) + kr.lazyProduct(k.transpose());
 }
 
 /// Tests the measurement, then fuses it when its ratio is at most 1.
@@ -47,7 +59,7 @@ template <int N, int M>
 AidStatus gated_update(Mat<N, 1>& x, Mat<N, N>& p, const Mat<M, 1>& y, const Mat<M, N>& h,
                        const Mat<M, M>& r, real gate) {
   AidStatus status;
-  status.test_ratio = test_ratio<M>(y, h * p * h.transpose() + r, gate);
+  status.test_ratio = test_ratio<M>(y, innovation_covariance<N, M>(p, h, r), gate);
   if (status.test_ratio <= real(1)) {
     joseph_update<N, M>(x, p, y, h, r);
     status.fused = true;

@@ -51,6 +51,13 @@ struct RunSummary {
   struct GyroCalibration {
     double bias = 0, bias_sd = 0;    ///< rad/s
     double scale = 1, scale_sd = 0;  ///< reading per true rate
+    /// s, the rows' latency learnt and the config's (imu.latency)
+    double latency = 0, latency_sd = 0, configured_latency = 0;
+    long bias_resets = 0;  ///< bias steps found (GyroModel::bias_resets)
+    static GyroCalibration of(const GyroModel& g) {
+      return {g.bias(),    g.bias_sd(),    g.scale(),           g.scale_sd(),
+              g.latency(), g.latency_sd(), g.options().latency, g.bias_resets()};
+    }
   };
   /// Set by add(step) when the step carries the gyro's model.
   std::optional<GyroCalibration> gyro;
@@ -64,6 +71,9 @@ struct RunSummary {
   /// covariance grown, so the pose of such an epoch is a guess). Warnings do
   /// not change the verdict: they say where to look.
   static constexpr double kMaxHeldFraction = 0.01;
+  /// The gyro's latency learnt is reported as differing from the config's
+  /// beyond this many of its sds.
+  static constexpr double kLatencySds = 3.0;
   bool usable() const;
   /// Why usable() is what it is, one sentence.
   std::string verdict() const;
