@@ -61,6 +61,7 @@
 // rate); each is capped at twice its alarm level, so a gyro that recovers
 // is back within about 4 h epochs. An alarm, unless the wheels reject the
 // array's twist, blames the gyro until both statistics are back at zero.
+// Not fed while the array is blamed (its readings are then the fault).
 // Otherwise, whenever the gyro reads (not saturated) the rotation reported is
 // the gyro's, with the heading's error its calibration leaves taken back as
 // the array teaches it (gyro.hpp): an accepted array twist teaches the

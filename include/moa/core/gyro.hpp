@@ -100,9 +100,10 @@
 // bounded step), feed two one-sided CUSUMs (cusum.hpp) with reference
 // kStepShift = 0.5 sd and an alarm level from kStepFalseAlarmTime, one false
 // alarm an hour in windows of window_time while the model holds. An alarm is
-// a bias step: the bias is learnt afresh (P_bb back to bias_sigma^2, its
-// correlations dropped), the statistics restart, and bias_resets() counts
-// it. The heading the step turned before the alarm is not taken back.
+// a bias step of unknown size: P_bb grows by bias_sigma^2 (its correlations
+// kept) and the bias is learnt afresh, the statistics restart, and
+// bias_resets() counts it. The heading the step turned before the alarm is
+// not taken back.
 #pragma once
 
 #include <cmath>
