@@ -21,7 +21,6 @@ constexpr std::uint8_t kRegMotionBurst = 0x50;
 constexpr std::uint8_t kRegSromLoadBurst = 0x62;
 constexpr std::uint8_t kMotionMot = 0x80;
 constexpr std::uint8_t kMotionLift = 0x08;
-constexpr std::size_t kBurstLength = 12;
 constexpr std::size_t kSromLength = 4094;
 
 }  // namespace

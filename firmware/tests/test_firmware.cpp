@@ -559,7 +559,7 @@ TEST(FirmwareCommands, WindowSumsSaturateAtInt16AndSetOverflow) {
                            });
       },
       400000.0));
-  const serial::Data& wide = s.data().back();
+  const serial::Data wide = s.data().back();  // a copy: data() is a temporary
   EXPECT_EQ(wide.sensors[0].dx, 32767);
   EXPECT_EQ(wide.sensors[0].dy, -32768);
   EXPECT_EQ(wide.sensors[0].flags & kFlagOverflow, kFlagOverflow);

@@ -32,7 +32,6 @@ constexpr std::uint8_t kOk = 0, kNoAnswer = 1, kWrongId = 2, kNoSrom = 3, kSromR
                        kStopped = 5;
 constexpr int kSqualFloor = 16;  // the firmware's SQUAL floor (config.h)
 constexpr std::uint8_t kIdleSqual = 100;
-constexpr std::uint8_t kTypeStatus = 0x04;
 constexpr std::uint8_t kTypeShutter = 0x05;
 // PMW33xx start-up: 50 ms after the reset, then per sensor about 10 ms of
 // SROM_Enable, 4094 bytes 15 us apart plus their transfer and loop (about
