@@ -136,8 +136,8 @@ TEST(ConfigInit, NumbersAreWrittenAsAPersonWouldWriteThem) {
 TEST(ConfigInit, PixArtPresetsCarryTheirDataSheetFigures) {
   const auto dir = test::scratch_dir("config_init_pixart");
   const fs::path config = dir / "robot.yaml";
-  const std::string polygon = "config init --layout polygon --sensors 4 --radius 0.1 --force --out " +
-                              config.string();
+  const std::string polygon =
+      "config init --layout polygon --sensors 4 --radius 0.1 --force --out " + config.string();
   auto r = test::run_moa(polygon + " --preset PMW3360");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   io::RobotConfig read = io::read_config(config);

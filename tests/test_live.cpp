@@ -446,8 +446,8 @@ TEST(Live, SerialGyroSamplesAreRecordedToImuCsvOnTheRowsClock) {
   const fs::path replay = scene.dir / "replay.csv";
   const fs::path diagnostics = scene.dir / "diagnostics.csv";
   const auto r = run_moa("odometry --config " + (record / "robot.yaml").string() + " --log " +
-                         record.string() + " --quiet --out " + replay.string() +
-                         " --diagnostics " + diagnostics.string());
+                         record.string() + " --quiet --out " + replay.string() + " --diagnostics " +
+                         diagnostics.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(read_text(replay), read_text(odometry));
   // The gyro was fed: diagnostics.csv has its row each epoch (tested

@@ -341,8 +341,9 @@ TEST(Decoder, StatusFrameHasTheDocumentedLayoutAndRoundTrips) {
   wire.push_back(0);
   EXPECT_EQ(encode(st), wire);
   Decoder decoder;
-  const Fed fed = feed(decoder, concat({wire, frame_of({0x04, 2, 0, 0, 1}),
-                                        frame_of({0x04, 0}), frame_of({0x04, 17})}));
+  const Fed fed =
+      feed(decoder,
+           concat({wire, frame_of({0x04, 2, 0, 0, 1}), frame_of({0x04, 0}), frame_of({0x04, 17})}));
   ASSERT_EQ(fed.messages.size(), 1u);
   const auto& got = std::get<Status>(fed.messages[0]);
   ASSERT_EQ(got.n, 3);

@@ -614,8 +614,9 @@ TEST(SerialReader, SensorStatesOtherThanOkAreWarnedOncePerChange) {
     if (w.find("chip select") != std::string::npos) said.push_back(w);
   }
   ASSERT_EQ(said.size(), 2u);
-  EXPECT_EQ(said[0], pty.device() +
-                         ": sensor 'a' (chip select 2): another part (product ID 0x47), left alone");
+  EXPECT_EQ(
+      said[0],
+      pty.device() + ": sensor 'a' (chip select 2): another part (product ID 0x47), left alone");
   EXPECT_EQ(said[1], pty.device() +
                          ": sensor 'a' (chip select 2): stopped answering; not read until the "
                          "device restarts");

@@ -169,8 +169,7 @@ class Session {
   }
 
  private:
-  static std::vector<std::unique_ptr<SpiChip>> make_models(
-      const std::vector<SensorSetup>& setups) {
+  static std::vector<std::unique_ptr<SpiChip>> make_models(const std::vector<SensorSetup>& setups) {
     std::vector<std::unique_ptr<SpiChip>> models;
     for (const SensorSetup& s : setups) {
       models.push_back(s.connected
@@ -471,12 +470,14 @@ TEST(FirmwareCommands, SetCpiSetsEverySensorAndAnswersHello) {
   s.send(serial::SetCpi{400});
   ASSERT_TRUE(s.run_until([&] { return s.hellos().size() >= 2; }, 20000.0));
   EXPECT_EQ(s.hellos()[1].cpi, 400);
-  for (std::size_t i = 0; i < 4; ++i) EXPECT_EQ(s.bench().model<Adns3080Model>(i)->configuration(), 0x09);
+  for (std::size_t i = 0; i < 4; ++i)
+    EXPECT_EQ(s.bench().model<Adns3080Model>(i)->configuration(), 0x09);
 
   s.send(serial::SetCpi{1600});
   ASSERT_TRUE(s.run_until([&] { return s.hellos().size() >= 3; }, 20000.0));
   EXPECT_EQ(s.hellos()[2].cpi, 1600);
-  for (std::size_t i = 0; i < 4; ++i) EXPECT_EQ(s.bench().model<Adns3080Model>(i)->configuration(), 0x19);
+  for (std::size_t i = 0; i < 4; ++i)
+    EXPECT_EQ(s.bench().model<Adns3080Model>(i)->configuration(), 0x19);
 
   ASSERT_TRUE(s.run_until([&] { return s.data().size() >= 6; }, 100000.0));
   expect_frames_match_script(s);
@@ -496,7 +497,8 @@ TEST(FirmwareCommands, RefusedSettingsAnswerHelloUnchanged) {
     EXPECT_EQ(hello.k, 12);
     EXPECT_EQ(hello.cpi, 1600);
   }
-  for (std::size_t i = 0; i < 4; ++i) EXPECT_EQ(s.bench().model<Adns3080Model>(i)->configuration(), 0x19);
+  for (std::size_t i = 0; i < 4; ++i)
+    EXPECT_EQ(s.bench().model<Adns3080Model>(i)->configuration(), 0x19);
   ASSERT_TRUE(s.run_until([&] { return s.data().size() >= 5; }, 100000.0));
   for (const std::size_t reads : reads_per_frame(s, 0)) EXPECT_EQ(reads, 12u);
   expect_frames_match_script(s);
@@ -553,10 +555,9 @@ TEST(FirmwareCommands, WindowSumsSaturateAtInt16AndSetOverflow) {
         // The first DATA frame after the answer (a STATUS frame follows
         // every HELLO).
         if (answer >= s.received().size()) return false;
-        return std::any_of(s.received().begin() + static_cast<std::ptrdiff_t>(answer) + 1,
-                           s.received().end(), [](const serial::Message& m) {
-                             return std::holds_alternative<serial::Data>(m);
-                           });
+        return std::any_of(
+            s.received().begin() + static_cast<std::ptrdiff_t>(answer) + 1, s.received().end(),
+            [](const serial::Message& m) { return std::holds_alternative<serial::Data>(m); });
       },
       400000.0));
   const serial::Data wide = s.data().back();  // a copy: data() is a temporary

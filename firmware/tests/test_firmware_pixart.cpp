@@ -75,8 +75,8 @@ struct Expected {
 /// What the protocol says a record over reads [begin, end) must hold: the
 /// counts of the reads the chip reported as on the surface (a lifted chip
 /// reports none) and, for a flow chip, not refused by the quality rule.
-Expected expected_record(const std::vector<MotionFrame>& script, std::size_t begin,
-                         std::size_t end, bool flow) {
+Expected expected_record(const std::vector<MotionFrame>& script, std::size_t begin, std::size_t end,
+                         bool flow) {
   long long sx = 0, sy = 0;
   int min_squal = 255;
   std::uint16_t shutter = 0;
@@ -405,7 +405,7 @@ const char* const kPaa5100C =
     "7300";
 
 struct Step {
-  int reg;  ///< -1: a wait
+  int reg;    ///< -1: a wait
   int value;  ///< the value, or the wait in ms
 };
 
@@ -417,7 +417,8 @@ void append(std::vector<Step>& out, const std::string& text) {
     if (word[0] == 'W') {
       out.push_back({-1, std::stoi(word.substr(1))});
     } else {
-      out.push_back({std::stoi(word.substr(0, 2), nullptr, 16), std::stoi(word.substr(2), nullptr, 16)});
+      out.push_back(
+          {std::stoi(word.substr(0, 2), nullptr, 16), std::stoi(word.substr(2), nullptr, 16)});
     }
     at = end + 1;
   }

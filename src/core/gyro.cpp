@@ -65,7 +65,8 @@ std::optional<GyroRate> GyroModel::rate(real g, real dt) const {
   constexpr std::array<int, 3> kIndex{0, 1, kLatency};
   Mat3 p;
   for (std::size_t a = 0; a < 3; ++a) {
-    for (std::size_t b = 0; b < 3; ++b) p(static_cast<int>(a), static_cast<int>(b)) = p_(kIndex[a], kIndex[b]);
+    for (std::size_t b = 0; b < 3; ++b)
+      p(static_cast<int>(a), static_cast<int>(b)) = p_(kIndex[a], kIndex[b]);
   }
   const real d = options_.noise_density;
   out.variance = d * d / (dt * k * k) + j.dot(p * j);
@@ -180,9 +181,9 @@ std::optional<AidStatus> GyroModel::close(real gate, bool chain) {
   // The regressor's own noise (two readings, 2 d^2 / dt), or the change
   // taken as none (up to kSlopeNoise of its sd), times the latency's
   // second moment.
-  const real dg_var = w.still ? real(0)
-                              : real(2) * nd * nd / w.dt *
-                                    (dg == 0 ? kSlopeNoise * kSlopeNoise : real(1));
+  const real dg_var =
+      w.still ? real(0)
+              : real(2) * nd * nd / w.dt * (dg == 0 ? kSlopeNoise * kSlopeNoise : real(1));
   const real tau2 = x_(kLatency) * x_(kLatency) + p_(kLatency, kLatency);
   const Mat<1, 1> r(nd * nd * w.t + k * k * w.noise + tau2 * dg_var);
   // The bias step's test, on the innovation before the update.

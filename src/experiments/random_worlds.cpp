@@ -472,14 +472,14 @@ Result random_worlds(const Options& options) {
                  "{:.2f} over {} worlds with a gyro.\n",
                  nees_q.median, nees_q.p90, nees_q.max, nees_q.n, rest_q.median, rest_q.max,
                  rest_q.n);
-  fmt::format_to(
-      out,
-      "The gyro's calibration at the end against the truth, ((x - x_true) / sd)^2 "
-      "(mean 1 if consistent): scale mean {:.2f}, median {:.2f}, max {:.1f} over {} "
-      "worlds; bias (no walk, no step) mean {:.2f}, median {:.2f}, max {:.1f} over {}; "
-      "latency mean {:.2f}, median {:.2f}, max {:.1f} over {}.\n",
-      mean(scale_nees), scale_q.median, scale_q.max, scale_q.n, mean(bias_nees), bias_q.median,
-      bias_q.max, bias_q.n, mean(latency_nees), latency_q.median, latency_q.max, latency_q.n);
+  fmt::format_to(out,
+                 "The gyro's calibration at the end against the truth, ((x - x_true) / sd)^2 "
+                 "(mean 1 if consistent): scale mean {:.2f}, median {:.2f}, max {:.1f} over {} "
+                 "worlds; bias (no walk, no step) mean {:.2f}, median {:.2f}, max {:.1f} over {}; "
+                 "latency mean {:.2f}, median {:.2f}, max {:.1f} over {}.\n",
+                 mean(scale_nees), scale_q.median, scale_q.max, scale_q.n, mean(bias_nees),
+                 bias_q.median, bias_q.max, bias_q.n, mean(latency_nees), latency_q.median,
+                 latency_q.max, latency_q.n);
   t += "\nFailures (an error, a non-finite figure, or over 5x selection):\n";
   std::size_t listed = 0;
   for (const auto& r : results) {

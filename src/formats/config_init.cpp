@@ -13,7 +13,6 @@
 namespace moa::io {
 namespace {
 
-
 constexpr std::string_view kExplanation = R"(#
 # Frames: the robot frame has x forward and y to the left, its origin at the
 # point whose pose you want (usually the centre of rotation); angles are

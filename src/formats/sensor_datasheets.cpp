@@ -24,23 +24,57 @@ const std::array<SensorDatasheet, 6> kSheets{{
     // PixArt PMW3360DM-T2QU (data sheet v1.50): 100 to 12000 cpi in steps of
     // 100, 250 in/s typical, 50 g, up to 12000 frames/s, resolution error 1 %
     // typical, lift-off cut at 2 mm (or 3 mm), on its LM19-LSI lens.
-    {{"PMW3360", 1600.0, 250.0 * kMetresPerInch, 12000.0}, 100.0, 12000.0, 100.0, 50.0 * kG,
-     0.0, 0.01, 0.0, 0.0, 0.002,
+    {{"PMW3360", 1600.0, 250.0 * kMetresPerInch, 12000.0},
+     100.0,
+     12000.0,
+     100.0,
+     50.0 * kG,
+     0.0,
+     0.01,
+     0.0,
+     0.0,
+     0.002,
      "the moa AVR firmware moa_firmware_pmw3360_atmega328p (needs PixArt's SROM image at "
      "build time), or a gaming mouse with it (evdev)"},
     // PixArt PMW3389DM-T3QU: 50 to 16000 cpi in steps of 50, 400 in/s, 50 g,
     // on the same LM19-LSI lens.
-    {{"PMW3389", 1600.0, 400.0 * kMetresPerInch, 0.0}, 50.0, 16000.0, 50.0, 50.0 * kG, 0.0, 0.0,
-     0.0, 0.0, 0.0,
+    {{"PMW3389", 1600.0, 400.0 * kMetresPerInch, 0.0},
+     50.0,
+     16000.0,
+     50.0,
+     50.0 * kG,
+     0.0,
+     0.0,
+     0.0,
+     0.0,
+     0.0,
      "the moa AVR firmware moa_firmware_pmw3389_atmega328p (needs PixArt's SROM image at "
      "build time), or a gaming mouse with it (evdev)"},
     // PixArt PMW3901MB-TXQT: an optical flow chip focused from 80 mm to
     // infinity, rated to 7.4 rad/s of flow (speed = 7.4 rad/s x height).
-    {{"PMW3901", 0.0, 0.0, 0.0}, 0.0, 0.0, 0.0, 0.0, 7.4, 0.0, 0.080, kInf, 0.0,
+    {{"PMW3901", 0.0, 0.0, 0.0},
+     0.0,
+     0.0,
+     0.0,
+     0.0,
+     7.4,
+     0.0,
+     0.080,
+     kInf,
+     0.0,
      "the moa AVR firmware moa_firmware_pmw3901_atmega328p"},
     // PixArt PAA5100JE-Q: an optical tracking chip for robots, working
     // range 15 to 35 mm over the floor with its LED.
-    {{"PAA5100", 0.0, 0.0, 0.0}, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.015, 0.035, 0.0,
+    {{"PAA5100", 0.0, 0.0, 0.0},
+     0.0,
+     0.0,
+     0.0,
+     0.0,
+     0.0,
+     0.0,
+     0.015,
+     0.035,
+     0.0,
      "the moa AVR firmware moa_firmware_paa5100_atmega328p / _atmega8"},
 }};
 
@@ -93,8 +127,7 @@ std::string datasheet_lines(const SensorDatasheet& s) {
   if (s.height_min > 0.0) {
     line(std::isinf(s.height_max)
              ? fmt::format("working height {} and up", metres(s.height_min))
-             : fmt::format("working height {} to {}", metres(s.height_min),
-                           metres(s.height_max)));
+             : fmt::format("working height {} to {}", metres(s.height_min), metres(s.height_max)));
   }
   if (s.lift_off > 0.0) line(fmt::format("stops tracking when lifted {}", metres(s.lift_off)));
   line(fmt::format("read by {}", s.interface));

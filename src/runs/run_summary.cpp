@@ -96,13 +96,11 @@ std::string RunSummary::gyro_line() const {
   }
   // More than kLatencySds of its sd from the config's: a false alarm at
   // about 0.3 % of runs while the config is right (a normal's two tails).
-  if (gyro && std::abs(gyro->latency - gyro->configured_latency) >
-                  kLatencySds * gyro->latency_sd) {
+  if (gyro && std::abs(gyro->latency - gyro->configured_latency) > kLatencySds * gyro->latency_sd) {
     out += fmt::format(
         "gyro: its rows' latency is {:.1f} ms (sd {:.2g}), the config says {:.1f} ms: set "
         "imu.latency: {:.4f}\n",
-        1e3 * gyro->latency, 1e3 * gyro->latency_sd, 1e3 * gyro->configured_latency,
-        gyro->latency);
+        1e3 * gyro->latency, 1e3 * gyro->latency_sd, 1e3 * gyro->configured_latency, gyro->latency);
   }
   return out;
 }

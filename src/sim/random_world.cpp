@@ -603,7 +603,8 @@ class Builder {
                      "  noise_density: {}\n  max_rate: {}\n  latency: {}\n",
                      num(g_rate_), num(g_scale_), num(g_bias_), num(g_walk_), num(g_noise_),
                      num(g_max_), num(g_latency_));
-      if (g_latency_error_ != 0.0) fmt::format_to(out, "  latency_error: {}\n", num(g_latency_error_));
+      if (g_latency_error_ != 0.0)
+        fmt::format_to(out, "  latency_error: {}\n", num(g_latency_error_));
       if (!gyro_faults_.empty()) {
         y += "  faults:\n";
         for (const auto& g : gyro_faults_) y += "    - " + g + "\n";

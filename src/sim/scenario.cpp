@@ -624,10 +624,9 @@ CameraModel parse_camera(const Source& source, const YAML::Node& node, double fr
 // part's datasheet and the firmware; scale 1 and bias 0), robot.true.yaml
 // the true scale, bias and latency.
 GyroSpec parse_imu(const Source& source, const YAML::Node& node) {
-  const Fields f(
-      source, node, "imu",
-      {"rate", "scale", "bias", "bias_walk", "noise_density", "max_rate", "latency",
-       "latency_error", "faults"});
+  const Fields f(source, node, "imu",
+                 {"rate", "scale", "bias", "bias_walk", "noise_density", "max_rate", "latency",
+                  "latency_error", "faults"});
   GyroSpec g;
   g.enabled = true;
   g.rate = f.bounded("rate", kMinRate, kMaxFrameRate, g.rate);
