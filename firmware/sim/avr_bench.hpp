@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "spi_chip.hpp"
 #include "mpu6050_model.hpp"
+#include "spi_chip.hpp"
 
 struct avr_t;
 struct avr_irq_t;

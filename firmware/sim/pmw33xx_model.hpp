@@ -16,16 +16,16 @@ namespace moa::firmware_sim {
 
 /// PMW3360 data sheet v1.50 (the PMW3389's is the same here), microseconds.
 struct Pmw33xxTiming {
-  double t_srad = 160.0;         ///< read: address byte to data byte
-  double t_srad_motbr = 35.0;    ///< Motion_Burst: address to the first data byte
-  double t_sww = 180.0;          ///< after a write, before the next command (t_SWW, t_SWR)
-  double t_srr = 20.0;           ///< after a read, before the next command (t_SRR, t_SRW)
+  double t_srad = 160.0;           ///< read: address byte to data byte
+  double t_srad_motbr = 35.0;      ///< Motion_Burst: address to the first data byte
+  double t_sww = 180.0;            ///< after a write, before the next command (t_SWW, t_SWR)
+  double t_srr = 20.0;             ///< after a read, before the next command (t_SRR, t_SRW)
   double t_sclk_ncs_write = 35.0;  ///< last bit of a write to NCS high
-  double t_bexit = 0.5;          ///< NCS high after a burst
-  double t_power_up = 50000.0;   ///< Power_Up_Reset to the first access
+  double t_bexit = 0.5;            ///< NCS high after a burst
+  double t_power_up = 50000.0;     ///< Power_Up_Reset to the first access
   double t_srom_enable = 10000.0;  ///< SROM_Enable 0x1D to 0x18; 0x15 to Data_Out
-  double t_load_byte = 15.0;     ///< between bytes of SROM_Load_Burst
-  double t_load_exit = 200.0;    ///< NCS high after the load, before the next access
+  double t_load_byte = 15.0;       ///< between bytes of SROM_Load_Burst
+  double t_load_exit = 200.0;      ///< NCS high after the load, before the next access
 };
 
 /// The made-up image the firmware tests upload (firmware/CMakeLists.txt
@@ -93,7 +93,7 @@ class Pmw33xxModel : public SpiChip {
   double address_end_us_ = 0.0;
   double last_byte_end_us_ = 0.0;
 
-  std::uint8_t config1_ = 0x0F;  ///< PMW3360 reset value: 1600 cpi
+  std::uint8_t config1_ = 0x0F;       ///< PMW3360 reset value: 1600 cpi
   std::uint8_t resolution_l_ = 0x20;  ///< PMW3389: 0x0020 x 50 = 1600 cpi
   std::uint8_t config2_ = 0x20;
   std::uint8_t srom_enable_ = 0;

@@ -44,8 +44,8 @@ struct MotionFrame {
   std::int16_t dx = 0;
   std::int16_t dy = 0;
   std::uint8_t squal = 100;
-  bool overflow = false;       ///< ADNS-3080 Motion bit 4 (OVF)
-  bool lifted = false;         ///< PMW33xx Motion bit 3 (Lift_Stat)
+  bool overflow = false;           ///< ADNS-3080 Motion bit 4 (OVF)
+  bool lifted = false;             ///< PMW33xx Motion bit 3 (Lift_Stat)
   std::uint16_t shutter = 0x0100;  ///< PMW parts' Shutter_Upper:Lower
 };
 

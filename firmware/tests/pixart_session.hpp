@@ -106,7 +106,8 @@ class PixartSession {
     std::vector<std::vector<SensorState>> out;
     for (const auto& p : payloads(0x04)) {
       std::vector<SensorState> s;
-      for (std::size_t i = 0; 2 + 2 * i + 1 < p.size(); ++i) s.push_back({p[2 + 2 * i], p[3 + 2 * i]});
+      for (std::size_t i = 0; 2 + 2 * i + 1 < p.size(); ++i)
+        s.push_back({p[2 + 2 * i], p[3 + 2 * i]});
       if (p.size() == 2 + 2 * static_cast<std::size_t>(p[1])) out.push_back(std::move(s));
     }
     return out;

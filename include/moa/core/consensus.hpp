@@ -247,7 +247,7 @@ class ConsensusEstimator {
   TwoSidedCusum gyro_drift_;
   real gyro_drift_h_ = 0;
   bool gyro_drifting_ = false;
-  RepeatCounter repeats_;     ///< of the counts as read (health: frozen; self-calibration's guard)
+  RepeatCounter repeats_;  ///< of the counts as read (health: frozen; self-calibration's guard)
   std::optional<SelfCalibration> calibration_;
   ArraySample corrected_;  ///< the epoch's counts through calibration_'s correction
 };

@@ -217,7 +217,7 @@ class GyroModel {
   /// or saturated)
   real last_g_ = std::numeric_limits<real>::quiet_NaN();
   real previous_g_ = std::numeric_limits<real>::quiet_NaN();
-  real change_ = 0;  ///< rad/s, last_g_ - previous_g_ beyond its noise, else 0
+  real change_ = 0;           ///< rad/s, last_g_ - previous_g_ beyond its noise, else 0
   real previous_change_ = 0;  ///< rad/s, change_ an epoch before
   struct Window {
     real t = 0, gyro = 0, array = 0, noise = 0, q = 0;  ///< s, rad, rad, rad^2, rad^2
@@ -226,7 +226,7 @@ class GyroModel {
     /// its last epoch's; s, that epoch's length
     real g0 = std::numeric_limits<real>::quiet_NaN(), g1 = 0, dt = 0;
     real c0 = 0, c1 = 0;  ///< rad/s, each edge reading's change over its epoch
-    bool still = true;  ///< every epoch at rest (zero twist, no noise)
+    bool still = true;    ///< every epoch at rest (zero twist, no noise)
   } window_;
   /// The change of reading a - b (rad/s) over readings of epochs of dt s:
   /// 0 within kSlopeNoise sds of its noise, or when either is missing.

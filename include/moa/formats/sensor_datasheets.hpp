@@ -18,7 +18,7 @@ struct SensorDatasheet {
   /// height), rated speed (m/s; 0: given as a flow rate instead) and frame
   /// rate (frames/s; 0: not in the data sheet's summary).
   SensorPreset preset;
-  double cpi_min;           ///< settable resolutions, counts per inch (0: none)
+  double cpi_min;  ///< settable resolutions, counts per inch (0: none)
   double cpi_max;
   double cpi_step;
   double max_acceleration;  ///< rated, m/s^2 (0: not given)
