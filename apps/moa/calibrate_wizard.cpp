@@ -139,7 +139,7 @@ void add_wizard_flags(CLI::App* cmd, WizardArgs& w) {
                 "The guided calibration: with --live, a step-by-step session with live data "
                 "(docs/live.md); without, the same as --method guided");
   cmd->add_flag("--live", w.live,
-                "With --guided: watch the motions live from --mouse, --serial or --replay");
+                "With --guided: watch the motions live from --mouse, --serial, --otos or --replay");
   add_source_flags(cmd, w.source);
   cmd->add_flag("--no-push-y", w.no_push_y,
                 "With --guided --live: skip the push along y (scales taken equal on both axes)");
@@ -147,9 +147,10 @@ void add_wizard_flags(CLI::App* cmd, WizardArgs& w) {
 
 void refuse_live_flags(const WizardArgs& args) {
   const SourceFlags& f = args.source;
-  if (!f.mice.empty() || !f.serial.empty() || !f.replay.empty() || args.no_push_y) {
+  if (!f.mice.empty() || !f.serial.empty() || !f.otos.empty() || !f.replay.empty() ||
+      args.no_push_y) {
     throw io::Error(
-        "--mouse, --serial, --replay and --no-push-y belong to --guided --live (the live guided "
+        "--mouse, --serial, --otos, --replay and --no-push-y belong to --guided --live (the live guided "
         "calibration)");
   }
 }
@@ -199,7 +200,7 @@ int run_wizard(const WizardArgs& args) {
     replay_files = io::resolve_log(spec.replay);
     if (replay_files.imu) replay_log.imu = std::make_unique<io::ImuReader>(*replay_files.imu);
   }
-  const bool gyro_possible = args.imu && (live.serial != nullptr || replay_log.imu);
+  const bool gyro_possible = args.imu && (live.gyro != nullptr || replay_log.imu);
   say("moa calibrate --guided --live: {} sensors of {}, from {}{}\n", config.names.size(),
       args.config, live.origin,
       gyro_possible ? "; the spin calibrates the gyro too, if one sends its rows (--no-imu: the "
@@ -311,7 +312,7 @@ int run_wizard(const WizardArgs& args) {
   announce_step();
   io::LiveRunSource input(*live.source, config.array.size(), live.where,
                           [&] { return quit || session.complete() || g_quit != 0; });
-  if (live.serial != nullptr && args.imu) input.add_gyro(*live.serial);
+  if (live.gyro != nullptr && args.imu) input.add_gyro(*live.gyro);
   if (replay_log.imu) input.add_log(replay_log, replay_files);
   io::run_loop(config, args.config, guided_session_odometry_options(), input, live.where,
                callbacks);

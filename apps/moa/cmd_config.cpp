@@ -96,7 +96,7 @@ int run_config_init(const ConfigInitArgs& a) {
     prototype.cpi = *a.cpi;
   } else if (a.preset.empty()) {
     throw io::Error("give --cpi (the sensors' counts per inch) or --preset");
-  } else if (sheet->cpi_step <= 0.0) {
+  } else if (sheet->cpi_step <= 0.0 && !sheet->velocity_sensor) {
     throw io::Error(fmt::format(
         "--preset {}: a flow chip has no resolution to set, its counts per inch depend on its "
         "height over the floor: push the robot a measured distance, divide the counts by it "
@@ -112,7 +112,11 @@ int run_config_init(const ConfigInitArgs& a) {
           "--sensor lists the sensors one by one: leave out --layout, --sensors, --radius");
     }
     for (const std::string& spec : a.sensor_specs) add_sensor(spec, prototype, config);
-    if (config.names.size() < 2) throw io::Error("--sensor: give at least 2 sensors");
+    // One sensor takes its rotation from a gyro: a sensor with its own may be alone.
+    const bool own_gyro = sheet != nullptr && sheet->gyro_full_scale > 0.0;
+    if (config.names.size() < (own_gyro ? 1u : 2u)) {
+      throw io::Error("--sensor: give at least 2 sensors");
+    }
     title = fmt::format("{} {}sensors at {} cpi, placed one by one", config.names.size(),
                         sensor_kind, prototype.cpi);
   } else {
@@ -148,6 +152,10 @@ int run_config_init(const ConfigInitArgs& a) {
   if (std::filesystem::is_directory(out, ec))
     throw io::Error(fmt::format("{}: is a directory", a.out));
   if (sheet != nullptr) title += "\n" + io::datasheet_lines(*sheet);
+  if (sheet != nullptr && sheet->gyro_full_scale > 0.0) {
+    config.imu = GyroOptions{};
+    config.imu->max_rate = sheet->gyro_full_scale;
+  }
   io::write_commented_config(config, "robot.yaml written by moa config init:\n" + title, out);
   fmt::print(
       "moa config init: {} sensors written to {}; edit it, then calibrate "

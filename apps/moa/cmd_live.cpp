@@ -1,6 +1,6 @@
 // moa live: odometry from devices as they stream, optionally recorded.
 //
-// Data path: EvdevReader, SerialReader or ReplayReader (rows;
+// Data path: EvdevReader, SerialReader, OtosReader or ReplayReader (rows;
 // runs/live_source.hpp) -> the run loop of `moa odometry` (io::run_loop,
 // runs/run_loop.hpp) -> odometry rows (file or stdout), a status line and,
 // with --serve, the dashboard (web/dashboard.hpp).
@@ -234,7 +234,7 @@ int run_live(LiveArgs args) {
       io::refuse_output_onto_inputs(dir / "imu.csv", "--record", inputs);
       io::refuse_output_onto_inputs(dir / "camera.csv", "--record", inputs);
     }
-    if (!spec.serial.empty() || replay_log.any()) {
+    if (!spec.serial.empty() || !spec.otos.empty() || replay_log.any()) {
       io::refuse_output_onto_inputs(dir / "wheels.csv", "--record", inputs);
       io::refuse_output_onto_inputs(dir / "imu.csv", "--record", inputs);
       io::refuse_output_onto_inputs(dir / "camera.csv", "--record", inputs);
@@ -322,17 +322,18 @@ int run_live(LiveArgs args) {
         fmt::format("recorded by moa live from {}; replay: moa odometry --config {} --log {}",
                     live.origin, (dir / "robot.yaml").string(), dir.string())};
     recording = std::make_unique<io::MiceWriter>(dir / "mice.csv", config.names,
-                                                 live.serial != nullptr || live.replay != nullptr,
+                                                 live.serial != nullptr ||
+                                                     live.otos != nullptr || live.replay != nullptr,
                                                  io::MiceWriter::Durability::kJournal, comments);
   }
   // The streams' rows, a serial board's gyro, the replayed log's wheels.csv,
   // camera.csv and imu.csv.
   std::unique_ptr<io::StreamCsvWriter> stream_recording;
-  if (recording && (!args.streams.empty() || live.serial || replay_log.any())) {
+  if (recording && (!args.streams.empty() || live.gyro != nullptr || replay_log.any())) {
     stream_recording = std::make_unique<io::StreamCsvWriter>(
         args.record, !args.streams.empty()
                          ? fmt::format("recorded by moa live from the streams of {}", args.streams)
-                     : live.serial
+                     : live.gyro != nullptr
                          ? fmt::format("recorded by moa live from the gyro of {} (t: s; gz: rad/s, "
                                        "counter-clockwise about z)",
                                        live.where)
@@ -481,7 +482,7 @@ int run_live(LiveArgs args) {
   };
 
   if (streams) input.add_streams(*streams, source_speed);
-  if (live.serial) input.add_gyro(*live.serial);
+  if (live.gyro != nullptr) input.add_gyro(*live.gyro);
   if (replay_log.any()) input.add_log(replay_log, replay_files);
   // A live input's bad row (a saturated record, a time out of order) is
   // skipped and not recorded, so that the recording replays; each kind is
@@ -549,6 +550,18 @@ int run_live(LiveArgs args) {
                    spec.mice[i].name, d.frames, d.lost, d.dropped);
       }
     }
+    if (live.otos) {
+      for (int i = 0; i < live.otos->units(); ++i) {
+        const auto& u = live.otos->stats(i);
+        fmt::print(report,
+                   "moa live: OTOS {}: {} rows from {} reads; {} failed reads, silent {} times ({} "
+                   "lift rows); tracking lost {}, optical fault {}, tilt {}, IMU fault {}; "
+                   "dropped {} corrupt, {} impossible\n",
+                   live.otos->where(i), u.rows, u.polls, u.read_errors, u.silences,
+                   u.silent_rows, u.tracking_lost, u.optical_fault, u.tilt, u.imu_fault,
+                   u.corrupt, u.implausible);
+      }
+    }
     if (live.serial) {
       const auto& s = live.serial->stats();
       fmt::print(report, "moa live: {} DATA frames, {} lost, {} corrupt; {} gyro samples\n",
@@ -605,7 +618,8 @@ void add_live(CLI::App& app, Action& action) {
   auto args = std::make_shared<LiveArgs>();
   auto* cmd = app.add_subcommand(
       "live",
-      "Live odometry from USB mice (evdev), a serial microcontroller or a replayed log; Ctrl-C "
+      "Live odometry from USB mice (evdev), a serial microcontroller, SparkFun OTOS units (I2C) "
+      "or a replayed log; Ctrl-C "
       "ends");
   cmd->add_option("--config", args->config, "Robot config v1 (YAML)")
       ->required()

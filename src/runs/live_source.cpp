@@ -14,10 +14,13 @@ namespace moa::io {
 
 LiveSource open_live_source(const LiveSourceSpec& spec, const RobotConfig& config,
                             const std::string& config_path, const LiveHooks& hooks) {
-  const int given = !spec.mice.empty() + !spec.serial.empty() + !spec.replay.empty();
+  const int given =
+      !spec.mice.empty() + !spec.serial.empty() + !spec.otos.empty() + !spec.replay.empty();
   if (given != 1) {
     throw Error(fmt::format(
-        "a live source is one of: mice (evdev), a serial port, a log to replay ({} given)", given));
+        "a live source is one of: mice (evdev), a serial port, OTOS units, a log to replay ({} "
+        "given)",
+        given));
   }
   LiveSource s;
   if (!spec.mice.empty()) {
@@ -34,9 +37,23 @@ LiveSource open_live_source(const LiveSourceSpec& spec, const RobotConfig& confi
   } else if (!spec.serial.empty()) {
     auto reader = std::make_unique<SerialReader>(spec.serial, config, spec.serial_options, hooks);
     s.serial = reader.get();
+    s.gyro = reader.get();
     s.source = std::move(reader);
     s.where = spec.serial;
     s.origin = spec.serial;
+  } else if (!spec.otos.empty()) {
+    if (static_cast<int>(spec.otos.size()) < config.array.size()) {
+      hooks.warning(fmt::format(
+          "{} of the {} sensors of {} have an OTOS unit; the others read as still",
+          spec.otos.size(), config.array.size(), config_path));
+    }
+    auto reader = std::make_unique<OtosReader>(spec.otos, config, spec.otos_options, hooks);
+    s.otos = reader.get();
+    s.gyro = reader.get();
+    s.source = std::move(reader);
+    s.where = spec.otos.size() == 1 ? fmt::format("OTOS {}", spec.otos[0].name) : "OTOS units";
+    s.origin = fmt::format("{} OTOS unit{} (i2c-dev)", spec.otos.size(),
+                           spec.otos.size() == 1 ? "" : "s");
   } else {
     auto reader = std::make_unique<ReplayReader>(spec.replay, config, spec.replay_options, hooks);
     s.replay = reader.get();
@@ -51,6 +68,7 @@ std::vector<std::filesystem::path> live_source_files(const LiveSourceSpec& spec)
   std::vector<std::filesystem::path> files;
   for (const auto& device : spec.mice) files.push_back(device.path);
   if (!spec.serial.empty()) files.emplace_back(spec.serial);
+  for (const auto& unit : spec.otos) files.push_back(unit.bus.path);
   if (!spec.replay.empty()) {
     const auto log = resolve_log(spec.replay).files();
     files.insert(files.end(), log.begin(), log.end());
@@ -66,6 +84,7 @@ std::string LiveSource::alive(const RobotConfig& config) const {
                        fresh ? serial->hello().names.size() : 0, config.names.size(),
                        serial->stats().lost_frames);
   }
+  if (otos) return fmt::format("OTOS {}/{} answering", otos->answering(), otos->units());
   return fmt::format("replay, {} rows", replay ? replay->rows() : 0);
 }
 
@@ -90,7 +109,7 @@ std::string LiveRunSource::where() const {
   return from_streams_ ? fmt::format("{} (streams)", where_) : where_;
 }
 
-void LiveRunSource::add_gyro(SerialReader& serial) { gyro_serial_ = &serial; }
+void LiveRunSource::add_gyro(GyroStream& gyro) { gyro_serial_ = &gyro; }
 
 void LiveRunSource::add_log(LogStreams& log, const LogFiles& files) {
   log_ = &log;

@@ -15,7 +15,7 @@
 namespace moa::io {
 
 /// The rated figures of a sensor known by name ("HDNS-2051", "ADNS-3080",
-/// "PMW3360", "PMW3389", "PMW3901", "PAA5100"; sensor_datasheets.hpp).
+/// "PMW3360", "PMW3389", "PMW3901", "PAA5100", "OTOS"; sensor_datasheets.hpp).
 std::optional<SensorPreset> find_sensor_preset(std::string_view name);
 /// The names find_sensor_preset() knows, comma separated (for messages).
 std::string sensor_preset_names();

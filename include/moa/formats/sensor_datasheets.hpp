@@ -28,6 +28,14 @@ struct SensorDatasheet {
   double height_max;        ///< m (0: none given; infinity: no upper limit)
   double lift_off;          ///< height at which it stops tracking, m (0: not given)
   const char* interface;    ///< how moa reads it
+  /// It reports a velocity, not counts (the OTOS): moa turns the velocity
+  /// into counts of 1/cpi inch, so any cpi > 0 will do and the default is
+  /// the preset's.
+  bool velocity_sensor;
+  /// rad/s, the full scale of its own z gyro (the OTOS), 0: it has none.
+  /// With a gyro it can be the only sensor; `moa config init` writes the
+  /// config's imu block with this max_rate.
+  double gyro_full_scale;
 };
 
 /// Every known sensor, HDNS-2051 and ADNS-3080 first (moa's core presets).

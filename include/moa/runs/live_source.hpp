@@ -1,7 +1,7 @@
 // Where live rows come from, for `moa live` and the guided calibration's
-// live session: USB mice (evdev), the serial board, or a recorded log played
-// at its own pace. All three are io::FrameSource, so everything after this
-// is the same. In runs/, not sources/: it resolves a replayed log's files
+// live session: USB mice (evdev), the serial board, SparkFun OTOS units on
+// I2C, or a recorded log played at its own pace. All are io::FrameSource,
+// so everything after this is the same. In runs/, not sources/: it resolves a replayed log's files
 // (resolve_log, runs/odometry_run.hpp).
 #pragma once
 
@@ -20,6 +20,7 @@
 #include "moa/runs/run_loop.hpp"
 #include "moa/sources/evdev.hpp"
 #include "moa/sources/live.hpp"
+#include "moa/sources/otos_reader.hpp"
 #include "moa/sources/replay_reader.hpp"
 #include "moa/sources/serial_reader.hpp"
 #include "moa/sources/stream_lines.hpp"
@@ -27,10 +28,13 @@
 namespace moa::io {
 
 /// Exactly one of: `mice` not empty (evdev devices, each bound to a sensor of
-/// the config), `serial` (a port) or `replay` (a log directory or mice.csv).
+/// the config), `serial` (a port), `otos` not empty (OTOS units, each bound
+/// to a sensor) or `replay` (a log directory or mice.csv).
 struct LiveSourceSpec {
   std::vector<EvdevDevice> mice;
   EvdevOptions evdev;
+  std::vector<OtosDevice> otos;
+  OtosOptions otos_options;
   std::string serial;
   SerialOptions serial_options;
   std::string replay;
@@ -41,7 +45,11 @@ struct LiveSource {
   std::unique_ptr<FrameSource> source;
   EvdevReader* evdev = nullptr;    ///< set for mice
   SerialReader* serial = nullptr;  ///< set for a serial port
+  OtosReader* otos = nullptr;      ///< set for OTOS units
   ReplayReader* replay = nullptr;  ///< set for a replay
+  /// The source's gyro, if it has one (the serial board's, the first OTOS
+  /// unit's): LiveRunSource::add_gyro merges it in.
+  GyroStream* gyro = nullptr;
   int mice = 0;                    ///< evdev devices
   std::string where;               ///< for messages: "mice", the port, the log
   /// "3 mice (evdev)", the port, "a replay of DIR": what a recording came from.
@@ -50,8 +58,9 @@ struct LiveSource {
   std::string alive(const RobotConfig& config) const;
 };
 
-/// The files the spec names (the mice's devices, the serial port, the
-/// replayed log's files): what no output of the run may name.
+/// The files the spec names (the mice's devices, the serial port, the OTOS
+/// units' adapters, the replayed log's files): what no output of the run
+/// may name.
 std::vector<std::filesystem::path> live_source_files(const LiveSourceSpec& spec);
 
 /// Opens the one source the spec names. Throws io::Error when none or more
@@ -88,12 +97,12 @@ class LiveRunSource final : public RunSource {
   /// Merges the robot's streams in; `speed`: the source's seconds per
   /// second of wall time (a replay's speed; 1 for devices).
   void add_streams(StreamLineReader& streams, double speed);
-  /// Merges the serial board's gyro samples in (SerialReader::take_gyro) as
-  /// ImuRows, each before the first mice row at or after its t, after that
-  /// row's fixes and wheel rows: the order a replay of imu.csv keeps. A
-  /// sample that comes after the rows of its window (the first of a stream)
-  /// is stamped just after them.
-  void add_gyro(SerialReader& serial);
+  /// Merges a device's gyro samples in (the serial board's, the first OTOS
+  /// unit's: GyroStream::take_gyro) as ImuRows, each before the first mice
+  /// row at or after its t, after that row's fixes and wheel rows: the order
+  /// a replay of imu.csv keeps. A sample that comes after the rows of its
+  /// window (the first of a stream) is stamped just after them.
+  void add_gyro(GyroStream& gyro);
   /// Merges a replayed log's streams in (its camera.csv, wheels.csv and
   /// imu.csv, opened by open_log_streams, runs/odometry_run.hpp) as `moa
   /// odometry` does: each row before the first mice row at or after its t,
@@ -156,7 +165,7 @@ class LiveRunSource final : public RunSource {
   std::size_t dropped_ = 0;
   std::size_t overflow_ = 0;
   Streamed streamed_;
-  SerialReader* gyro_serial_ = nullptr;  ///< the serial device's gyro (add_gyro)
+  GyroStream* gyro_serial_ = nullptr;  ///< the device's gyro (add_gyro)
   std::deque<ImuRow> serial_gyro_;       ///< its samples, not yet handed out
   // A replayed log's streams (add_log), and each one's next row, not yet handed out.
   LogStreams* log_ = nullptr;

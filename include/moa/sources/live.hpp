@@ -6,6 +6,7 @@
 
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace moa::io {
 
@@ -30,6 +31,25 @@ struct LiveHooks {
   void warning(const std::string& text) const {
     if (warn) warn(text);
   }
+};
+
+/// A device's z gyro over one of its windows (a serial board's DATA window,
+/// an OTOS unit's poll interval).
+struct GyroSample {
+  double t = 0.0;          ///< s, the end of the window, on its device's row clock
+  double gz = 0.0;         ///< rad/s, mean over the window, counter-clockwise about the chip's z
+  bool saturated = false;  ///< a sample of the window was at full scale: gz is too small
+};
+
+/// A live reader that also has a gyro (the serial board, an OTOS unit):
+/// `moa live` merges its samples in as imu rows (runs/live_source.hpp).
+class GyroStream {
+ public:
+  virtual ~GyroStream() = default;
+  /// The samples decoded since the last call, in time order. When the
+  /// reader's next() hands out a row, the sample of its window, if any, is
+  /// here already.
+  virtual std::vector<GyroSample> take_gyro() = 0;
 };
 
 }  // namespace moa::io

@@ -47,14 +47,9 @@ struct SerialOptions {
   double start_timeout = 5.0;
 };
 
-/// The device's gyro over one DATA window.
-struct GyroSample {
-  double t = 0.0;          ///< s, the DATA frame's row time (end of the window)
-  double gz = 0.0;         ///< rad/s, mean over the window, counter-clockwise about the chip's z
-  bool saturated = false;  ///< a sample of the window was at full scale: gz is too small
-};
-
-class SerialReader : public FrameSource {
+/// The device's gyro over one DATA window is a GyroSample (sources/live.hpp)
+/// at the DATA frame's row time.
+class SerialReader : public FrameSource, public GyroStream {
  public:
   struct Stats {
     std::uint64_t data_frames = 0;     ///< DATA frames turned into rows
@@ -90,7 +85,7 @@ class SerialReader : public FrameSource {
   /// rows of each DATA frame are held until its GYRO frame (or the next
   /// frame, a HELLO, the end): when next() hands out a row, the sample of
   /// its window, if any, is here already.
-  std::vector<GyroSample> take_gyro();
+  std::vector<GyroSample> take_gyro() override;
 
   /// Sends a host command (SET_K, SET_CPI, HELLO_REQUEST).
   void send(const serial::Message& message);
