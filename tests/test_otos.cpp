@@ -348,8 +348,9 @@ TEST(OtosReader, ASimulatedRobotsTwistComesBackWithinTheRegistersQuantisation) {
   const double per_unit = std::sqrt(2.0) * otos::kVelocityLsb / 2.0 +
                           speed * otos::kHeadingLsb + std::sqrt(2.0) * 3.0 / (k * period);
   // |delta twist| <= |A^+| |delta u|, |delta u| <= sqrt(2) per_unit (two units).
-  const Eigen::JacobiSVD<Mat<4, 3>> svd(a);
-  const double bound = std::sqrt(2.0) * per_unit / svd.singularValues().minCoeff();
+  // |A^+| = 1 / sigma_min(A) = 1 / sqrt(lambda_min(A^T A)).
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(a.transpose() * a);
+  const double bound = std::sqrt(2.0) * per_unit / std::sqrt(eig.eigenvalues().minCoeff());
   double worst = 0.0;
   for (std::size_t e = 1; e + 1 < twists.size(); ++e) {  // first and last: partial rows
     worst = std::max(worst, (twists[e].vector() - truth.vector()).norm());
@@ -484,7 +485,9 @@ TEST(OtosReader, StatusBitsFlagTheRowsAndAreSaidOncePerUnit) {
     gyro += reader->take_gyro().size();
     if (row->sensor == 0 && (row->flags & kFlagLift)) ++lift_rows;
     if (row->sensor == 1 && row->squal == 0) ++low_squal;
-    if (row->sensor == 0) EXPECT_FALSE(row->squal);
+    if (row->sensor == 0) {
+      EXPECT_FALSE(row->squal);
+    }
   }
   EXPECT_NEAR(static_cast<double>(lift_rows), 40.0, 1.0);  // 0.2 s at 200 Hz
   EXPECT_NEAR(static_cast<double>(low_squal), 20.0, 1.0);
@@ -501,7 +504,9 @@ TEST(OtosReader, StatusBitsFlagTheRowsAndAreSaidOncePerUnit) {
   for (int i = 0; i < 40; ++i) {
     const auto row = reader->next();
     ASSERT_TRUE(row);
-    if (row->sensor == 0) EXPECT_EQ(row->squal, 0);
+    if (row->sensor == 0) {
+      EXPECT_EQ(row->squal, 0);
+    }
   }
   EXPECT_TRUE(reader->take_gyro().empty());
   EXPECT_GE(reader->stats(0).imu_fault, 19u);

@@ -195,6 +195,7 @@ struct OtosReader::Impl {
     }
     u.stats.info = *s.info;
     u.stats.answering = true;
+    u.last_good = t;  // a glitch right after is not a new silence yet
     u.counts.restart();
     hooks.warning(fmt::format(
         "{}: answers again after {:.3f} s (started again, without the IMU calibration); its "

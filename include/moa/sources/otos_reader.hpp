@@ -21,7 +21,9 @@
 // after its first, the trapezoid mean of its rate over the interval, at the
 // row's t (its rows and its sample come together). Other units' rates are
 // read (their headings turn their velocities back) but not fed: the
-// pipeline has one gyro.
+// pipeline has one gyro. While the first unit is silent its gyro has no
+// samples; the first after it covers the silence with the rate it reads
+// then (an imu row is the mean since the previous one).
 //
 // Time: row t = the middle of its poll's transfer on CLOCK_MONOTONIC, less
 // the clock at the end of construction (units started), s. Polls of one
