@@ -493,8 +493,8 @@ TEST(Live, BadArgumentsAreRejected) {
   auto r = run_moa("live" + config);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_EQ(r.err,
-            "moa live: error: give one of --mouse NAME=DEV (one per mouse), --serial DEV or "
-            "--replay LOGDIR\n");
+            "moa live: error: give one of --mouse NAME=DEV (one per mouse), --serial DEV, --otos "
+            "[NAME=]/dev/i2c-N (one per unit) or --replay LOGDIR\n");
   r = run_moa("live" + config + " --mouse zz=/dev/null");
   EXPECT_EQ(r.err, "moa live: error: --mouse zz=/dev/null: no sensor 'zz' in " +
                        scene.config.string() + "\n");

@@ -44,8 +44,8 @@ using io::RobotConfig;
 TEST(OtosRegisters, ScalesAreTheRegisterMapsFullScalesOver32768) {
   // Full scales of the register map: 10 m, 5 m/s, 16 g, pi rad, 2000 deg/s,
   // 1000 pi rad/s^2, each over 2^15.
-  EXPECT_DOUBLE_EQ(otos::kPositionLsb, 0.00030517578125);      // 10 / 32768 m, exact in binary
-  EXPECT_DOUBLE_EQ(otos::kVelocityLsb, 0.000152587890625);     // 5 / 32768 m/s
+  EXPECT_DOUBLE_EQ(otos::kPositionLsb, 0.00030517578125);        // 10 / 32768 m, exact in binary
+  EXPECT_DOUBLE_EQ(otos::kVelocityLsb, 0.000152587890625);       // 5 / 32768 m/s
   EXPECT_NEAR(otos::kHeadingLsb, 9.587379924285257e-05, 1e-18);  // pi / 32768 rad
   EXPECT_NEAR(otos::kRateLsb, 34.906585039886591 / 32768.0, 1e-18);
   EXPECT_NEAR(otos::kAccelerationLsb, 156.9064 / 32768.0, 1e-15);
@@ -76,11 +76,10 @@ TEST(OtosRegisters, TriplesAreLittleEndianInt16) {
 }
 
 TEST(OtosRegisters, WritingRoundsToTheNearestStepAndSaturates) {
-  const otos::RawTriple raw =
-      otos::to_raw({Vec2(1.2 * otos::kVelocityLsb, -2.5 * otos::kVelocityLsb), 99.0},
-                   otos::kVelocityScale);
+  const otos::RawTriple raw = otos::to_raw(
+      {Vec2(1.2 * otos::kVelocityLsb, -2.5 * otos::kVelocityLsb), 99.0}, otos::kVelocityScale);
   EXPECT_EQ(raw.x, 1);
-  EXPECT_EQ(raw.y, -3);  // half away from zero
+  EXPECT_EQ(raw.y, -3);     // half away from zero
   EXPECT_EQ(raw.h, 32767);  // 99 rad/s is beyond 2000 deg/s: saturated
   EXPECT_EQ(otos::to_raw({Vec2(-7.0, 0.0), 0.0}, otos::kVelocityScale).x, -32768);
 }
@@ -137,16 +136,15 @@ TEST(OtosRegisters, VelocityIsTurnedBackIntoTheUnitsFrameByItsHeading) {
   const Vec2 w(0.8, 0.25);
   model.set_triple(otos::kRegPosition, {Vec2::Zero(), h}, otos::kPositionScale);
   model.set_triple(otos::kRegVelocity, {rotation(h) * w, 0.0}, otos::kVelocityScale);
-  const otos::Reading r = otos::decode_poll(
-      std::span<const std::uint8_t, otos::kPollBytes>(model.regs.data() + otos::kRegStatus,
-                                                      otos::kPollBytes));
+  const otos::Reading r = otos::decode_poll(std::span<const std::uint8_t, otos::kPollBytes>(
+      model.regs.data() + otos::kRegStatus, otos::kPollBytes));
   const double bound =
       std::sqrt(2.0) * otos::kVelocityLsb / 2.0 + w.norm() * otos::kHeadingLsb / 2.0;
   EXPECT_LE((otos::body_velocity(r) - w).norm(), bound);
 }
 
 TEST(OtosRegisters, VelocityCountsAreTheTrapezoidRoundedWithTheRemainderCarried) {
-  io::VelocityCounts counts(1e6);  // 1 um a count
+  io::VelocityCounts counts(1e6);                             // 1 um a count
   EXPECT_EQ(counts.add(0.0, Vec2(0.1, -0.2)), Vec2::Zero());  // opens
   // (0.1 + 0.3) / 2 x 0.0049 s = 980 um; (-0.2 + -0.2) / 2 x 0.0049 = -980 um.
   EXPECT_EQ(counts.add(0.0049, Vec2(0.3, -0.2)), Vec2(980.0, -980.0));
@@ -204,8 +202,7 @@ struct Rig {
   }
   std::unique_ptr<io::OtosReader> reader(const RobotConfig& config, io::OtosOptions options = {}) {
     hooks.stop = [this] { return clock.time - origin >= stop_at; };
-    auto r = std::make_unique<io::OtosReader>(links(config), config, options, hooks,
-                                              clock.clock());
+    auto r = std::make_unique<io::OtosReader>(links(config), config, options, hooks, clock.clock());
     origin = clock.time;
     return r;
   }
@@ -218,9 +215,9 @@ struct Rig {
 
 TEST(OtosUnit, StartChecksTheProductIdAndSetsOffsetScalarsAndRotation) {
   auto state = std::make_shared<OtosModelState>();
-  state->regs[otos::kRegLinearScalar] = 0x05;      // 1.005, left by someone
-  state->regs[otos::kRegSignalProcess] = 0x0B;     // rotation off
-  state->regs[otos::kRegOffset] = 0x44;            // an offset
+  state->regs[otos::kRegLinearScalar] = 0x05;   // 1.005, left by someone
+  state->regs[otos::kRegSignalProcess] = 0x0B;  // rotation off
+  state->regs[otos::kRegOffset] = 0x44;         // an offset
   OtosModel model(state);
   double slept = 0.0;
   const io::OtosStart s = io::start_otos(model, {}, [&](double d) { slept += d; });
@@ -288,9 +285,9 @@ TEST(OtosReader, BadStartsAndOptionsAreRefusedWithTheUnitsName) {
               "OTOS options: rate: must be 25 to 416.7 Hz (the unit's loop), is 500");
   }
   // A device that is no adapter, and one that does not exist.
-  EXPECT_EQ(error_of([] { io::I2cDev("/dev/null", 0x17); }).rfind("/dev/null: not an I2C adapter",
-                                                                  0),
-            0u);
+  EXPECT_EQ(
+      error_of([] { io::I2cDev("/dev/null", 0x17); }).rfind("/dev/null: not an I2C adapter", 0),
+      0u);
   EXPECT_EQ(error_of([] { io::I2cDev("/nonexistent/i2c-9", 0x17); }),
             "/nonexistent/i2c-9: cannot open (No such file or directory); is the i2c-dev module "
             "loaded (sudo modprobe i2c-dev)? see docs/hardware.md");
@@ -324,7 +321,9 @@ TEST(OtosReader, ASimulatedRobotsTwistComesBackWithinTheRegistersQuantisation) {
       io::resolve_odometry_options(OdometryOptions{}, "ls", {}, true, config, "robot.yaml");
   std::vector<Twist2> twists;
   io::RunCallbacks callbacks;
-  callbacks.on_step = [&](const OdometryStep& step) { twists.push_back(step.estimate.estimate.twist); };
+  callbacks.on_step = [&](const OdometryStep& step) {
+    twists.push_back(step.estimate.estimate.twist);
+  };
   const io::OdometryRun run =
       io::run_loop(config, "robot.yaml", options, input, "OTOS units", callbacks);
   EXPECT_TRUE(rig.warnings.empty()) << rig.warnings.front();
@@ -345,8 +344,8 @@ TEST(OtosReader, ASimulatedRobotsTwistComesBackWithinTheRegistersQuantisation) {
     a.block<2, 3>(2 * i, 0) = config.array[i].point_jacobian();
     speed = std::max(speed, (config.array[i].point_jacobian() * truth.vector()).norm());
   }
-  const double per_unit = std::sqrt(2.0) * otos::kVelocityLsb / 2.0 +
-                          speed * otos::kHeadingLsb + std::sqrt(2.0) * 3.0 / (k * period);
+  const double per_unit = std::sqrt(2.0) * otos::kVelocityLsb / 2.0 + speed * otos::kHeadingLsb +
+                          std::sqrt(2.0) * 3.0 / (k * period);
   // |delta twist| <= |A^+| |delta u|, |delta u| <= sqrt(2) per_unit (two units).
   // |A^+| = 1 / sigma_min(A) = 1 / sqrt(lambda_min(A^T A)).
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(a.transpose() * a);
@@ -382,8 +381,11 @@ TEST(OtosReader, OneUnitsGyroGivesTheRotation) {
       io::resolve_odometry_options(OdometryOptions{}, "consensus", {}, true, config, "robot.yaml");
   std::vector<Twist2> twists;
   io::RunCallbacks callbacks;
-  callbacks.on_step = [&](const OdometryStep& step) { twists.push_back(step.estimate.estimate.twist); };
-  const io::OdometryRun run = io::run_loop(config, "robot.yaml", options, input, "OTOS o1", callbacks);
+  callbacks.on_step = [&](const OdometryStep& step) {
+    twists.push_back(step.estimate.estimate.twist);
+  };
+  const io::OdometryRun run =
+      io::run_loop(config, "robot.yaml", options, input, "OTOS o1", callbacks);
   EXPECT_GT(run.imu_rows, 1000u);
   ASSERT_GT(twists.size(), 590u);
   // The last second, the motion prior's start-up behind: the gyro rows are
@@ -560,8 +562,10 @@ TEST(OtosCli, FlagsAreCheckedWithPreciseErrors) {
       std::filesystem::temp_directory_path() / ("moa-otos-cli-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const std::string config = (dir / "robot.yaml").string();
-  const auto init = run_moa("config init --preset OTOS --sensor o1=0.1,0,0 --sensor o2=-0.1,0,180 "
-                            "--out " + config);
+  const auto init = run_moa(
+      "config init --preset OTOS --sensor o1=0.1,0,0 --sensor o2=-0.1,0,180 "
+      "--out " +
+      config);
   ASSERT_EQ(init.exit_code, 0) << init.err;
   const auto live = [&](const std::string& flags) {
     return run_moa("live --config " + config + " --duration 1 " + flags);

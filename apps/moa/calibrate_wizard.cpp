@@ -150,8 +150,8 @@ void refuse_live_flags(const WizardArgs& args) {
   if (!f.mice.empty() || !f.serial.empty() || !f.otos.empty() || !f.replay.empty() ||
       args.no_push_y) {
     throw io::Error(
-        "--mouse, --serial, --otos, --replay and --no-push-y belong to --guided --live (the live guided "
-        "calibration)");
+        "--mouse, --serial, --otos, --replay and --no-push-y belong to --guided --live (the live "
+        "guided calibration)");
   }
 }
 

@@ -321,10 +321,10 @@ int run_live(LiveArgs args) {
     std::vector<std::string> comments{
         fmt::format("recorded by moa live from {}; replay: moa odometry --config {} --log {}",
                     live.origin, (dir / "robot.yaml").string(), dir.string())};
-    recording = std::make_unique<io::MiceWriter>(dir / "mice.csv", config.names,
-                                                 live.serial != nullptr ||
-                                                     live.otos != nullptr || live.replay != nullptr,
-                                                 io::MiceWriter::Durability::kJournal, comments);
+    recording = std::make_unique<io::MiceWriter>(
+        dir / "mice.csv", config.names,
+        live.serial != nullptr || live.otos != nullptr || live.replay != nullptr,
+        io::MiceWriter::Durability::kJournal, comments);
   }
   // The streams' rows, a serial board's gyro, the replayed log's wheels.csv,
   // camera.csv and imu.csv.
@@ -557,9 +557,8 @@ int run_live(LiveArgs args) {
                    "moa live: OTOS {}: {} rows from {} reads; {} failed reads, silent {} times ({} "
                    "lift rows); tracking lost {}, optical fault {}, tilt {}, IMU fault {}; "
                    "dropped {} corrupt, {} impossible\n",
-                   live.otos->where(i), u.rows, u.polls, u.read_errors, u.silences,
-                   u.silent_rows, u.tracking_lost, u.optical_fault, u.tilt, u.imu_fault,
-                   u.corrupt, u.implausible);
+                   live.otos->where(i), u.rows, u.polls, u.read_errors, u.silences, u.silent_rows,
+                   u.tracking_lost, u.optical_fault, u.tilt, u.imu_fault, u.corrupt, u.implausible);
       }
     }
     if (live.serial) {

@@ -16,7 +16,7 @@ namespace moa::cli {
 struct SourceFlags {
   std::vector<std::string> mice;
   std::string serial;
-  int baud = 500000;  ///< the firmware's (docs/firmware.md)
+  int baud = 500000;              ///< the firmware's (docs/firmware.md)
   std::vector<std::string> otos;  ///< [NAME=]/dev/i2c-N[:ADDR]
   double otos_rate = io::OtosOptions{}.rate;
   bool otos_no_imu_calibration = false;

@@ -129,9 +129,10 @@ std::string datasheet_lines(const SensorDatasheet& s) {
   std::string out = fmt::format("{}, from its data sheet:", s.preset.name);
   const auto line = [&out](const std::string& text) { out += "\n  " + text; };
   if (s.velocity_sensor) {
-    line(fmt::format("resolution: none to set; it reports its velocity, which moa turns into "
-                     "counts of 1/cpi inch ({:g} cpi: {:g} um a count; any cpi > 0 will do)",
-                     s.preset.cpi, kMetresPerInch / s.preset.cpi * 1e6));
+    line(
+        fmt::format("resolution: none to set; it reports its velocity, which moa turns into "
+                    "counts of 1/cpi inch ({:g} cpi: {:g} um a count; any cpi > 0 will do)",
+                    s.preset.cpi, kMetresPerInch / s.preset.cpi * 1e6));
   } else if (s.cpi_step > 0.0) {
     line(fmt::format("resolution {:g} to {:g} cpi in steps of {:g}", s.cpi_min, s.cpi_max,
                      s.cpi_step));
@@ -151,15 +152,15 @@ std::string datasheet_lines(const SensorDatasheet& s) {
                      s.max_acceleration));
   }
   if (s.preset.frame_rate > 0.0) {
-    line(s.velocity_sensor
-             ? fmt::format("its own loop: a sample every {:g} ms ({:.4g} /s)",
-                           1000.0 / s.preset.frame_rate, s.preset.frame_rate)
-             : fmt::format("frame rate up to {:g} /s", s.preset.frame_rate));
+    line(s.velocity_sensor ? fmt::format("its own loop: a sample every {:g} ms ({:.4g} /s)",
+                                         1000.0 / s.preset.frame_rate, s.preset.frame_rate)
+                           : fmt::format("frame rate up to {:g} /s", s.preset.frame_rate));
   }
   if (s.gyro_full_scale > 0.0) {
-    line(fmt::format("its own z gyro, full scale {:.4g} rad/s: moa live feeds the first unit's "
-                     "rate as the imu stream (config key imu)",
-                     s.gyro_full_scale));
+    line(
+        fmt::format("its own z gyro, full scale {:.4g} rad/s: moa live feeds the first unit's "
+                    "rate as the imu stream (config key imu)",
+                    s.gyro_full_scale));
   }
   if (s.resolution_error > 0.0) {
     line(fmt::format("resolution error {:g} % typical (calibration finds each sensor's scale)",

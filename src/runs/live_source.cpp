@@ -43,17 +43,17 @@ LiveSource open_live_source(const LiveSourceSpec& spec, const RobotConfig& confi
     s.origin = spec.serial;
   } else if (!spec.otos.empty()) {
     if (static_cast<int>(spec.otos.size()) < config.array.size()) {
-      hooks.warning(fmt::format(
-          "{} of the {} sensors of {} have an OTOS unit; the others read as still",
-          spec.otos.size(), config.array.size(), config_path));
+      hooks.warning(
+          fmt::format("{} of the {} sensors of {} have an OTOS unit; the others read as still",
+                      spec.otos.size(), config.array.size(), config_path));
     }
     auto reader = std::make_unique<OtosReader>(spec.otos, config, spec.otos_options, hooks);
     s.otos = reader.get();
     s.gyro = reader.get();
     s.source = std::move(reader);
     s.where = spec.otos.size() == 1 ? fmt::format("OTOS {}", spec.otos[0].name) : "OTOS units";
-    s.origin = fmt::format("{} OTOS unit{} (i2c-dev)", spec.otos.size(),
-                           spec.otos.size() == 1 ? "" : "s");
+    s.origin =
+        fmt::format("{} OTOS unit{} (i2c-dev)", spec.otos.size(), spec.otos.size() == 1 ? "" : "s");
   } else {
     auto reader = std::make_unique<ReplayReader>(spec.replay, config, spec.replay_options, hooks);
     s.replay = reader.get();

@@ -45,19 +45,19 @@ I2cDev::I2cDev(const std::filesystem::path& path, std::uint8_t address)
   fd_ = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
   if (fd_ < 0) {
     const int e = errno;
-    throw IoError(fmt::format(
-        "{}: cannot open ({}){}", path.string(), std::strerror(e),
-        e == ENOENT    ? "; is the i2c-dev module loaded (sudo modprobe i2c-dev)? see "
-                         "docs/hardware.md"
-        : e == EACCES ? "; add yourself to the group i2c (docs/hardware.md)"
-                      : ""));
+    throw IoError(fmt::format("{}: cannot open ({}){}", path.string(), std::strerror(e),
+                              e == ENOENT
+                                  ? "; is the i2c-dev module loaded (sudo modprobe i2c-dev)? see "
+                                    "docs/hardware.md"
+                              : e == EACCES ? "; add yourself to the group i2c (docs/hardware.md)"
+                                            : ""));
   }
   unsigned long funcs = 0;
   if (::ioctl(fd_, I2C_FUNCS, &funcs) < 0) {
     const int e = errno;
     ::close(fd_);
-    throw Error(fmt::format("{}: not an I2C adapter (I2C_FUNCS: {})", path.string(),
-                            std::strerror(e)));
+    throw Error(
+        fmt::format("{}: not an I2C adapter (I2C_FUNCS: {})", path.string(), std::strerror(e)));
   }
   if ((funcs & I2C_FUNC_I2C) == 0) {
     ::close(fd_);

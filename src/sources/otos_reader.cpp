@@ -107,9 +107,9 @@ struct OtosReader::Impl {
   OtosOptions options;
   LiveHooks hooks;
   OtosClock clock;
-  double origin = 0.0;      ///< clock time of row t = 0
-  double next_poll = 0.0;   ///< s, row clock
-  double next_tick = 0.0;   ///< s, row clock
+  double origin = 0.0;     ///< clock time of row t = 0
+  double next_poll = 0.0;  ///< s, row clock
+  double next_tick = 0.0;  ///< s, row clock
   std::deque<SensorRow> rows;
   std::vector<GyroSample> gyro;
 
@@ -133,9 +133,10 @@ struct OtosReader::Impl {
                                 d.sensor, config.array.size()));
       }
       if (!buses.insert({u.link.transport->where(), d.bus.address}).second) {
-        throw Error(fmt::format("{}: a second unit at the same bus and address (OTOS units all "
-                                "answer at 0x17: give each its own bus or multiplexer channel)",
-                                where(u)));
+        throw Error(
+            fmt::format("{}: a second unit at the same bus and address (OTOS units all "
+                        "answer at 0x17: give each its own bus or multiplexer channel)",
+                        where(u)));
       }
       if (!sensors.insert(d.sensor).second) {
         throw Error(fmt::format("{}: sensor '{}' is bound to two units", where(u), d.name));

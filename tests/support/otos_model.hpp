@@ -90,8 +90,8 @@ class OtosModel final : public io::I2cTransport {
 /// tracking frame R(h) w; the registers hold them rounded (to_raw).
 /// Its position x, y stay 0 (moa reads the heading only). `now` is the
 /// test's clock (s).
-inline void drive_otos_model(OtosModelState& state, const SensorMount& mount,
-                             const Twist2& twist, std::function<double()> now) {
+inline void drive_otos_model(OtosModelState& state, const SensorMount& mount, const Twist2& twist,
+                             std::function<double()> now) {
   auto reset_at = std::make_shared<double>(now());
   state.on_reset = [reset_at, now](OtosModelState&) { *reset_at = now(); };
   state.before_poll = [reset_at, now, mount, twist](OtosModelState& s) {

@@ -165,7 +165,7 @@ class LiveRunSource final : public RunSource {
   std::size_t dropped_ = 0;
   std::size_t overflow_ = 0;
   Streamed streamed_;
-  GyroStream* gyro_serial_ = nullptr;  ///< the device's gyro (add_gyro)
+  GyroStream* gyro_serial_ = nullptr;    ///< the device's gyro (add_gyro)
   std::deque<ImuRow> serial_gyro_;       ///< its samples, not yet handed out
   // A replayed log's streams (add_log), and each one's next row, not yet handed out.
   LogStreams* log_ = nullptr;

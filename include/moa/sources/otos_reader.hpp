@@ -64,9 +64,9 @@
 namespace moa::io {
 
 struct OtosDevice {
-  std::string name;   ///< the sensor's name in the config, for messages
-  I2cAddress bus;     ///< adapter and address
-  int sensor = 0;     ///< row.sensor of its rows (index in the config)
+  std::string name;  ///< the sensor's name in the config, for messages
+  I2cAddress bus;    ///< adapter and address
+  int sensor = 0;    ///< row.sensor of its rows (index in the config)
 };
 
 struct OtosOptions {
@@ -126,19 +126,19 @@ class OtosReader final : public FrameSource, public GyroStream {
  public:
   struct UnitStats {
     bool answering = true;
-    std::uint64_t polls = 0;         ///< transfers tried
-    std::uint64_t rows = 0;          ///< rows handed out (lift rows of a silence included)
-    std::uint64_t read_errors = 0;   ///< failed transfers
-    std::uint64_t silences = 0;      ///< times it went silent
-    std::uint64_t silent_rows = 0;   ///< lift rows while silent
-    std::uint64_t tracking_lost = 0; ///< reads with optical tracking unreliable
-    std::uint64_t optical_fault = 0; ///< reads with the optical chip's fault bit
-    std::uint64_t tilt = 0;          ///< reads with the tilt bit
-    std::uint64_t imu_fault = 0;     ///< reads with the IMU's fault bit
-    std::uint64_t corrupt = 0;       ///< reads with reserved status bits, dropped
-    std::uint64_t implausible = 0;   ///< reads with an impossible change, dropped
-    std::uint64_t rate_saturated = 0;///< gyro samples at the rate's full scale
-    OtosInfo info;                   ///< from its (last) start
+    std::uint64_t polls = 0;           ///< transfers tried
+    std::uint64_t rows = 0;            ///< rows handed out (lift rows of a silence included)
+    std::uint64_t read_errors = 0;     ///< failed transfers
+    std::uint64_t silences = 0;        ///< times it went silent
+    std::uint64_t silent_rows = 0;     ///< lift rows while silent
+    std::uint64_t tracking_lost = 0;   ///< reads with optical tracking unreliable
+    std::uint64_t optical_fault = 0;   ///< reads with the optical chip's fault bit
+    std::uint64_t tilt = 0;            ///< reads with the tilt bit
+    std::uint64_t imu_fault = 0;       ///< reads with the IMU's fault bit
+    std::uint64_t corrupt = 0;         ///< reads with reserved status bits, dropped
+    std::uint64_t implausible = 0;     ///< reads with an impossible change, dropped
+    std::uint64_t rate_saturated = 0;  ///< gyro samples at the rate's full scale
+    OtosInfo info;                     ///< from its (last) start
   };
 
   /// Opens every unit's adapter (I2cDev) and starts the units. Throws

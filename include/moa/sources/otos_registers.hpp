@@ -72,8 +72,8 @@ enum StatusBit : std::uint8_t {
   /// bits 2..5, reserved: moa takes a status with any of them set for a
   /// corrupt transfer
   kStatusReserved = 0x3C,
-  kStatusOpticalFault = 1u << 6,    ///< the optical chip (PAA5160) failed
-  kStatusImuFault = 1u << 7,        ///< the IMU (LSM6DSO) failed
+  kStatusOpticalFault = 1u << 6,  ///< the optical chip (PAA5160) failed
+  kStatusImuFault = 1u << 7,      ///< the IMU (LSM6DSO) failed
 };
 
 /// Signal-process register bits (all set at power-up).
@@ -88,18 +88,17 @@ enum SignalProcessBit : std::uint8_t {
 inline constexpr std::uint8_t kResetTracking = 1u << 0;
 
 /// The unit's internal loop: one sample every 2.4 ms.
-inline constexpr double kLoopPeriod = 0.0024;  ///< s
+inline constexpr double kLoopPeriod = 0.0024;           ///< s
 inline constexpr double kLoopRate = 1.0 / kLoopPeriod;  ///< Hz, about 416.7
 
 // Scales, SI units per LSB.
 inline constexpr double kLsbPerFullScale = 32768.0;
-inline constexpr double kGravity = 9.80665;  ///< m/s^2 per g
-inline constexpr double kPositionLsb = 10.0 / kLsbPerFullScale;         ///< m
+inline constexpr double kGravity = 9.80665;                                 ///< m/s^2 per g
+inline constexpr double kPositionLsb = 10.0 / kLsbPerFullScale;             ///< m
 inline constexpr double kHeadingLsb = std::numbers::pi / kLsbPerFullScale;  ///< rad
-inline constexpr double kVelocityLsb = 5.0 / kLsbPerFullScale;          ///< m/s
-inline constexpr double kRateLsb =
-    2000.0 * std::numbers::pi / 180.0 / kLsbPerFullScale;  ///< rad/s
-inline constexpr double kAccelerationLsb = 16.0 * kGravity / kLsbPerFullScale;  ///< m/s^2
+inline constexpr double kVelocityLsb = 5.0 / kLsbPerFullScale;              ///< m/s
+inline constexpr double kRateLsb = 2000.0 * std::numbers::pi / 180.0 / kLsbPerFullScale;  ///< rad/s
+inline constexpr double kAccelerationLsb = 16.0 * kGravity / kLsbPerFullScale;            ///< m/s^2
 inline constexpr double kAngularAccelerationLsb =
     1000.0 * std::numbers::pi / kLsbPerFullScale;  ///< rad/s^2
 inline constexpr double kScalarLsb = 0.001;
