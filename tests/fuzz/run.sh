@@ -16,7 +16,7 @@ build=${FUZZ_BUILD_DIR:-build-fuzz}
 targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
   targets=(fuzz_mice_csv fuzz_wheels_csv fuzz_camera_csv fuzz_truth_csv fuzz_config
-           fuzz_scenario fuzz_evemu fuzz_serial fuzz_evdev fuzz_stream_lines)
+           fuzz_scenario fuzz_evemu fuzz_serial fuzz_evdev fuzz_stream_lines fuzz_otos)
 fi
 
 if ! grep -qs '^MOA_BUILD_FUZZERS:BOOL=ON$' "$build/CMakeCache.txt"; then
