@@ -50,8 +50,8 @@ struct LiveSource {
   /// The source's gyro, if it has one (the serial board's, the first OTOS
   /// unit's): LiveRunSource::add_gyro merges it in.
   GyroStream* gyro = nullptr;
-  int mice = 0;                    ///< evdev devices
-  std::string where;               ///< for messages: "mice", the port, the log
+  int mice = 0;       ///< evdev devices
+  std::string where;  ///< for messages: "mice", the port, the log
   /// "3 mice (evdev)", the port, "a replay of DIR": what a recording came from.
   std::string origin;
   /// Status text: how many sensors are alive, frames lost.
@@ -165,8 +165,8 @@ class LiveRunSource final : public RunSource {
   std::size_t dropped_ = 0;
   std::size_t overflow_ = 0;
   Streamed streamed_;
-  GyroStream* gyro_serial_ = nullptr;    ///< the device's gyro (add_gyro)
-  std::deque<ImuRow> serial_gyro_;       ///< its samples, not yet handed out
+  GyroStream* gyro_serial_ = nullptr;  ///< the device's gyro (add_gyro)
+  std::deque<ImuRow> serial_gyro_;     ///< its samples, not yet handed out
   // A replayed log's streams (add_log), and each one's next row, not yet handed out.
   LogStreams* log_ = nullptr;
   const LogFiles* log_files_ = nullptr;
